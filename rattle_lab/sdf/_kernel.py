@@ -1,0 +1,912 @@
+"""Event-driven exact kernel of the SDF impact oscillator (scalar code).
+
+This module is written once and loaded twice: as plain Python (the readable
+reference path, ``method="exact-python"``) and compiled with numba
+(``method="exact"``).  :mod:`rattle_lab.sdf._compiled` does the second load
+with the module global ``__rattle_jit__`` set; nothing else differs.
+
+Model (nondimensional, thesis eq. 2.33)::
+
+    x'' + 2 zeta x' + x = F cos(theta),  theta = theta0 + omega s,   x < 1
+    v -> -e v                                                       at x = 1
+
+Free flight
+    Closed form (see :mod:`rattle_lab.sdf._flow`): particular part plus the
+    homogeneous part, for zeta < 1, = 1, > 1, and the undamped resonance.  No
+    time step is taken.  Each flight is restarted ("rebased") at least once per
+    window ``W = min(2 pi, 2 pi / omega)`` so that local times stay small and
+    phases stay accurate to rounding.
+
+Why no impact can be missed
+    The impact is the earliest ``s`` in the window where ``g(s) = x(s) - 1 >= 0``.
+    The window is cut into chunks and each chunk ``[s_a, s_b]`` is examined with
+    rigorous bounds on the derivatives of ``x`` over the chunk:
+
+    * the particular part has ``|x_p^(k)| <= R omega^k`` (R its amplitude);
+    * the homogeneous part ``y`` obeys ``d/ds (y^2 + y'^2) = -4 zeta y'^2 <= 0``,
+      so ``rho = |(y, y')|`` never grows and ``|y^(k)| <= n_k rho(s_a)`` with
+      ``n_k`` the norm of the first row of the k-th power of the companion
+      matrix; for zeta > 1 the two decaying modes are bounded separately.
+
+    With ``M2 >= |x''|`` on the chunk, ``g`` lies below both parabolas
+    ``g_a + g'_a u + M2 u^2 / 2`` and ``g_b - g'_b w + M2 w^2 / 2``; if the
+    maximum of their lower envelope is negative the chunk holds no impact.  If
+    not, ``M3 >= |x'''|`` bounds ``x''``: if ``x''`` is provably negative the
+    chunk holds at most one local maximum of ``x``, found by a bracketed root of
+    ``v`` and compared with 1 exactly; if ``x''`` is provably positive the
+    maximum is at an end.  Otherwise the chunk is halved.  Near a tangency the
+    curvature is bounded away from zero, so the concavity test settles it after
+    a few halvings: a trajectory that touches ``x = 1`` reports that impact (with
+    ``v_in`` the rounding-level velocity there), one that stays below by more
+    than rounding does not.  Sampling sign changes is never relied on.
+
+Impacts on and from the stop
+    A flight that starts on the stop (after an impact, or on release from
+    sticking) is evaluated near its start by its Taylor series about the start,
+    ``x - 1 = sum_k d_k s^k / k!`` with ``d_k`` from the equation of motion, so
+    that tiny chatter flights are resolved to relative rounding instead of being
+    lost in the cancellation ``x_p + y - 1``.  The first instants are excluded by
+    the leading nonzero derivative: ``g(u) <= d_k u^k / k! + M_{k+1} u^{k+1} /
+    (k+1)! < 0`` for small ``u`` when ``d_k < 0``.  When the leading derivative
+    pushes into the stop (v = 0 and F cos(theta) > 1), the mass sticks.
+
+Chatter and sticking
+    When the force pushes into the stop (``a_stop = F cos(theta) - 1 > 0`` at
+    x = 1, v = 0) and flights shrink geometrically (complete chatter, Budd &
+    Dux 1994; Nordmark & Piiroinen 2009), the remaining flight times form a
+    geometric series.  After each micro-impact the tail ``tau_k q / (1 - q)``
+    (``q`` the measured ratio of the last two flight times, which tends to
+    ``e``) is computed; once it is below the time resolution ``16 ulp(t)``, or
+    after ``N_CHATTER_MAX`` micro-impacts, the solver jumps to the accumulation
+    point and sticks.  While stuck (x = 1, v = 0) the net force
+    ``F cos(theta) - 1`` pushes into the stop; the mass is released at the
+    analytic phase ``theta = arccos(1 / F)`` where the force reverses.
+
+The kernel never lets x exceed 1 (impacts set x = 1 exactly), and every loop is
+bounded (``max_events``).
+"""
+
+import math
+
+import numpy as np
+
+try:  # set by rattle_lab.sdf._compiled before executing this source
+    _JIT = bool(__rattle_jit__)  # type: ignore[name-defined]  # noqa: F821
+except NameError:
+    _JIT = False
+
+if _JIT:
+    import numba
+
+    def jit(func):
+        return numba.njit(cache=True, nogil=True)(func)
+else:
+
+    def jit(func):
+        return func
+
+
+TWO_PI = 2.0 * math.pi
+EPS = 2.220446049250313e-16
+#: Terms of the Taylor series used near a start on the stop.
+N_TAYLOR = 20
+#: Taylor series used while s * LAMBDA <= TAYLOR_REACH (remainder < 1e-25 relative).
+TAYLOR_REACH = 0.5
+#: Micro-impacts of one chatter sequence before jumping to its accumulation point.
+N_CHATTER_MAX = 20000
+#: Maximum halvings of a search chunk.
+MAX_LEVEL = 60
+#: Consecutive short elastic (e = 1) bounces before micro-bounce averaging.
+N_MICRO = 1000
+#: Elastic bounces shorter than TAU_MICRO (relative to the fastest time scale)
+#: are averaged; averaging ends when the flight time grows to TAU_EXIT.
+TAU_MICRO = 1e-4
+TAU_EXIT = 1e-2
+#: Maximum sub-intervals examined in one search chunk.
+MAX_WORK = 20000
+
+# Layout of the parameter vector P.
+I_F, I_W, I_Z, I_E, I_AC, I_AS, I_R, I_RES, I_REG, I_WD, I_R1, I_R2, I_LAM = range(13)
+I_NK = 13  # n_0 .. n_7 follow
+N_P = I_NK + 8
+
+# Layout of the segment vector S.
+J_TH, J_Y, J_YD, J_ONSTOP = range(4)
+J_TAY = 4  # Taylor coefficients t_0 .. t_N_TAYLOR (t_k = d_k / k!)
+N_S = J_TAY + N_TAYLOR + 1
+
+
+@jit
+def make_params(F, omega, zeta, e):
+    """Pack the parameters and the derived constants into one float vector."""
+    P = np.zeros(N_P)
+    P[I_F] = F
+    P[I_W] = omega
+    P[I_Z] = zeta
+    P[I_E] = e
+    one_m_w2 = (1.0 - omega) * (1.0 + omega)
+    two_zw = 2.0 * zeta * omega
+    D = one_m_w2 * one_m_w2 + two_zw * two_zw
+    if D == 0.0:  # undamped resonance: secular particular solution
+        P[I_RES] = 1.0
+    else:
+        P[I_AC] = F * one_m_w2 / D
+        P[I_AS] = F * two_zw / D
+        P[I_R] = math.sqrt(P[I_AC] * P[I_AC] + P[I_AS] * P[I_AS])
+    if zeta < 1.0:
+        P[I_REG] = 0.0
+        P[I_WD] = math.sqrt((1.0 - zeta) * (1.0 + zeta))
+        lam_h = 1.0
+    elif zeta == 1.0:
+        P[I_REG] = 1.0
+        lam_h = 1.0
+    else:
+        P[I_REG] = 2.0
+        mu = math.sqrt((zeta - 1.0) * (zeta + 1.0))
+        P[I_WD] = mu
+        P[I_R1] = -1.0 / (zeta + mu)
+        P[I_R2] = -zeta - mu
+        lam_h = zeta + mu
+    P[I_LAM] = max(omega, lam_h, 1.0)
+    # n_k = |first row of A^k|, A = [[0, 1], [-1, -2 zeta]] (companion matrix)
+    a00, a01 = 1.0, 0.0
+    a10, a11 = 0.0, 1.0
+    for k in range(8):
+        P[I_NK + k] = math.sqrt(a00 * a00 + a01 * a01) * (1.0 + 1e-12)
+        # (row0, row1) <- A @ (row0, row1)
+        n00 = a10
+        n01 = a11
+        n10 = -a00 - 2.0 * zeta * a10
+        n11 = -a01 - 2.0 * zeta * a11
+        a00, a01, a10, a11 = n00, n01, n10, n11
+    return P
+
+
+@jit
+def transition(P, s):
+    """(Ec, Es) of the homogeneous flow over time s."""
+    z = P[I_Z]
+    reg = P[I_REG]
+    if reg == 0.0:
+        wd = P[I_WD]
+        d = math.exp(-z * s)
+        return d * math.cos(wd * s), d * math.sin(wd * s) / wd
+    if reg == 1.0:
+        d = math.exp(-s)
+        return d, d * s
+    mu = P[I_WD]
+    e1 = math.exp(P[I_R1] * s)
+    e2 = math.exp(P[I_R2] * s)
+    return 0.5 * (e1 + e2), e1 * (-math.expm1(-2.0 * mu * s)) / (2.0 * mu)
+
+
+@jit
+def particular(P, th, s):
+    """(x_p, v_p) at phase th, s after the flight started (s matters at resonance only)."""
+    c = math.cos(th)
+    sn = math.sin(th)
+    if P[I_RES] != 0.0:
+        h = 0.5 * P[I_F]
+        return h * s * sn, h * (sn + s * c)
+    Ac = P[I_AC]
+    As = P[I_AS]
+    return Ac * c + As * sn, P[I_W] * (As * c - Ac * sn)
+
+
+@jit
+def reduce_phase(th):
+    """Reduce a phase to [0, 2 pi)."""
+    r = th - TWO_PI * math.floor(th / TWO_PI)
+    if r < 0.0:
+        r += TWO_PI
+    if r >= TWO_PI:
+        r = 0.0
+    return r
+
+
+@jit
+def start_segment(P, S, th, x, v, on_stop):
+    """Fill the segment vector S for a free flight starting at (x, v, th)."""
+    xp, vp = particular(P, th, 0.0)
+    S[J_TH] = th
+    S[J_Y] = x - xp
+    S[J_YD] = v - vp
+    S[J_ONSTOP] = 1.0 if on_stop else 0.0
+    if on_stop:
+        F = P[I_F]
+        w = P[I_W]
+        z = P[I_Z]
+        # d_0 = x (=1), d_1 = v, d_{k+2} = F w^k cos(th + k pi/2) - 2 z d_{k+1} - d_k
+        dkm1 = 1.0
+        dk = v
+        S[J_TAY] = 1.0
+        S[J_TAY + 1] = v
+        fact = 1.0
+        wk = 1.0
+        for k in range(N_TAYLOR - 1):
+            q = k % 4
+            if q == 0:
+                trig = math.cos(th)
+            elif q == 1:
+                trig = -math.sin(th)
+            elif q == 2:
+                trig = -math.cos(th)
+            else:
+                trig = math.sin(th)
+            dnew = F * wk * trig - 2.0 * z * dk - dkm1
+            if k == 0 and abs(dnew) <= 8.0 * EPS * (F + 1.0 + 2.0 * z * abs(v)):
+                dnew = 0.0  # rounding noise of an exact zero (release from sticking)
+            wk *= w
+            fact *= (k + 2)
+            S[J_TAY + k + 2] = dnew / fact
+            dkm1 = dk
+            dk = dnew
+
+
+@jit
+def evaluate(P, S, s):
+    """(x - 1 if on-stop Taylor else x, v, a, y, yd, x) at local time s.
+
+    Returns a tuple (x, v, a, y, yd, zstop) where zstop = x - 1 computed without
+    cancellation near a start on the stop (Taylor), else x - 1.
+    """
+    th = S[J_TH] + P[I_W] * s
+    Ec, Es = transition(P, s)
+    z = P[I_Z]
+    y0 = S[J_Y]
+    yd0 = S[J_YD]
+    y = (Ec + z * Es) * y0 + Es * yd0
+    yd = -Es * y0 + (Ec - z * Es) * yd0
+    xp, vp = particular(P, th, s)
+    x = xp + y
+    v = vp + yd
+    zstop = x - 1.0
+    if S[J_ONSTOP] != 0.0 and s * P[I_LAM] <= TAYLOR_REACH:
+        zs = 0.0
+        vs = 0.0
+        for k in range(N_TAYLOR, 0, -1):
+            zs = zs * s + S[J_TAY + k]
+            vs = vs * s + k * S[J_TAY + k]
+        zstop = zs * s
+        v = vs
+        x = 1.0 + zstop
+    a = P[I_F] * math.cos(th) - 2.0 * z * v - x
+    return x, v, a, y, yd, zstop
+
+
+@jit
+def deriv_bound(P, k, y, yd, s_end, x, v, L):
+    """Bound of |x^(k)| (k = 2..5) over an interval [s_a, s_a + L], s_a + L = s_end.
+
+    (y, yd) is the homogeneous state and (x, v) the full state at s_a.  Two
+    valid bounds are computed and the smaller is returned:
+
+    * modal: ``R omega^k`` for the particular part plus ``n_k |(y, y')|`` (or the
+      two decaying modes for zeta > 1) for the homogeneous part, which never
+      grows;
+    * energy: ``d/ds sqrt(x^2 + v^2) <= F`` gives ``|x|, |v| <= r = |(x, v)| + F L``
+      on the interval, and the equation of motion gives
+      ``|x^(j+2)| <= F omega^j + 2 zeta |x^(j+1)| + |x^(j)|``.  This one stays
+      sharp near resonance, where the particular and homogeneous parts are
+      both large and cancel.
+    """
+    if P[I_RES] != 0.0:
+        bp = 0.5 * P[I_F] * (s_end + k)
+    else:
+        bp = P[I_R] * P[I_W] ** k
+    if P[I_REG] == 2.0:
+        r1 = P[I_R1]
+        r2 = P[I_R2]
+        c1 = (yd - r2 * y) / (r1 - r2)
+        c2 = (r1 * y - yd) / (r1 - r2)
+        bh = (abs(c1) * abs(r1) ** k + abs(c2) * abs(r2) ** k) * (1.0 + 1e-10)
+    else:
+        bh = P[I_NK + k] * math.sqrt(y * y + yd * yd)
+    modal = bp + bh
+    F = P[I_F]
+    w = P[I_W]
+    tz = 2.0 * P[I_Z]
+    r = math.sqrt(x * x + v * v) + F * L
+    m0 = r
+    m1 = r
+    wj = 1.0
+    for j in range(k - 1):
+        m2 = F * wj + tz * m1 + m0
+        m0 = m1
+        m1 = m2
+        wj *= w
+    return min(modal, m1) * (1.0 + 1e-12) + 1e-300
+
+
+@jit
+def level_values(P, S, s, c, sig):
+    """g = sig (x - c), g' and g'' at s, plus the homogeneous state (y, yd)."""
+    x, v, a, y, yd, zstop = evaluate(P, S, s)
+    if c == 1.0:
+        g = sig * zstop
+    else:
+        g = sig * (x - c)
+    return g, sig * v, sig * a, y, yd
+
+
+@jit
+def _max_min_parabolas(ga, gva, gb, gvb, M, L):
+    """max over [0, L] of min(ga + gva u + M u^2/2, gb - gvb (L-u) + M (L-u)^2/2)."""
+    best = max(ga, gb)
+    coef = gva - gvb + M * L
+    const = ga - gb + gvb * L - 0.5 * M * L * L
+    if coef != 0.0:
+        u = -const / coef
+        if 0.0 < u < L:
+            p1 = ga + gva * u + 0.5 * M * u * u
+            if p1 > best:
+                best = p1
+    return best
+
+
+@jit
+def _lower_line_bound(fa, fb, M, L):
+    """min over [0, L] of max(fa - M u, fb - M (L - u)): a lower bound of f."""
+    u = (fa - fb + M * L) / (2.0 * M)
+    if u <= 0.0:
+        return fb - M * L
+    if u >= L:
+        return fa - M * L
+    return fa - M * u
+
+
+@jit
+def _upper_line_bound(fa, fb, M, L):
+    """max over [0, L] of min(fa + M u, fb + M (L - u)): an upper bound of f."""
+    return -_lower_line_bound(-fa, -fb, M, L)
+
+
+@jit
+def _root(P, S, c, sig, which, lo, hi, flo, fhi):
+    """Bracketed root of f on [lo, hi] with f(lo) < 0 <= f(hi).
+
+    which = 0: f = g (returns the smallest point found with g >= 0);
+    which = 1: f = -g' (critical point of g, a maximum).
+    Safeguarded Newton with bisection fallback; converges to rounding.
+    """
+    if fhi == 0.0:
+        return hi
+    s = hi - fhi * (hi - lo) / (fhi - flo)
+    if not (lo < s < hi):
+        s = 0.5 * (lo + hi)
+    width_old = hi - lo
+    for it in range(200):
+        g, gv, ga, y, yd = level_values(P, S, s, c, sig)
+        if which == 0:
+            f = g
+            fp = gv
+        else:
+            f = -gv
+            fp = -ga
+        if f >= 0.0:
+            hi = s
+            if f == 0.0:
+                return s
+        else:
+            lo = s
+        tol = 2.0 * EPS * max(abs(lo), abs(hi), 1e-300)
+        if hi - lo <= tol:
+            break
+        sn = s - f / fp if fp != 0.0 else 0.5 * (lo + hi)
+        if it % 3 == 2:
+            if hi - lo > 0.5 * width_old:
+                sn = 0.5 * (lo + hi)
+            width_old = hi - lo
+        if not (lo < sn < hi):
+            sn = 0.5 * (lo + hi)
+        if sn == s:
+            # Newton has converged: finish with the neighbouring float towards the bracket.
+            sn = 0.5 * (lo + hi)
+            if sn == lo or sn == hi:
+                break
+        s = sn
+    return hi
+
+
+@jit
+def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag):
+    """Earliest s in (sa, sb] with g(s) >= 0, or -1.  va = values at sa (g < 0).
+
+    out_b receives the values at sb (g, g', g'', y, yd) for the next chunk.
+    At most MAX_WORK sub-intervals are examined; past that the chunk is
+    settled at the current resolution and diag[0] counts it (reported to the
+    caller as a NumericalWarning).
+    """
+    work = 0
+    stk = np.empty((MAX_LEVEL + 4, 12))
+    gb, gvb, gab, yb, ydb = level_values(P, S, sb, c, sig)
+    out_b[0] = gb
+    out_b[1] = gvb
+    out_b[2] = gab
+    out_b[3] = yb
+    out_b[4] = ydb
+    n = 0
+    stk[0, 0] = sa
+    stk[0, 1] = sb
+    stk[0, 2] = va[0]
+    stk[0, 3] = va[1]
+    stk[0, 4] = va[2]
+    stk[0, 5] = va[3]
+    stk[0, 6] = va[4]
+    stk[0, 7] = gb
+    stk[0, 8] = gvb
+    stk[0, 9] = gab
+    stk[0, 10] = 0.0  # level
+    n = 1
+    while n > 0:
+        n -= 1
+        a0 = stk[n, 0]
+        b0 = stk[n, 1]
+        ga = stk[n, 2]
+        gva = stk[n, 3]
+        gaa = stk[n, 4]
+        ya = stk[n, 5]
+        yda = stk[n, 6]
+        gbb = stk[n, 7]
+        gvbb = stk[n, 8]
+        gabb = stk[n, 9]
+        level = stk[n, 10]
+        L = b0 - a0
+        xa = c + sig * ga
+        vxa = sig * gva
+        M2 = deriv_bound(P, 2, ya, yda, b0, xa, vxa, L)
+        M3 = deriv_bound(P, 3, ya, yda, b0, xa, vxa, L)
+        tiny = L <= 4.0 * EPS * max(abs(b0), 1e-300) or level >= MAX_LEVEL
+        work += 1
+        if work > MAX_WORK:
+            if work == MAX_WORK + 1:
+                diag[0] += 1.0
+            tiny = True
+        if gbb >= 0.0:
+            # a root lies in (a0, b0]; find the earliest one
+            if _lower_line_bound(gva, gvbb, M2, L) > 0.0 or tiny:
+                return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+            uba = _upper_line_bound(gaa, gabb, M3, L)
+            lba = _lower_line_bound(gaa, gabb, M3, L)
+            if lba > 0.0:  # convex: a single crossing
+                return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+            if uba < 0.0:  # concave: rises to one maximum then falls
+                if gvbb >= 0.0 or gva <= 0.0:
+                    return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb)
+                gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
+                if gc >= 0.0:
+                    return _root(P, S, c, sig, 0, a0, sc, ga, gc)
+                return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+        else:
+            if _max_min_parabolas(ga, gva, gbb, gvbb, M2, L) < 0.0:
+                continue
+            uba = _upper_line_bound(gaa, gabb, M3, L)
+            lba = _lower_line_bound(gaa, gabb, M3, L)
+            if lba > 0.0:
+                continue  # convex: the maximum is at an end, both ends < 0
+            if uba < 0.0:
+                if gva <= 0.0 or gvbb >= 0.0:
+                    continue  # monotone: the maximum is at an end
+                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb)
+                gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
+                if gc >= 0.0:
+                    return _root(P, S, c, sig, 0, a0, sc, ga, gc)
+                continue
+            if tiny:
+                continue  # degenerate (g, g', g'' all ~0): below resolution
+        # split
+        m = 0.5 * (a0 + b0)
+        gm, gvm, gam, ym, ydm = level_values(P, S, m, c, sig)
+        # right half first (processed last)
+        stk[n, 0] = m
+        stk[n, 1] = b0
+        stk[n, 2] = gm
+        stk[n, 3] = gvm
+        stk[n, 4] = gam
+        stk[n, 5] = ym
+        stk[n, 6] = ydm
+        stk[n, 7] = gbb
+        stk[n, 8] = gvbb
+        stk[n, 9] = gabb
+        stk[n, 10] = level + 1.0
+        if gm >= 0.0:
+            n -= 1  # the root is in the left half; the right half is never needed
+        n += 1
+        stk[n, 0] = a0
+        stk[n, 1] = m
+        stk[n, 2] = ga
+        stk[n, 3] = gva
+        stk[n, 4] = gaa
+        stk[n, 5] = ya
+        stk[n, 6] = yda
+        stk[n, 7] = gm
+        stk[n, 8] = gvm
+        stk[n, 9] = gam
+        stk[n, 10] = level + 1.0
+        n += 1
+    return -1.0
+
+
+@jit
+def first_reach(P, S, c, sig, s_lo, s_hi, hmax, diag):
+    """Earliest s in (s_lo, s_hi] where sig (x(s) - c) >= 0, or -1.
+
+    Requires sig (x(s_lo) - c) < 0.
+    """
+    va = np.empty(5)
+    vb = np.empty(5)
+    g, gv, ga, y, yd = level_values(P, S, s_lo, c, sig)
+    va[0] = g
+    va[1] = gv
+    va[2] = ga
+    va[3] = y
+    va[4] = yd
+    sa = s_lo
+    while sa < s_hi:
+        sb = min(sa + hmax, s_hi)
+        if s_hi - sb < 0.25 * hmax:
+            sb = s_hi
+        r = _search_chunk(P, S, c, sig, sa, sb, va, vb, diag)
+        if r >= 0.0:
+            return r
+        for i in range(5):
+            va[i] = vb[i]
+        sa = sb
+    return -1.0
+
+
+@jit
+def stop_exit(P, S, hmax):
+    """Leave the stop: (+1, 0) if the motion pushes into the stop (stick), else
+    (-1, u1) with g < 0 proven on (0, u1].  Uses the leading nonzero Taylor term."""
+    y = S[J_Y]
+    yd = S[J_YD]
+    for k in range(1, 5):
+        tk = S[J_TAY + k]
+        if tk > 0.0:
+            return 1.0, 0.0
+        if tk < 0.0:
+            u = hmax
+            # g(u) <= t_k u^k + M_{k+1} u^{k+1} / (k+1)!  < 0  for u < |t_k| (k+1)! / M
+            for it in range(60):
+                M = deriv_bound(P, k + 1, y, yd, u, 1.0, S[J_TAY + 1], u)
+                fact = 1.0
+                for j in range(2, k + 2):
+                    fact *= j
+                u_ok = abs(tk) * fact / M
+                if u_ok > u:
+                    break
+                u = 0.5 * u_ok
+            return -1.0, u
+    # all leading terms vanish (degenerate): leave with a tiny advance
+    return -1.0, 64.0 * EPS
+
+
+@jit
+def level_exit(P, S, s0, c, sig, hmax):
+    """Smallest advance u with sig (x - c) < 0 proven on (s0, s0 + u], starting at a
+    point exactly on the level with sig v < 0 (first order)."""
+    g, gv, ga, y, yd = level_values(P, S, s0, c, sig)
+    if gv >= 0.0:
+        return 64.0 * EPS * max(1.0, abs(s0))
+    u = hmax
+    for it in range(60):
+        M = deriv_bound(P, 2, y, yd, s0 + u, c + sig * g, sig * gv, u)
+        u_ok = 2.0 * (-gv) / M
+        if u_ok > u:
+            break
+        u = 0.5 * u_ok
+    return u
+
+
+@jit
+def micro_bounce(F, omega, zeta, th, w0, rem):
+    """Average elastic (e = 1) micro-bouncing on the stop while the force pushes.
+
+    With e = 1 there is no accumulation point: damping removes
+    ``4 zeta w^3 / (3 a)`` of energy per bounce of rebound speed ``w`` under the
+    net push ``a = F cos(theta) - 1``, so ``dw/dt = -(2 zeta / 3) w``, and the
+    bounce action ``w^3 / a`` is an adiabatic invariant, so over a slowly
+    varying push ``w(t) = w0 (a(t) / a0)^(1/3) exp(-2 zeta t / 3)``.  The
+    number of bounces grows without bound as w shrinks, so following them one
+    by one cannot finish; this asymptotic solution (relative error of order
+    the flight time over the forcing and damping time scales, below
+    TAU_MICRO) carries the state to the time where the flight time
+    ``2 w / a`` reaches TAU_EXIT again (near the force reversal), from where
+    the exact solver resumes.
+
+    When the bounce height ``w^2 / (2 a)`` falls below the displacement
+    resolution (half an ulp of 1.0) the mass is in contact to double precision
+    and is reported stuck.
+
+    Returns (duration, w at the end, estimated number of bounces skipped,
+    stuck flag).
+    """
+    a0 = F * math.cos(th) - 1.0
+    psi = math.acos(1.0 / F)
+    phi = th if th <= math.pi else th - TWO_PI
+    t_push = (psi - phi) / omega
+    scale = max(1.0, omega, 2.0 * zeta)
+    n_scan = 512
+    t_prev = 0.0
+    t_exit = min(t_push, rem)
+    n_b = 0.0
+    f_prev = a0 / (2.0 * w0)
+    for k in range(1, n_scan + 1):
+        tk = t_push * k / n_scan
+        ak = F * math.cos(th + omega * tk) - 1.0
+        if ak <= 0.0 or tk >= rem:
+            t_exit = min(tk, rem)
+            break
+        wk = w0 * (ak / a0) ** (1.0 / 3.0) * math.exp(-2.0 * zeta * tk / 3.0)
+        if wk * wk / (2.0 * ak) < 0.5 * EPS:
+            return tk, 0.0, n_b, True
+        if 2.0 * wk / ak * scale >= TAU_EXIT:
+            lo = t_prev
+            hi = tk
+            for it in range(60):
+                mid = 0.5 * (lo + hi)
+                am = F * math.cos(th + omega * mid) - 1.0
+                wm = w0 * (am / a0) ** (1.0 / 3.0) * math.exp(-2.0 * zeta * mid / 3.0)
+                if am <= 0.0 or 2.0 * wm / am * scale >= TAU_EXIT:
+                    hi = mid
+                else:
+                    lo = mid
+            t_exit = hi
+            break
+        f_k = ak / (2.0 * wk)
+        n_b += 0.5 * (f_prev + f_k) * (tk - t_prev)
+        f_prev = f_k
+        t_prev = tk
+    t_exit = min(t_exit, rem)
+    a_end = F * math.cos(th + omega * t_exit) - 1.0
+    if a_end > 0.0:
+        w_end = w0 * (a_end / a0) ** (1.0 / 3.0) * math.exp(-2.0 * zeta * t_exit / 3.0)
+    else:
+        w_end = 0.0
+    return t_exit, w_end, n_b, False
+
+
+@jit
+def _grow(arr, n):
+    if n < arr.shape[0]:
+        return arr
+    new = np.empty((2 * arr.shape[0] + 16, arr.shape[1]))
+    new[: arr.shape[0]] = arr
+    return new
+
+
+@jit
+def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_segs,
+        max_events):
+    """Simulate for `duration` from the given state.
+
+    Returns (imp, n_imp, acc, n_acc, stk, n_stk, crs, n_crs, seg, n_seg,
+    t, x, v, th, stuck, n_events, status, n_unresolved, avg, n_avg) where imp rows are
+    (t, phase, v_in, v_out), stk rows (t_start, t_end), crs rows (t, v), seg rows
+    (t_start, th0, y0, yd0, kind) with kind 0 = free flight, 1 = stuck, and
+    avg rows (t_start, t_end, n_bounces) mark elastic micro-bounce intervals
+    that were averaged (see :func:`micro_bounce`);
+    status 0 = done, 1 = event budget exhausted; n_unresolved counts search
+    chunks settled at the MAX_WORK cap (zero in all tested cases).
+    """
+    P = make_params(F, omega, zeta, e)
+    S = np.zeros(N_S)
+    diag = np.zeros(2)
+    imp = np.empty((64, 4))
+    acc = np.empty((4, 1))
+    stk = np.empty((4, 2))
+    crs = np.empty((16 if want_cross else 1, 2))
+    seg = np.empty((64 if want_segs else 1, 5))
+    avg = np.empty((2, 3))
+    n_avg = 0
+    n_imp = 0
+    n_acc = 0
+    n_stk = 0
+    n_crs = 0
+    n_seg = 0
+    W = min(TWO_PI, TWO_PI / omega)
+    hmax = W / 8.0
+    t = t0
+    x = x0
+    v = v0
+    th = reduce_phase(th0)
+    stuck = stuck0
+    rem = duration
+    n_events = 0
+    status = 0
+    tau_prev = -1.0  # previous chatter flight time (-1: not in a chatter sequence)
+    n_chat = 0
+    last_was_impact = False
+    released_now = False
+    while rem > 0.0:
+        if n_events >= max_events:
+            status = 1
+            break
+        if stuck:
+            if want_segs:
+                seg = _grow(seg, n_seg)
+                seg[n_seg, 0] = t
+                seg[n_seg, 1] = th
+                seg[n_seg, 2] = 0.0
+                seg[n_seg, 3] = 0.0
+                seg[n_seg, 4] = 1.0
+                n_seg += 1
+            if F > 1.0:
+                psi = math.acos(1.0 / F)
+            else:
+                psi = 0.0
+            phi = th if th <= math.pi else th - TWO_PI
+            if -psi <= phi < psi and not released_now:
+                s_rel = (psi - phi) / omega
+                th_rel = psi
+            else:
+                s_rel = 0.0
+                th_rel = th
+            stk = _grow(stk, n_stk)
+            stk[n_stk, 0] = t
+            if s_rel >= rem:
+                t += rem
+                th = reduce_phase(th + omega * rem)
+                rem = 0.0
+                stk[n_stk, 1] = t
+                n_stk += 1
+                break
+            t += s_rel
+            rem -= s_rel
+            th = th_rel
+            stk[n_stk, 1] = t
+            n_stk += 1
+            stuck = False
+            released_now = True
+            x = 1.0
+            v = 0.0
+            n_events += 1
+            last_was_impact = False
+            continue
+        on_stop = x == 1.0
+        start_segment(P, S, th, x, v, on_stop)
+        if want_segs:
+            seg = _grow(seg, n_seg)
+            seg[n_seg, 0] = t
+            seg[n_seg, 1] = th
+            seg[n_seg, 2] = S[J_Y]
+            seg[n_seg, 3] = S[J_YD]
+            seg[n_seg, 4] = 0.0
+            n_seg += 1
+        Wn = min(W, rem)
+        s_lo = 0.0
+        if on_stop:
+            sgn, u1 = stop_exit(P, S, hmax)
+            if sgn > 0.0 and not released_now:
+                stuck = True
+                x = 1.0
+                v = 0.0
+                n_seg -= 1 if want_segs else 0
+                continue
+            s_lo = min(u1, Wn)
+        released_now = False
+        s_imp = -1.0
+        if s_lo < Wn:
+            s_imp = first_reach(P, S, 1.0, 1.0, s_lo, Wn, hmax, diag)
+        s_end = s_imp if s_imp >= 0.0 else Wn
+        if want_cross:
+            # upward crossings of x = 0 inside (0, s_end]
+            xs, vs, a_s, ys, yds, zs = evaluate(P, S, 0.0)
+            if xs < 0.0 or (xs == 0.0 and vs < 0.0):
+                sig = 1.0
+            else:
+                sig = -1.0
+            s_from = 0.0
+            if xs == 0.0:
+                s_from = min(level_exit(P, S, 0.0, 0.0, sig, hmax), s_end)
+            while s_from < s_end:
+                sc = first_reach(P, S, 0.0, sig, s_from, s_end, hmax, diag)
+                if sc < 0.0:
+                    break
+                if sig > 0.0:
+                    xc, vc, ac, yc, ydc, zc = evaluate(P, S, sc)
+                    crs = _grow(crs, n_crs)
+                    crs[n_crs, 0] = t + sc
+                    crs[n_crs, 1] = vc
+                    n_crs += 1
+                sig = -sig
+                g, gv, ga, yg, ydg = level_values(P, S, sc, 0.0, sig)
+                if g < 0.0:
+                    s_from = sc
+                else:
+                    s_from = sc + level_exit(P, S, sc, 0.0, sig, hmax)
+        if s_imp < 0.0:
+            xn, vn, an, yn, ydn, zn = evaluate(P, S, Wn)
+            x = min(xn, 1.0)
+            if x == 1.0:
+                x = 1.0 - EPS  # a window end within rounding of the stop (no impact found)
+            v = vn
+            t += Wn
+            th = reduce_phase(th + omega * Wn)
+            rem -= Wn
+            tau_prev = -1.0
+            n_chat = 0
+            last_was_impact = False
+            continue
+        # impact
+        xi, v_in, ai, yi, ydi, zi = evaluate(P, S, s_imp)
+        if v_in < 0.0:
+            v_in = 0.0  # grazing: the crossing velocity is zero to rounding
+        t_imp = t + s_imp
+        th = reduce_phase(th + omega * s_imp)
+        rem -= s_imp
+        imp = _grow(imp, n_imp)
+        imp[n_imp, 0] = t_imp
+        imp[n_imp, 1] = th
+        imp[n_imp, 2] = v_in
+        imp[n_imp, 3] = e * v_in
+        n_imp += 1
+        n_events += 1
+        x = 1.0
+        v = -e * v_in
+        tau = s_imp if last_was_impact else -1.0
+        t = t_imp
+        last_was_impact = True
+        # complete chatter: jump to the accumulation point
+        a_stop = F * math.cos(th) - 1.0
+        if a_stop > 0.0 and tau > 0.0:
+            if tau_prev > 0.0:
+                q = tau / tau_prev
+                n_chat += 1
+            else:
+                q = e
+                n_chat = 1
+            tau_prev = tau
+            if e < 1.0 and q < 1.0:
+                tail = tau * q / (1.0 - q)
+                res = 16.0 * EPS * max(1.0, abs(t))
+                if (tail <= res or n_chat >= N_CHATTER_MAX) and tail < rem:
+                    if F * math.cos(th + omega * tail) - 1.0 > 0.0:
+                        t += tail
+                        th = reduce_phase(th + omega * tail)
+                        rem -= tail
+                        acc = _grow(acc, n_acc)
+                        acc[n_acc, 0] = t
+                        n_acc += 1
+                        n_events += 1
+                        stuck = True
+                        v = 0.0
+                        tau_prev = -1.0
+                        n_chat = 0
+                        last_was_impact = False
+                        continue
+            if (e == 1.0 and n_chat >= N_MICRO and tau * max(1.0, omega, 2.0 * zeta) < TAU_MICRO):
+                # elastic micro-bouncing: no accumulation exists; average it
+                dt_avg, w_end, n_b, now_stuck = micro_bounce(F, omega, zeta, th, e * v_in, rem)
+                avg = _grow(avg, n_avg)
+                avg[n_avg, 0] = t
+                avg[n_avg, 1] = t + dt_avg
+                avg[n_avg, 2] = n_b
+                n_avg += 1
+                n_events += 1
+                t += dt_avg
+                th = reduce_phase(th + omega * dt_avg)
+                rem -= dt_avg
+                v = -w_end
+                if now_stuck:
+                    v = 0.0
+                    stuck = True
+                tau_prev = -1.0
+                n_chat = 0
+                last_was_impact = False
+                continue
+            # a flight shorter than the time resolution cannot be resolved: stick
+            if tau < 4.0 * EPS * max(1.0, abs(t)) and e * v_in < 1e-8:
+                stuck = True
+                v = 0.0
+                tau_prev = -1.0
+                n_chat = 0
+                last_was_impact = False
+                continue
+        else:
+            tau_prev = -1.0
+            n_chat = 0
+    return (imp, n_imp, acc, n_acc, stk, n_stk, crs, n_crs, seg, n_seg,
+            t, x, v, th, stuck, n_events, status, diag[0], avg, n_avg)
