@@ -479,6 +479,11 @@ def test_public_surface_is_pinned() -> None:
         "floquet_multipliers", "orbit_clearance", "grazing_forcing", "saddle_node_forcing",
         "branch_events", "impact_map", "find_periodic_orbit", "periodic_orbit_from_impacts",
         "bifurcation_sets", "plot_bifurcation_sets",
+        "Regime", "SweepPoint", "Sweep", "LyapunovResult", "AttractorMap", "DisturbanceMap",
+        "classify_impacts", "sweep_values", "sweep", "sweep_up_down", "plot_sweeps",
+        "write_sweeps_csv", "lyapunov_exponent", "lyapunov_from_result", "tangent_log_growth",
+        "regime_map", "basin_map", "disturbance_threshold", "disturbance_map",
+        "plot_attractor_map", "plot_disturbance_map",
     ]
     for name in analysis.__all__:
         assert getattr(analysis, name).__doc__

@@ -5,9 +5,26 @@
 * :mod:`rattle_lab.analysis.bifsets`: regions of existence and stability of
   the 1/n orbits in the (omega, F) plane with their boundary curves (thesis
   3.3, Fig. 3-7, 3-9, 3-10).
+* :mod:`rattle_lab.analysis.sweep`: slow parameter sweeps with the state
+  carried over, regime classification (thesis 4.2-4.3, Fig. 4-3 to 4-5).
+* :mod:`rattle_lab.analysis.lyapunov`: the largest Lyapunov exponent, exactly
+  from the impact log (transition and saltation matrices).
+* :mod:`rattle_lab.analysis.maps`: regime maps, basins of attraction and the
+  disturbance study (thesis 4.3.3, Fig. 4-7), run serially or through Dask.
 """
 
 from .bifsets import BifurcationSets, BoundaryCurve, bifurcation_sets, plot_bifurcation_sets
+from .lyapunov import LyapunovResult, lyapunov_exponent, lyapunov_from_result, tangent_log_growth
+from .maps import (
+    AttractorMap,
+    DisturbanceMap,
+    basin_map,
+    disturbance_map,
+    disturbance_threshold,
+    plot_attractor_map,
+    plot_disturbance_map,
+    regime_map,
+)
 from .orbits import (
     BranchEvent,
     OneOverNOrbit,
@@ -24,6 +41,17 @@ from .orbits import (
     orbit_forcing,
     periodic_orbit_from_impacts,
     saddle_node_forcing,
+)
+from .sweep import (
+    Regime,
+    Sweep,
+    SweepPoint,
+    classify_impacts,
+    plot_sweeps,
+    sweep,
+    sweep_up_down,
+    sweep_values,
+    write_sweeps_csv,
 )
 
 __all__ = [
@@ -46,4 +74,25 @@ __all__ = [
     "periodic_orbit_from_impacts",
     "bifurcation_sets",
     "plot_bifurcation_sets",
+    "Regime",
+    "SweepPoint",
+    "Sweep",
+    "LyapunovResult",
+    "AttractorMap",
+    "DisturbanceMap",
+    "classify_impacts",
+    "sweep_values",
+    "sweep",
+    "sweep_up_down",
+    "plot_sweeps",
+    "write_sweeps_csv",
+    "lyapunov_exponent",
+    "lyapunov_from_result",
+    "tangent_log_growth",
+    "regime_map",
+    "basin_map",
+    "disturbance_threshold",
+    "disturbance_map",
+    "plot_attractor_map",
+    "plot_disturbance_map",
 ]

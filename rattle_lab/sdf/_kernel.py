@@ -20,25 +20,33 @@ Free flight
 Why no impact can be missed
     The impact is the earliest ``s`` in the window where ``g(s) = x(s) - 1 >= 0``.
     The window is cut into chunks and each chunk ``[s_a, s_b]`` is examined with
-    rigorous bounds on the derivatives of ``x`` over the chunk:
+    rigorous bounds ``M_k >= |x^(k)|`` over the chunk (:func:`deriv_bound`), the
+    smaller of two valid ones:
 
-    * the particular part has ``|x_p^(k)| <= R omega^k`` (R its amplitude);
-    * the homogeneous part ``y`` obeys ``d/ds (y^2 + y'^2) = -4 zeta y'^2 <= 0``,
-      so ``rho = |(y, y')|`` never grows and ``|y^(k)| <= n_k rho(s_a)`` with
-      ``n_k`` the norm of the first row of the k-th power of the companion
-      matrix; for zeta > 1 the two decaying modes are bounded separately.
+    * modal: the particular part has ``|x_p^(k)| <= R omega^k`` (R its
+      amplitude); the homogeneous part ``y`` obeys
+      ``d/ds (y^2 + y'^2) = -4 zeta y'^2 <= 0``, so ``rho = |(y, y')|`` never
+      grows and ``|y^(k)| <= n_k rho(s_a)`` (``n_k`` the norm of the first row of
+      the k-th power of the companion matrix; for zeta > 1 the two decaying
+      modes are bounded separately);
+    * energy: ``d/ds |(x, v)| <= F`` bounds ``|x|, |v|`` on the chunk, and the
+      equation of motion bounds the higher derivatives; this one stays sharp
+      near resonance, where the modal parts are large and cancel.
 
-    With ``M2 >= |x''|`` on the chunk, ``g`` lies below both parabolas
+    With ``M2`` on the chunk, ``g`` lies below both parabolas
     ``g_a + g'_a u + M2 u^2 / 2`` and ``g_b - g'_b w + M2 w^2 / 2``; if the
-    maximum of their lower envelope is negative the chunk holds no impact.  If
-    not, ``M3 >= |x'''|`` bounds ``x''``: if ``x''`` is provably negative the
-    chunk holds at most one local maximum of ``x``, found by a bracketed root of
-    ``v`` and compared with 1 exactly; if ``x''`` is provably positive the
+    maximum of their lower envelope is below ``-GRAZE_TOL`` the chunk holds no
+    impact.  If not, ``M3`` bounds ``x''``: if ``x''`` is provably negative the
+    chunk holds at most one local maximum of ``x``, found as a bracketed root of
+    ``v`` and compared with the stop; if ``x''`` is provably positive the
     maximum is at an end.  Otherwise the chunk is halved.  Near a tangency the
     curvature is bounded away from zero, so the concavity test settles it after
-    a few halvings: a trajectory that touches ``x = 1`` reports that impact (with
-    ``v_in`` the rounding-level velocity there), one that stays below by more
-    than rounding does not.  Sampling sign changes is never relied on.
+    a few halvings.  A maximum within ``GRAZE_TOL`` (4 ulp) of the stop is a
+    grazing impact (``v_in`` is then the rounding-level velocity there): below
+    that the distinction is lost in the rounding of ``x`` itself.  Sampling sign
+    changes is never relied on.  Each chunk examines at most ``MAX_WORK``
+    sub-intervals (a guard that has not been reached in any test); if it is,
+    the caller is warned.
 
 Impacts on and from the stop
     A flight that starts on the stop (after an impact, or on release from
@@ -54,11 +62,15 @@ Chatter and sticking
     When the force pushes into the stop (``a_stop = F cos(theta) - 1 > 0`` at
     x = 1, v = 0) and flights shrink geometrically (complete chatter, Budd &
     Dux 1994; Nordmark & Piiroinen 2009), the remaining flight times form a
-    geometric series.  After each micro-impact the tail ``tau_k q / (1 - q)``
-    (``q`` the measured ratio of the last two flight times, which tends to
-    ``e``) is computed; once it is below the time resolution ``16 ulp(t)``, or
-    after ``N_CHATTER_MAX`` micro-impacts, the solver jumps to the accumulation
-    point and sticks.  While stuck (x = 1, v = 0) the net force
+    geometric series.  Each micro-flight is solved from the Taylor series about
+    the stop (:func:`micro_flight`, a proven single root), and after each
+    micro-impact the tail ``tau_k q / (1 - q)`` (``q`` the measured ratio of the
+    last two flight times, which tends to ``e``) is computed.  Once the tail,
+    or its error estimate ``tail |q_k - q_(k-1)| / (1 - q)^2`` (q drifts by
+    O(w) per flight), is below the time resolution ``16 ulp(t)``, or after
+    ``N_CHATTER_MAX`` micro-impacts, the solver jumps to the accumulation point
+    and sticks.  With e = 1 there is no accumulation point; elastic
+    micro-bouncing is averaged (:func:`micro_bounce`) and reported.  While stuck (x = 1, v = 0) the net force
     ``F cos(theta) - 1`` pushes into the stop; the mass is released at the
     analytic phase ``theta = arccos(1 / F)`` where the force reverses.
 
@@ -102,6 +114,9 @@ N_MICRO = 1000
 #: are averaged; averaging ends when the flight time grows to TAU_EXIT.
 TAU_MICRO = 1e-4
 TAU_EXIT = 1e-2
+#: A local maximum of x within GRAZE_TOL of the stop is a grazing impact: the
+#: distinction is below the rounding of x (4 ulp of 1.0).
+GRAZE_TOL = 4.0 * EPS
 #: Maximum sub-intervals examined in one search chunk.
 MAX_WORK = 20000
 
@@ -234,8 +249,10 @@ def start_segment(P, S, th, x, v, on_stop):
             else:
                 trig = math.sin(th)
             dnew = F * wk * trig - 2.0 * z * dk - dkm1
-            if k == 0 and abs(dnew) <= 8.0 * EPS * (F + 1.0 + 2.0 * z * abs(v)):
-                dnew = 0.0  # rounding noise of an exact zero (release from sticking)
+            if k <= 2 and abs(dnew) <= 8.0 * EPS * (F * wk + 2.0 * z * abs(dk) + abs(dkm1)):
+                # rounding noise of an exact zero (release from sticking, contact at
+                # the crest of the force): keep the leading order of the motion exact
+                dnew = 0.0
             wk *= w
             fact *= (k + 2)
             S[J_TAY + k + 2] = dnew / fact
@@ -371,7 +388,8 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi):
     """
     if fhi == 0.0:
         return hi
-    s = hi - fhi * (hi - lo) / (fhi - flo)
+    den = fhi - flo
+    s = hi - fhi * ((hi - lo) / den) if den > 0.0 else 0.5 * (lo + hi)
     if not (lo < s < hi):
         s = 0.5 * (lo + hi)
     width_old = hi - lo
@@ -418,6 +436,8 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag):
     caller as a NumericalWarning).
     """
     work = 0
+    graze = c == 1.0
+    gtol = GRAZE_TOL if graze else 0.0
     stk = np.empty((MAX_LEVEL + 4, 12))
     gb, gvb, gab, yb, ydb = level_values(P, S, sb, c, sig)
     out_b[0] = gb
@@ -479,7 +499,9 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag):
                     return _root(P, S, c, sig, 0, a0, sc, ga, gc)
                 return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
         else:
-            if _max_min_parabolas(ga, gva, gbb, gvbb, M2, L) < 0.0:
+            if graze and gbb >= -GRAZE_TOL and gvbb >= 0.0:
+                return b0  # touches the stop (within rounding) at the chunk end
+            if _max_min_parabolas(ga, gva, gbb, gvbb, M2, L) < -gtol:
                 continue
             uba = _upper_line_bound(gaa, gabb, M3, L)
             lba = _lower_line_bound(gaa, gabb, M3, L)
@@ -492,6 +514,8 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag):
                 gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
                 if gc >= 0.0:
                     return _root(P, S, c, sig, 0, a0, sc, ga, gc)
+                if gc >= -gtol:
+                    return sc  # grazing contact: the maximum touches the stop
                 continue
             if tiny:
                 continue  # degenerate (g, g', g'' all ~0): below resolution
@@ -557,6 +581,67 @@ def first_reach(P, S, c, sig, s_lo, s_hi, hmax, diag):
 
 
 @jit
+def micro_flight(P, S, s_hi):
+    """Next impact of a short flight from the stop, from its Taylor series; -1 if
+    the fast path does not apply.
+
+    On the stop, ``x - 1 = s p(s)`` with ``p(s) = sum_k t_k s^(k-1)``.  When the
+    mass leaves (``t_1 = v < 0``) against a push (``t_2 = a / 2 > 0``), the flight
+    is short and ``p`` is provably increasing on ``[0, s_max]`` if
+    ``t_2 - sum_{k>=3} (k-1) |t_k| s_max^(k-2) > 0``; then ``p`` has exactly one
+    root in ``(0, s_max)`` when ``p(s_max) > 0``, ``x < 1`` before it, and it is
+    the next impact.  This resolves chatter flights to relative rounding at a
+    fraction of the cost of the general search.
+    """
+    t1 = S[J_TAY + 1]
+    t2 = S[J_TAY + 2]
+    if not (t1 < 0.0 and t2 > 0.0):
+        return -1.0
+    s_max = -2.0 * t1 / t2
+    if s_max * P[I_LAM] > TAYLOR_REACH or s_max >= s_hi:
+        return -1.0
+    lb = t2
+    sk = 1.0
+    for k in range(3, N_TAYLOR + 1):
+        sk *= s_max
+        lb -= (k - 1) * abs(S[J_TAY + k]) * sk
+    if lb <= 0.25 * t2:
+        return -1.0
+    ph = 0.0
+    for k in range(N_TAYLOR, 0, -1):
+        ph = ph * s_max + S[J_TAY + k]
+    if ph <= 0.0:
+        return -1.0
+    lo = 0.0
+    hi = s_max
+    s = -t1 / t2
+    for it in range(100):
+        f = 0.0
+        fp = 0.0
+        for k in range(N_TAYLOR, 0, -1):
+            f = f * s + S[J_TAY + k]
+        for k in range(N_TAYLOR, 1, -1):
+            fp = fp * s + (k - 1) * S[J_TAY + k]
+        if f >= 0.0:
+            hi = s
+            if f == 0.0:
+                return s
+        else:
+            lo = s
+        if hi - lo <= 2.0 * EPS * hi:
+            break
+        sn = s - f / fp
+        if not (lo < sn < hi):
+            sn = 0.5 * (lo + hi)
+        if sn == s:
+            sn = 0.5 * (lo + hi)
+            if sn == lo or sn == hi:
+                break
+        s = sn
+    return hi
+
+
+@jit
 def stop_exit(P, S, hmax):
     """Leave the stop: (+1, 0) if the motion pushes into the stop (stick), else
     (-1, u1) with g < 0 proven on (0, u1].  Uses the leading nonzero Taylor term."""
@@ -589,7 +674,11 @@ def level_exit(P, S, s0, c, sig, hmax):
     point exactly on the level with sig v < 0 (first order)."""
     g, gv, ga, y, yd = level_values(P, S, s0, c, sig)
     if gv >= 0.0:
-        return 64.0 * EPS * max(1.0, abs(s0))
+        # degenerate: on the level without a velocity away from it (a tangency,
+        # or at rest on the level when F = 0); step on by a fraction of a chunk
+        if P[I_F] == 0.0 and g == 0.0 and gv == 0.0 and ga == 0.0:
+            return 1e300  # at rest on the level for ever: no further crossing
+        return hmax / 64.0
     u = hmax
     for it in range(60):
         M = deriv_bound(P, 2, y, yd, s0 + u, c + sig * g, sig * gv, u)
@@ -713,14 +802,19 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
     v = v0
     th = reduce_phase(th0)
     stuck = stuck0
+    t_end = t0 + duration
     rem = duration
     n_events = 0
     status = 0
     tau_prev = -1.0  # previous chatter flight time (-1: not in a chatter sequence)
+    q_prev = 0.0
     n_chat = 0
     last_was_impact = False
     released_now = False
     while rem > 0.0:
+        rem = t_end - t  # recomputed, so that t ends at t0 + duration to rounding
+        if rem <= 0.0:
+            break
         if n_events >= max_events:
             status = 1
             break
@@ -747,14 +841,13 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             stk = _grow(stk, n_stk)
             stk[n_stk, 0] = t
             if s_rel >= rem:
-                t += rem
+                t = t_end
                 th = reduce_phase(th + omega * rem)
                 rem = 0.0
                 stk[n_stk, 1] = t
                 n_stk += 1
                 break
             t += s_rel
-            rem -= s_rel
             th = th_rel
             stk[n_stk, 1] = t
             n_stk += 1
@@ -788,10 +881,15 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             s_lo = min(u1, Wn)
         released_now = False
         s_imp = -1.0
-        if s_lo < Wn:
+        micro = False
+        if on_stop:
+            s_imp = micro_flight(P, S, Wn)
+            micro = s_imp >= 0.0
+        if not micro and s_lo < Wn:
             s_imp = first_reach(P, S, 1.0, 1.0, s_lo, Wn, hmax, diag)
         s_end = s_imp if s_imp >= 0.0 else Wn
-        if want_cross:
+        # a micro flight stays within |v0| s_imp of the stop: it cannot reach x = 0
+        if want_cross and not (micro and -S[J_TAY + 1] * s_imp < 0.5):
             # upward crossings of x = 0 inside (0, s_end]
             xs, vs, a_s, ys, yds, zs = evaluate(P, S, 0.0)
             if xs < 0.0 or (xs == 0.0 and vs < 0.0):
@@ -805,18 +903,15 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
                 sc = first_reach(P, S, 0.0, sig, s_from, s_end, hmax, diag)
                 if sc < 0.0:
                     break
-                if sig > 0.0:
-                    xc, vc, ac, yc, ydc, zc = evaluate(P, S, sc)
+                xc, vc, ac, yc, ydc, zc = evaluate(P, S, sc)
+                if sig > 0.0 and vc > 0.0:  # v = 0 is a tangency, not a crossing
                     crs = _grow(crs, n_crs)
                     crs[n_crs, 0] = t + sc
                     crs[n_crs, 1] = vc
                     n_crs += 1
                 sig = -sig
-                g, gv, ga, yg, ydg = level_values(P, S, sc, 0.0, sig)
-                if g < 0.0:
-                    s_from = sc
-                else:
-                    s_from = sc + level_exit(P, S, sc, 0.0, sig, hmax)
+                # step past the crossing by a proven margin, clear of rounding noise
+                s_from = sc + level_exit(P, S, sc, 0.0, sig, hmax)
         if s_imp < 0.0:
             xn, vn, an, yn, ydn, zn = evaluate(P, S, Wn)
             x = min(xn, 1.0)
@@ -825,7 +920,6 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             v = vn
             t += Wn
             th = reduce_phase(th + omega * Wn)
-            rem -= Wn
             tau_prev = -1.0
             n_chat = 0
             last_was_impact = False
@@ -836,7 +930,6 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             v_in = 0.0  # grazing: the crossing velocity is zero to rounding
         t_imp = t + s_imp
         th = reduce_phase(th + omega * s_imp)
-        rem -= s_imp
         imp = _grow(imp, n_imp)
         imp[n_imp, 0] = t_imp
         imp[n_imp, 1] = th
@@ -848,6 +941,7 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
         v = -e * v_in
         tau = s_imp if last_was_impact else -1.0
         t = t_imp
+        rem = t_end - t
         last_was_impact = True
         # complete chatter: jump to the accumulation point
         a_stop = F * math.cos(th) - 1.0
@@ -858,15 +952,18 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             else:
                 q = e
                 n_chat = 1
+            dq = abs(q - q_prev) if n_chat >= 3 else 1.0
+            q_prev = q
             tau_prev = tau
             if e < 1.0 and q < 1.0:
                 tail = tau * q / (1.0 - q)
                 res = 16.0 * EPS * max(1.0, abs(t))
-                if (tail <= res or n_chat >= N_CHATTER_MAX) and tail < rem:
+                # error of the geometric tail from the drift of q (O(w) per flight)
+                tail_err = tail * dq / ((1.0 - q) * (1.0 - q))
+                if (tail <= res or tail_err <= res or n_chat >= N_CHATTER_MAX) and tail < rem:
                     if F * math.cos(th + omega * tail) - 1.0 > 0.0:
                         t += tail
                         th = reduce_phase(th + omega * tail)
-                        rem -= tail
                         acc = _grow(acc, n_acc)
                         acc[n_acc, 0] = t
                         n_acc += 1
@@ -888,7 +985,6 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
                 n_events += 1
                 t += dt_avg
                 th = reduce_phase(th + omega * dt_avg)
-                rem -= dt_avg
                 v = -w_end
                 if now_stuck:
                     v = 0.0

@@ -21,10 +21,17 @@ from ..exceptions import ParameterError
 TWO_PI = 2.0 * math.pi
 
 
-def _finite(name: str, value: float) -> float:
+#: Smallest nonzero magnitude accepted for F, x and v: the simulator's derivative
+#: bounds and Taylor coefficients would underflow below it.
+TINY = 1e-150
+
+
+def _finite(name: str, value: float, tiny_ok: bool = True) -> float:
     value = float(value)
     if not math.isfinite(value):
         raise ParameterError(f"`{name}` must be finite, was {value}")
+    if not tiny_ok and 0.0 < abs(value) < TINY:
+        raise ParameterError(f"`{name}` must be 0 or of magnitude >= {TINY:g}, was {value}")
     return value
 
 
@@ -51,7 +58,7 @@ class SDFParams:
 
     def __post_init__(self) -> None:
         for name in ("F", "omega", "zeta", "e"):
-            object.__setattr__(self, name, _finite(name, getattr(self, name)))
+            object.__setattr__(self, name, _finite(name, getattr(self, name), name != "F"))
         if self.F < 0:
             raise ParameterError(f"`F` must be >= 0, was {self.F}")
         if self.omega <= 0:

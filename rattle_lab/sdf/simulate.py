@@ -172,7 +172,12 @@ def simulate(
         cross = Crossings(t=c[:, 0], v=c[:, 1])
     dense = None
     if t_grid is not None:
-        dense = dense_from_segments(params, np.asarray(seg)[:n_seg], t_grid, fields)
+        segments = np.asarray(seg)[:n_seg]
+        if n_seg == 0:  # zero duration: the initial state is the only segment
+            xp0, vp0 = particular_state(params.F, params.omega, params.zeta, state.theta)
+            segments = np.array([[state.t, state.theta, state.x - float(xp0),
+                                  state.v - float(vp0), 1.0 if state.stuck else 0.0]])
+        dense = dense_from_segments(params, segments, t_grid, fields)
     end = SDFState(t=float(t), x=float(x), v=float(v), theta=float(th), stuck=bool(stuck))
     return SimResult(
         params=params,

@@ -1,0 +1,173 @@
+"""Benchmark of ``rattle_lab.ingest``: throughput against plain h5py reads, and peak memory.
+
+Usage::
+
+    python benchmarks/ingest.py            # a 60-minute, 4-channel, 51.2 kHz record (2.9 GB)
+    python benchmarks/ingest.py --quick    # a 5-minute record, under a minute in all
+    python benchmarks/ingest.py --minutes 10 --repeat 3 --dir /tmp
+
+It writes a long synthetic record (float32 volts and m/s^2, sine plus noise), then times
+
+* a plain h5py read of the same channels, chunk by chunk (the reference);
+* a plain h5py copy into a new file (read + write, no checks: the floor of any copying ingest);
+* SHA-256 of the input file (the content hash used for idempotence);
+* ``ingest()``: hashing, schema validation, quality checks, conversion to SI, writing the store
+  and its catalogue;
+
+and runs one more ingest in a fresh process to read its peak resident memory
+(``ru_maxrss``).  Times are the best of ``--repeat`` runs with the file in the page cache.
+Target: ingest within 3x the plain read time (PASS/FAIL is printed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from rattle_lab.ingest import ingest, sha256_file
+from rattle_lab.records import Channel, GeneratedData, Record, Rig, Run, write_record
+
+FS_HZ = 51200.0
+CHUNK = 1 << 20
+TARGET_RATIO = 3.0
+
+
+def make_record(n_samples: int) -> Record:
+    """Four float32 channels: two in raw volts with sensitivities, two in SI units."""
+
+    def signal(seed: int, amplitude: float) -> GeneratedData:
+        def make(start: int, stop: int) -> np.ndarray:
+            t = np.arange(start, stop) / FS_HZ
+            noise = np.random.default_rng((seed, start)).standard_normal(stop - start)
+            return (amplitude * (np.sin(2 * np.pi * 94.0 * t) + 0.01 * noise)).astype(np.float32)
+        return GeneratedData(n_samples, np.float32, make)
+
+    common = {"sample_rate_hz": FS_HZ, "start_time_s": 0.0}
+    channels = [
+        Channel("base", "base_acceleration", "V", signal(1, 0.5), sensitivity=100.0,
+                sensitivity_units="mV/g", **common),
+        Channel("plate", "plate_acceleration", "m/s^2", signal(2, 20.0), **common),
+        Channel("velocity", "plate_velocity", "V", signal(3, 2.0), sensitivity=25.0,
+                sensitivity_units="(mm/s)/V", **common),
+        Channel("mic", "sound_pressure", "Pa", signal(4, 0.2), **common),
+    ]
+    return Record("bench", "measured", Rig("other", description="benchmark record"),
+                  [Run("long", "transient", channels)])
+
+
+def best_of(repeat: int, func) -> float:  # type: ignore[no-untyped-def]
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        func()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def plain_read(path: Path) -> None:
+    with h5py.File(path, "r") as fh:
+        for ds in fh["runs/long/channels"].values():
+            for start in range(0, ds.shape[0], CHUNK):
+                ds[start:start + CHUNK]
+
+
+def plain_copy(path: Path, out: Path) -> None:
+    with h5py.File(path, "r") as fh, h5py.File(out, "w") as dst:
+        for name, ds in fh["runs/long/channels"].items():
+            target = dst.create_dataset(name, shape=ds.shape, dtype=ds.dtype)
+            for start in range(0, ds.shape[0], CHUNK):
+                target[start:start + CHUNK] = ds[start:start + CHUNK]
+
+
+def fresh_ingest(path: Path, store: Path) -> None:
+    if store.exists():
+        store.unlink()
+    ingest([path], store)
+
+
+MEASURE = textwrap.dedent("""
+    import json, resource, sys, time
+    t0 = time.perf_counter()
+    from rattle_lab.ingest import ingest
+    ingest([sys.argv[1]], sys.argv[2])
+    print(json.dumps({"seconds": time.perf_counter() - t0,
+                      "maxrss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+""")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="a 5-minute record (under a minute)")
+    parser.add_argument("--minutes", type=float, help="record length in minutes (default 60, quick 5)")
+    parser.add_argument("--repeat", type=int, help="timed repetitions (default 3, full run 2)")
+    parser.add_argument("--dir", help="folder for the temporary files (default: system temp)")
+    args = parser.parse_args(argv)
+    minutes = args.minutes or (5.0 if args.quick else 60.0)
+    repeat = args.repeat or (3 if args.quick or minutes <= 10 else 2)
+    n_samples = round(minutes * 60 * FS_HZ)
+    work = Path(tempfile.mkdtemp(prefix="rattle_ingest_bench_", dir=args.dir))
+    try:
+        record_path = work / "long.h5"
+        t0 = time.perf_counter()
+        write_record(record_path, make_record(n_samples))
+        t_write = time.perf_counter() - t0
+        mb = 4 * n_samples * 4 / 1e6
+
+        t_read = best_of(repeat, lambda: plain_read(record_path))
+        t_copy = best_of(repeat, lambda: plain_copy(record_path, work / "copy.h5"))
+        (work / "copy.h5").unlink()
+        t_hash = best_of(repeat, lambda: sha256_file(record_path))
+        t_ingest = best_of(repeat, lambda: fresh_ingest(record_path, work / "store.h5"))
+        (work / "store.h5").unlink()
+        proc = subprocess.run([sys.executable, "-c", MEASURE, str(record_path), str(work / "m.h5")],
+                              check=True, capture_output=True, text=True)
+        mem = json.loads(proc.stdout)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+    ratio = t_ingest / t_read
+    rows = [
+        ("record written (write_record, generated data)", t_write, mb / t_write, ""),
+        ("plain h5py read, 1 Mi-sample chunks", t_read, mb / t_read, "reference"),
+        ("plain h5py copy (read + write, no checks)", t_copy, mb / t_copy, f"{t_copy / t_read:.2f}x read"),
+        ("sha256 of the input file", t_hash, mb / t_hash, f"{t_hash / t_read:.2f}x read"),
+        ("ingest (hash, validate, check, SI, store)", t_ingest, mb / t_ingest,
+         f"{ratio:.2f}x read, {t_ingest / t_copy:.2f}x copy"),
+        ("ingest in a fresh process (imports included)", mem["seconds"], mb / mem["seconds"],
+         f"peak RSS {mem['maxrss_mib']:.0f} MiB"),
+        # --- rig synthesis: to be added by the rig developer ------------------------------
+        # ("rig synthesis of the same record", t_synth, mb / t_synth, ""),
+    ]
+    print(f"rattle_lab ingest benchmark: {minutes:g} min x 4 channels x {FS_HZ:g} Hz float32 = "
+          f"{mb:.0f} MB of samples; best of {repeat}; page cache warm")
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}, h5py {h5py.__version__}, numpy {np.__version__}")
+    print()
+    print(f"{'step':<48} {'time s':>8} {'MB/s':>8}  note")
+    print(f"{'-' * 48} {'-' * 8} {'-' * 8}  {'-' * 24}")
+    for name, seconds, rate, note in rows:
+        print(f"{name:<48} {seconds:8.3f} {rate:8.0f}  {note}")
+    print(f"{'rig synthesis (to be added by the rig developer)':<48} {'-':>8} {'-':>8}")
+    print()
+    verdict = "PASS" if ratio <= TARGET_RATIO else "FAIL"
+    print(f"{verdict}: ingest takes {ratio:.2f}x the plain h5py read time (target <= {TARGET_RATIO:g}x)")
+    print(f"peak memory of the ingest process: {mem['maxrss_mib']:.0f} MiB "
+          f"(record {mb:.0f} MB; target well under 1024 MiB): "
+          f"{'PASS' if mem['maxrss_mib'] < 1024 else 'FAIL'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,118 @@
+"""Benchmark of the sweep and study layer (thesis 4.2-4.3): sweeps, bifurcation sets, maps.
+
+Run ``python benchmarks/sweeps.py [--quick]``.  Times (wall clock, best of
+``--repeat`` runs after an untimed warm-up that loads the compiled kernels):
+
+1. the Fig. 4-3 slow sweep, up and down (451 values of omega in [0.85, 1.3]
+   at F = 0.2, zeta = 0.05, e = 0.6, 100 forcing periods each, 70 discarded),
+   with the largest Lyapunov exponent of every aperiodic value (a 300-period
+   side run each) and without it;
+2. the 1/n bifurcation sets n = 1..5 of Fig. 3-10 (default grid);
+3. a regime map over (F, omega) in [0.02, 0.6] x [0.6, 1.5], 150 periods per
+   point (200 x 200 points; 60 x 60 with ``--quick``), serially and on a local
+   Dask cluster of 2 worker processes (cluster start-up included); the two
+   results are checked to be identical.
+
+Target: the up+down sweep (with Lyapunov exponents) in well under one second
+on one core, i.e. < 1 s; printed as PASS/FAIL.  Numbers also go to
+``benchmarks/out/sweeps.json``.  All quantities are nondimensional.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+if str(ROOT) not in sys.path:  # run from a checkout without installing
+    sys.path.insert(0, str(ROOT))
+
+from rattle_lab._atomic import atomic_write_text
+from rattle_lab.analysis import bifurcation_sets, regime_map, sweep_up_down, sweep_values
+from rattle_lab.sdf import SDFParams
+
+OUT = Path(__file__).resolve().parent / "out"
+SWEEP_TARGET_S = 1.0
+
+
+def _best(func: Callable[[], Any], repeat: int) -> tuple[float, Any]:
+    best, result = float("inf"), None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        result = func()
+        best = min(best, time.perf_counter() - t0)
+    return best, result
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="small map, one repeat (< 60 s)")
+    ap.add_argument("--repeat", type=int, default=None, help="timed repeats (default 3; quick 1)")
+    args = ap.parse_args(argv)
+    repeat = args.repeat or (1 if args.quick else 3)
+    n_map = 60 if args.quick else 200
+    base = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6)
+    grid = sweep_values(0.85, 1.3, 0.001)
+    rows: list[tuple[str, str, float]] = []
+
+    t0 = time.perf_counter()
+    sweep_up_down("omega", grid[:3], base=base)  # warm-up: numba cache load / compile
+    warm = time.perf_counter() - t0
+
+    t_sweep, (up, down) = _best(lambda: sweep_up_down("omega", grid, base=base), repeat)
+    n_ap = sum(p.regime.kind == "aperiodic" for sw in (up, down) for p in sw.points)
+    rows.append(("Fig. 4-3 sweep up+down, Lyapunov on aperiodic",
+                 f"2 x 451 values x 100 periods, {n_ap} exponents", t_sweep))
+    t_plain, _ = _best(lambda: sweep_up_down("omega", grid, base=base, lyapunov="none"), repeat)
+    rows.append(("Fig. 4-3 sweep up+down, no Lyapunov", "2 x 451 values x 100 periods", t_plain))
+
+    t_bif, _ = _best(lambda: bifurcation_sets([1, 2, 3, 4, 5]), repeat)
+    rows.append(("1/n bifurcation sets n = 1..5", "241 x 121 grid, curves traced", t_bif))
+
+    F = np.linspace(0.02, 0.6, n_map)
+    omega = np.linspace(0.6, 1.5, n_map)
+    regime_map(F[:2], omega[:2])  # warm-up
+    t_serial, serial = _best(lambda: regime_map(F, omega), 1)
+    rows.append(("regime map, serial", f"{n_map} x {n_map} points x 150 periods", t_serial))
+    t_dask, dask_map = _best(lambda: regime_map(F, omega, workers=2), 1)
+    rows.append(("regime map, Dask LocalCluster 2 workers", "same, start-up included", t_dask))
+    same = all(np.array_equal(getattr(serial, k), getattr(dask_map, k), equal_nan=k in (
+        "mean_impact_velocity", "max_impact_velocity", "lyapunov"))
+        for k in ("code", "m", "n", "mean_impact_velocity", "max_impact_velocity", "lyapunov"))
+
+    print("Sweep and study benchmark (rattle_lab.analysis), nondimensional units.")
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; "
+          f"python {platform.python_version()}; best of {repeat} after warm-up "
+          f"(first call incl. numba cache load: {warm:.2f} s)")
+    print()
+    head = f"{'task':<46} {'size':<44} {'time / s':>9}"
+    print(head)
+    print("-" * len(head))
+    for name, size, t in rows:
+        print(f"{name:<46} {size:<44} {t:>9.3f}")
+    print()
+    print(f"regime map: {n_map * n_map / t_serial:,.0f} points/s serial, "
+          f"speed-up with 2 workers {t_serial / t_dask:.2f}x; results identical: {same}")
+    ok = t_sweep < SWEEP_TARGET_S
+    print(f"{'PASS' if ok else 'FAIL'}: Fig. 4-3 up+down sweep {t_sweep:.3f} s < "
+          f"{SWEEP_TARGET_S:g} s on one core")
+    OUT.mkdir(exist_ok=True)
+    atomic_write_text(OUT / "sweeps.json", json.dumps({
+        "quick": args.quick, "repeat": repeat, "warmup_s": warm,
+        "rows": [{"task": n, "size": s, "time_s": t} for n, s, t in rows],
+        "map_identical": same, "sweep_target_s": SWEEP_TARGET_S, "sweep_pass": ok,
+    }, indent=2))
+    return 0 if ok and same else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,748 @@
+"""Slow parameter sweeps of the SDF impact oscillator (thesis 4.2-4.3, Fig. 4-3 to 4-5).
+
+A sweep steps one parameter (``omega``, ``F``, ``e`` or the gap) through a
+grid.  At each value the exact simulator (:func:`rattle_lab.sdf.simulate`)
+runs ``cycles`` forcing periods from the state the previous value ended in,
+with the forcing phase continuous (the state's ``theta`` carries over), which
+is the thesis's model of a slow sweep experiment (4.2; Appendix A.1,
+``fillv_impbuffer``).  The first ``discard`` periods are discarded (thesis:
+100 and 70).  Over the kept periods it records
+
+* the incoming impact velocities ``v_im`` and their forcing phases;
+* the velocities ``v_{x=0}^+`` of the upward crossings of ``x = 0``;
+* the average impact velocity per forcing cycle, ``sum(v_im) / n_kept``
+  (the thesis's ``v_average += vm / periods``, Appendix A.1), so a 1/n orbit
+  has ``v_im / n``;
+* the regime: no impact, ``m/n`` periodic, or aperiodic
+  (:func:`classify_impacts`), and for aperiodic motion its largest Lyapunov
+  exponent (:mod:`rattle_lab.analysis.lyapunov`), so that chaos is a measured
+  statement;
+* the linear estimate of the impact velocity (eq. 4.7-4.11,
+  :func:`rattle_lab.linear.linear_impact_velocity`), NaN where linear theory
+  predicts no impact.
+
+The gap
+    At fixed dimensional forcing ``F_es`` the nondimensional forcing is
+    ``F = F_es / (omega_s^2 h)`` (eq. 2.31), so ``1/F = omega_s^2 h / F_es`` is
+    the gap in units of the static deflection ``F_es / omega_s^2``, and
+    ``v_im / F = omega_s v_sim / F_es`` is proportional to the dimensional
+    impact velocity (eq. 4.5).  A ``"gap"`` sweep steps ``gap = 1/F`` with
+    ``omega``, ``zeta`` and ``e`` (and the dimensional forcing) held fixed, and
+    its results are presented as ``v_im / F`` against ``1/F`` (Fig. 4-4).  The
+    nondimensional state ``(x, v)`` is carried to the next value unchanged, as
+    for the other parameters.
+
+All quantities are nondimensional.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .._progress import progress
+from .._version import __version__
+from ..exceptions import ParameterError
+from ..linear import linear_impact_velocity
+from ..sdf._types import SDFParams, SDFState
+from ..sdf.simulate import simulate
+from .lyapunov import LyapunovResult, lyapunov_exponent
+
+SweepParam = Literal["omega", "F", "e", "gap"]
+Direction = Literal["up", "down"]
+LyapunovMode = Literal["aperiodic", "all", "none"]
+RegimeKind = Literal["no-impact", "periodic", "aperiodic"]
+
+SWEEP_PARAMS: tuple[SweepParam, ...] = ("omega", "F", "e", "gap")
+DIRECTIONS: tuple[Direction, ...] = ("up", "down")
+LYAPUNOV_MODES: tuple[LyapunovMode, ...] = ("aperiodic", "all", "none")
+#: Integer codes of the regime kinds in arrays (maps).
+KIND_CODES: dict[RegimeKind, int] = {"no-impact": 0, "periodic": 1, "aperiodic": 2}
+KIND_NAMES: tuple[RegimeKind, ...] = ("no-impact", "periodic", "aperiodic")
+
+#: Default relative tolerance of the period detection (see :func:`classify_impacts`).
+PERIOD_RTOL = 1e-4
+
+__all__ = [
+    "Regime",
+    "SweepPoint",
+    "Sweep",
+    "classify_impacts",
+    "sweep_values",
+    "sweep",
+    "sweep_up_down",
+    "plot_sweeps",
+    "write_sweeps_csv",
+]
+
+
+# ---------------------------------------------------------------------------
+# Period detection
+# ---------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Regime:
+    """Classification of a motion from its impacts.
+
+    Attributes
+    ----------
+    kind : {"no-impact", "periodic", "aperiodic"}
+        No impact in the window; ``m/n`` periodic; neither.
+    m : int
+        Impacts per period (0 unless periodic).
+    n : int
+        Forcing periods per period, the smallest found (0 unless periodic).
+    """
+
+    kind: RegimeKind
+    m: int = 0
+    n: int = 0
+
+    @property
+    def label(self) -> str:
+        """``"no impact"``, ``"m/n"`` or ``"aperiodic"``."""
+        if self.kind == "periodic":
+            return f"{self.m}/{self.n}"
+        return "no impact" if self.kind == "no-impact" else "aperiodic"
+
+    @property
+    def code(self) -> int:
+        """Integer code of ``kind`` (:data:`KIND_CODES`)."""
+        return KIND_CODES[self.kind]
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dictionary."""
+        return {"kind": self.kind, "m": self.m, "n": self.n, "label": self.label}
+
+
+@numba.njit(cache=True, nogil=True)
+def _classify(t: np.ndarray, v: np.ndarray, t_start: float, t_stop: float, period: float,
+              n_max: int, rtol: float) -> tuple[int, int, int]:
+    """(kind code, m, n); see :func:`classify_impacts`."""
+    N = t.shape[0]
+    if N == 0:
+        return 0, 0, 0
+    vscale = 0.0
+    for i in range(N):
+        vscale = max(vscale, abs(v[i]))
+    tol_t = rtol * period
+    tol_v = rtol * max(vscale, 1e-300)
+    for n in range(1, n_max + 1):
+        P = n * period
+        if t_start + 2.0 * P > t_stop + tol_t:
+            break  # two periods no longer fit in the window
+        if t[0] - P > t_start + tol_t:
+            continue  # a whole period without impact, then impacts: not n-periodic
+        m = 0
+        while m < N and t[m] < t[0] + P - tol_t:
+            m += 1
+        if m >= N:
+            continue
+        ok = True
+        for i in range(N):
+            if i + m < N:
+                if abs(t[i + m] - t[i] - P) > tol_t or abs(v[i + m] - v[i]) > tol_v:
+                    ok = False
+                    break
+            elif t[i] + P < t_stop - tol_t:
+                ok = False  # the repeat of impact i is missing from the window
+                break
+        if ok:
+            return 1, m, n
+    return 2, 0, 0
+
+
+def classify_impacts(t: ArrayLike, v_in: ArrayLike, *, t_start: float, t_stop: float,
+                     omega: float, n_max: int = 12, rtol: float = PERIOD_RTOL) -> Regime:
+    """Classify the motion in ``[t_start, t_stop]`` from its impacts: none, m/n or aperiodic.
+
+    The motion is ``m/n`` periodic when, for the smallest ``n <= n_max``, the
+    impact sequence repeats after ``m`` impacts and ``n`` forcing periods
+    ``T = 2 pi / omega``: for every impact ``i`` with a successor ``i + m`` in
+    the window ``|t_{i+m} - t_i - n T| <= rtol T`` and
+    ``|v_{i+m} - v_i| <= rtol max(v)``, and every impact whose repeat would
+    fall inside the window has one.  Only ``n`` with two full periods in the
+    window are tried (``2 n T <= t_stop - t_start``).
+
+    Why ``rtol = 1e-4``: after the discarded transient, the distance to a
+    periodic attractor decays like ``|mu|^k`` (``mu`` its leading Floquet
+    multiplier); a tolerance far above rounding lets orbits close to a
+    bifurcation (``|mu|`` near 1) count as periodic as they would on the
+    thesis's plots, while a chaotic sequence matching itself to 1e-4 over
+    a whole window (two periods or more) does not happen in practice: the
+    Lyapunov exponent, not this test, is the evidence of chaos.
+
+    Parameters
+    ----------
+    t, v_in : array_like
+        Impact times (sorted) and incoming velocities in the window.
+    t_start, t_stop : float
+        The window (nondimensional time).
+    omega : float
+        Forcing frequency (nondimensional).
+    n_max : int
+        Largest period, in forcing periods, to try (>= 1).
+    rtol : float
+        Relative tolerance (> 0), see above.
+
+    Returns
+    -------
+    Regime
+
+    Raises
+    ------
+    ParameterError
+        On an invalid argument.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> T = 2 * np.pi
+    >>> t = np.arange(10) * 2 * T + 0.3          # one impact every two periods
+    >>> classify_impacts(t, np.full(10, 0.5), t_start=0.0, t_stop=20 * T, omega=1.0).label
+    '1/2'
+    >>> classify_impacts([], [], t_start=0.0, t_stop=20 * T, omega=1.0).label
+    'no impact'
+    """
+    tt = np.ascontiguousarray(t, dtype=float).ravel()
+    vv = np.ascontiguousarray(v_in, dtype=float).ravel()
+    if tt.shape != vv.shape:
+        raise ParameterError(f"`t` and `v_in` must have the same length, were {tt.size} and {vv.size}")
+    if tt.size > 1 and np.any(np.diff(tt) < 0):
+        raise ParameterError("`t` must be sorted")
+    if not (math.isfinite(omega) and omega > 0):
+        raise ParameterError(f"`omega` must be finite and > 0, was {omega}")
+    _check_int("n_max", n_max, 1)
+    if not (math.isfinite(rtol) and rtol > 0):
+        raise ParameterError(f"`rtol` must be finite and > 0, was {rtol}")
+    if not t_stop > t_start:
+        raise ParameterError(f"`t_stop` must be > t_start = {t_start}, was {t_stop}")
+    kind, m, n = _classify(tt, vv, float(t_start), float(t_stop), 2.0 * math.pi / omega,
+                           int(n_max), float(rtol))
+    return Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n))
+
+
+def _check_int(name: str, value: object, lo: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) < lo:
+        raise ParameterError(f"`{name}` must be an integer >= {lo}, was {value!r}")
+    return int(value)
+
+
+# ---------------------------------------------------------------------------
+# Results
+# ---------------------------------------------------------------------------
+
+def _num(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """What a sweep records at one parameter value (all nondimensional).
+
+    Attributes
+    ----------
+    value : float
+        The swept parameter's value (for ``"gap"``: ``1/F``).
+    params : SDFParams
+        The full parameter set simulated.
+    impact_velocities : ndarray
+        Incoming velocity ``v_im`` of every impact in the kept periods.
+    impact_phases : ndarray
+        Forcing phase at those impacts, in ``[0, 2 pi)``.
+    crossing_velocities : ndarray
+        Velocity ``v_{x=0}^+`` of every upward crossing of ``x = 0`` in the kept periods.
+    mean_impact_velocity : float
+        ``sum(v_im) / n_kept``: average impact velocity per forcing cycle
+        (thesis Appendix A.1); 0 without impacts.
+    regime : Regime
+        No impact, ``m/n`` periodic or aperiodic (:func:`classify_impacts`).
+    sticking : bool
+        The mass stuck to the stop (after complete chatter) in the kept periods.
+    lyapunov : LyapunovResult or None
+        Largest Lyapunov exponent, where computed (see ``sweep(lyapunov=...)``).
+    linear_impact_velocity : float
+        Linear estimate of the impact velocity, eq. (4.7)-(4.11)
+        (``omega sqrt(x_max^2 - 1)``); NaN where linear theory predicts no impact.
+    """
+
+    value: float
+    params: SDFParams
+    impact_velocities: np.ndarray
+    impact_phases: np.ndarray
+    crossing_velocities: np.ndarray
+    mean_impact_velocity: float
+    regime: Regime
+    sticking: bool
+    lyapunov: LyapunovResult | None
+    linear_impact_velocity: float
+
+    @property
+    def chaotic(self) -> bool:
+        """Aperiodic with a measured positive largest Lyapunov exponent."""
+        return (self.regime.kind == "aperiodic" and self.lyapunov is not None
+                and self.lyapunov.exponent > 0.0)
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dictionary (non-finite numbers become None)."""
+        return {
+            "value": self.value,
+            "params": {"F": self.params.F, "omega": self.params.omega,
+                       "zeta": self.params.zeta, "e": self.params.e},
+            "impact_velocities": [float(x) for x in self.impact_velocities],
+            "impact_phases": [float(x) for x in self.impact_phases],
+            "crossing_velocities": [float(x) for x in self.crossing_velocities],
+            "mean_impact_velocity": self.mean_impact_velocity,
+            "classification": self.regime.label,
+            "regime": self.regime.to_dict(),
+            "sticking": self.sticking,
+            "lyapunov": None if self.lyapunov is None else self.lyapunov.to_dict(),
+            "chaotic": self.chaotic,
+            "linear_impact_velocity": _num(self.linear_impact_velocity),
+        }
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A slow sweep in one direction.
+
+    Attributes
+    ----------
+    param : {"omega", "F", "e", "gap"}
+        The swept parameter.
+    direction : {"up", "down"}
+        Increasing or decreasing values.
+    points : tuple of SweepPoint
+        One per value, in sweep order.
+    base : SDFParams
+        The fixed parameters (the swept one, and ``F`` for ``"gap"``, are
+        replaced at each value).
+    cycles, discard : int
+        Forcing periods simulated and discarded at each value.
+    initial_state, final_state : SDFState
+        The state the sweep started from and ended in (continue from it).
+    provenance : dict
+        Package, version, function and arguments that made it.
+    """
+
+    param: SweepParam
+    direction: Direction
+    points: tuple[SweepPoint, ...]
+    base: SDFParams
+    cycles: int
+    discard: int
+    initial_state: SDFState
+    final_state: SDFState
+    provenance: dict[str, object] = field(default_factory=dict)
+
+    @property
+    def values(self) -> np.ndarray:
+        """The swept values, in sweep order."""
+        return np.array([p.value for p in self.points])
+
+    @property
+    def labels(self) -> list[str]:
+        """Regime label at each value."""
+        return [p.regime.label for p in self.points]
+
+    @property
+    def mean_impact_velocity(self) -> np.ndarray:
+        """Average impact velocity per forcing cycle at each value."""
+        return np.array([p.mean_impact_velocity for p in self.points])
+
+    def transitions(self) -> list[dict[str, object]]:
+        """Where the regime label changes: ``{"from", "to", "before", "after"}`` (values)."""
+        out: list[dict[str, object]] = []
+        for a, b in zip(self.points[:-1], self.points[1:]):
+            if a.regime.label != b.regime.label:
+                out.append({"from": a.regime.label, "to": b.regime.label,
+                            "before": a.value, "after": b.value})
+        return out
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dictionary: settings and one entry per value.
+
+        For a ``"gap"`` sweep each entry also carries the velocities divided by
+        ``F`` (``*_over_F``), the quantities of thesis Fig. 4-4 (eq. 4.5), and
+        ``inv_F`` (= ``value``).
+        """
+        points = []
+        for p in self.points:
+            d = p.to_dict()
+            if self.param == "gap":
+                F = p.params.F
+                d["inv_F"] = p.value
+                d["impact_velocities_over_F"] = [float(v) / F for v in p.impact_velocities]
+                d["crossing_velocities_over_F"] = [float(v) / F for v in p.crossing_velocities]
+                d["mean_impact_velocity_over_F"] = p.mean_impact_velocity / F
+                d["linear_impact_velocity_over_F"] = _num(p.linear_impact_velocity / F)
+            points.append(d)
+        return {"param": self.param, "direction": self.direction,
+                "base": {"F": self.base.F, "omega": self.base.omega, "zeta": self.base.zeta,
+                         "e": self.base.e},
+                "cycles": self.cycles, "discard": self.discard, "points": points,
+                "provenance": self.provenance}
+
+
+# ---------------------------------------------------------------------------
+# The sweep
+# ---------------------------------------------------------------------------
+
+def sweep_values(start: float, stop: float, step: float) -> np.ndarray:
+    """The grid ``start, start + step, ..., stop`` (ascending, ``stop`` included).
+
+    ``(stop - start) / step`` must be an integer to within 1e-9 of a step, so
+    that up and down sweeps visit exactly the same values.
+
+    Raises
+    ------
+    ParameterError
+        If ``step <= 0``, ``stop <= start`` or the step does not divide the range.
+
+    Examples
+    --------
+    >>> v = sweep_values(0.85, 1.3, 0.001)
+    >>> v.size, bool(abs(v[-1] - 1.3) < 1e-12)
+    (451, True)
+    """
+    start, stop, step = float(start), float(stop), float(step)
+    for name, x in (("start", start), ("stop", stop), ("step", step)):
+        if not math.isfinite(x):
+            raise ParameterError(f"`{name}` must be finite, was {x}")
+    if step <= 0:
+        raise ParameterError(f"`step` must be > 0, was {step}")
+    if stop <= start:
+        raise ParameterError(f"`stop` must be > start = {start}, was {stop}")
+    k = (stop - start) / step
+    n = round(k)
+    if abs(k - n) > 1e-9 * max(1.0, k):
+        raise ParameterError(f"`step` = {step} must divide stop - start = {stop - start}")
+    if n + 1 > 10**7:
+        raise ParameterError(f"`step` = {step} gives {n + 1} values (at most 10**7)")
+    return start + step * np.arange(n + 1)
+
+
+def _params_at(param: SweepParam, base: SDFParams, value: float) -> SDFParams:
+    if param == "gap":
+        if not value > 0:
+            raise ParameterError(f"`gap` values must be > 0, was {value}")
+        return base.replace(F=1.0 / value)
+    try:
+        return base.replace(**{param: value})
+    except ParameterError as exc:
+        raise ParameterError(f"sweep of `{param}`: {exc}") from None
+
+
+def _check_settings(param: object, cycles: object, discard: object, n_max: object,
+                    rtol: float, lyapunov: object, lyapunov_cycles: float,
+                    lyapunov_warmup: float) -> tuple[int, int, int]:
+    if param not in SWEEP_PARAMS:
+        raise ParameterError(f"`param` must be one of {SWEEP_PARAMS}, was {param!r}")
+    cycles_i = _check_int("cycles", cycles, 1)
+    discard_i = _check_int("discard", discard, 0)
+    if discard_i >= cycles_i:
+        raise ParameterError(f"`discard` must be < cycles = {cycles_i}, was {discard_i}")
+    n_max_i = _check_int("n_max", n_max, 1)
+    if 2 * n_max_i > cycles_i - discard_i:
+        raise ParameterError(
+            f"`n_max` must be <= (cycles - discard) / 2 = {(cycles_i - discard_i) // 2} "
+            f"(two periods must fit in the kept cycles), was {n_max_i}")
+    if not (math.isfinite(rtol) and rtol > 0):
+        raise ParameterError(f"`rtol` must be finite and > 0, was {rtol}")
+    if lyapunov not in LYAPUNOV_MODES:
+        raise ParameterError(f"`lyapunov` must be one of {LYAPUNOV_MODES}, was {lyapunov!r}")
+    if not (math.isfinite(lyapunov_warmup) and lyapunov_warmup >= 0):
+        raise ParameterError(f"`lyapunov_warmup` must be >= 0, was {lyapunov_warmup}")
+    if not (math.isfinite(lyapunov_cycles) and lyapunov_cycles > lyapunov_warmup):
+        raise ParameterError(
+            f"`lyapunov_cycles` must be > lyapunov_warmup = {lyapunov_warmup}, was {lyapunov_cycles}")
+    return cycles_i, discard_i, n_max_i
+
+
+def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: Direction = "up",
+          cycles: int = 100, discard: int = 70, state: SDFState | None = None, n_max: int = 12,
+          rtol: float = PERIOD_RTOL, lyapunov: LyapunovMode = "aperiodic",
+          lyapunov_cycles: float = 300.0, lyapunov_warmup: float = 50.0,
+          quiet: bool = True) -> Sweep:
+    """Slow sweep of one parameter with the state carried from value to value (thesis 4.2).
+
+    Parameters
+    ----------
+    param : {"omega", "F", "e", "gap"}
+        The swept parameter.  ``"gap"`` is ``1/F`` at fixed dimensional
+        forcing (module docstring): each value sets ``F = 1 / value``.
+    values : array_like
+        The grid, ascending (e.g. :func:`sweep_values`); visited in ascending
+        order for ``direction="up"`` and descending for ``"down"``.
+    base : SDFParams
+        The fixed parameters (nondimensional); its value of the swept
+        parameter (and of ``F`` for ``"gap"``) is ignored.
+    direction : {"up", "down"}
+        Sweep direction.
+    cycles : int
+        Forcing periods simulated at each value (thesis: 100).
+    discard : int
+        Of which the first are discarded (thesis: 70).
+    state : SDFState, optional
+        State at the first value (default: at rest at x = 0, phase 0).
+    n_max : int
+        Largest period (in forcing periods) the classification looks for;
+        at most ``(cycles - discard) / 2``.
+    rtol : float
+        Tolerance of the period detection (:func:`classify_impacts`).
+    lyapunov : {"aperiodic", "all", "none"}
+        Where to compute the largest Lyapunov exponent: at aperiodic values
+        (default), everywhere, or nowhere.  It is measured on a side run of
+        ``lyapunov_cycles`` periods from the value's end state (the sweep
+        itself continues from that end state, unaffected), the first
+        ``lyapunov_warmup`` of them aligning the tangent vector.
+    lyapunov_cycles, lyapunov_warmup : float
+        See ``lyapunov``.
+    quiet : bool
+        No progress bar (one is drawn on a terminal otherwise).
+
+    Returns
+    -------
+    Sweep
+
+    Raises
+    ------
+    ParameterError
+        On an invalid argument, naming it and its value.
+
+    Examples
+    --------
+    >>> from rattle_lab.sdf import SDFParams
+    >>> base = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6)
+    >>> sw = sweep("omega", [1.0, 1.1, 1.2], base=base)
+    >>> sw.labels
+    ['1/1', '1/1', '1/1']
+    """
+    if not isinstance(base, SDFParams):
+        raise ParameterError(f"`base` must be an SDFParams, was {type(base).__name__}")
+    if direction not in DIRECTIONS:
+        raise ParameterError(f"`direction` must be one of {DIRECTIONS}, was {direction!r}")
+    cycles_i, discard_i, n_max_i = _check_settings(param, cycles, discard, n_max, rtol,
+                                                   lyapunov, lyapunov_cycles, lyapunov_warmup)
+    grid = np.asarray(values, dtype=float).ravel()
+    if grid.size == 0:
+        raise ParameterError("`values` must not be empty")
+    if not np.all(np.isfinite(grid)):
+        raise ParameterError(f"`values` must be finite, was {grid[~np.isfinite(grid)][0]}")
+    if grid.size > 1 and np.any(np.diff(grid) <= 0):
+        raise ParameterError("`values` must be strictly ascending (use `direction` to sweep down)")
+    order = grid if direction == "up" else grid[::-1]
+    all_params = [_params_at(param, base, float(x)) for x in order]  # validate all first
+    state = SDFState() if state is None else state
+    if not isinstance(state, SDFState):
+        raise ParameterError(f"`state` must be an SDFState, was {type(state).__name__}")
+    initial = state
+    kept = cycles_i - discard_i
+    # Eq. (4.7)-(4.11), once for the whole grid (NaN where linear theory has no impact)
+    linear = np.atleast_1d(linear_impact_velocity(np.array([q.F for q in all_params]),
+                                                  np.array([q.omega for q in all_params]),
+                                                  base.zeta))
+    points: list[SweepPoint] = []
+    for value, p, v_lin in progress(zip(order, all_params, linear), total=len(all_params),
+                                    desc=f"{direction}-sweep of {param}", quiet=quiet,
+                                    unit="value"):
+        # The discarded periods need no crossings: a second call (same state, same
+        # forcing phase) is the same motion, and the cheaper one.
+        if discard_i:
+            state = simulate(p, cycles=discard_i, state=state).state
+        t0 = state.t
+        res = simulate(p, cycles=kept, state=state, crossings=True)
+        state = res.state
+        imp = res.impacts
+        kind, m, n = _classify(imp.t, imp.v_in, t0, state.t, p.period, n_max_i, float(rtol))
+        regime = Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n))
+        lyap = None
+        if lyapunov == "all" or (lyapunov == "aperiodic" and regime.kind == "aperiodic"):
+            lyap = lyapunov_exponent(p, cycles=lyapunov_cycles, warmup_cycles=lyapunov_warmup,
+                                     state=state)
+        assert res.crossings is not None
+        points.append(SweepPoint(
+            value=float(value), params=p,
+            impact_velocities=np.array(imp.v_in), impact_phases=np.array(imp.phase),
+            crossing_velocities=np.array(res.crossings.v),
+            mean_impact_velocity=float(np.sum(imp.v_in) / kept),
+            regime=regime, sticking=bool(res.sticking.shape[0] > 0 or res.accumulations.size > 0),
+            lyapunov=lyap,
+            linear_impact_velocity=float(v_lin)))
+    provenance: dict[str, object] = {
+        "package": "rattle_lab", "version": __version__,
+        "function": "rattle_lab.analysis.sweep",
+        "arguments": {"param": param, "direction": direction, "n_values": int(grid.size),
+                      "first": float(grid[0]), "last": float(grid[-1]),
+                      "base": {"F": base.F, "omega": base.omega, "zeta": base.zeta, "e": base.e},
+                      "cycles": cycles_i, "discard": discard_i, "n_max": n_max_i,
+                      "rtol": float(rtol), "lyapunov": lyapunov,
+                      "lyapunov_cycles": float(lyapunov_cycles),
+                      "lyapunov_warmup": float(lyapunov_warmup),
+                      "initial_state": {"t": initial.t, "x": initial.x, "v": initial.v,
+                                        "theta": initial.theta, "stuck": initial.stuck}},
+    }
+    return Sweep(param=param, direction=direction, points=tuple(points), base=base,
+                 cycles=cycles_i, discard=discard_i, initial_state=initial, final_state=state,
+                 provenance=provenance)
+
+
+def sweep_up_down(param: SweepParam, values: ArrayLike, *, base: SDFParams,
+                  state: SDFState | None = None, **options: object) -> tuple[Sweep, Sweep]:
+    """An up-sweep followed by a down-sweep that starts from the up-sweep's final state.
+
+    Like a slow experiment that goes up and comes back (thesis Fig. 4-3 (a),
+    (b)).  ``options`` are the keyword arguments of :func:`sweep`.
+
+    Returns
+    -------
+    (Sweep, Sweep)
+        The up- and the down-sweep.
+    """
+    up = sweep(param, values, base=base, direction="up", state=state, **options)  # type: ignore[arg-type]
+    down = sweep(param, values, base=base, direction="down", state=up.final_state,
+                 **options)  # type: ignore[arg-type]
+    return up, down
+
+
+# ---------------------------------------------------------------------------
+# Output: plot and CSV
+# ---------------------------------------------------------------------------
+
+_AXIS_LABELS: dict[str, str] = {
+    "omega": "forcing frequency omega (nondimensional)",
+    "F": "forcing amplitude F (nondimensional)",
+    "e": "coefficient of restitution e",
+    "gap": "1/F (gap in units of F_es / omega_s^2, at fixed F_es)",
+}
+
+
+def plot_sweeps(sweeps: Sequence[Sweep], path: str | os.PathLike[str]) -> Path:
+    """Plot sweeps like thesis Fig. 4-3 (omega), 4-4 (gap) and 4-5 (e); write atomically.
+
+    One column per sweep (e.g. (a) up, (b) down), three rows: the impact
+    velocities ``v_im``, the upward ``x = 0`` crossing velocities
+    ``v_{x=0}^+`` and the average impact velocity per forcing cycle, against
+    the swept parameter.  For a ``"gap"`` sweep the velocities are divided by
+    ``F`` and plotted against ``1/F`` (eq. 4.5, Fig. 4-4).  The linear estimate
+    of the impact velocity (eq. 4.11) is drawn as a line where it applies.
+    Aperiodic values with a positive Lyapunov exponent are drawn in red.
+
+    Parameters
+    ----------
+    sweeps : sequence of Sweep
+        One to four sweeps of the same parameter.
+    path : str or Path
+        ``.png``, ``.pdf`` or ``.svg``.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    ParameterError
+        If the sweeps are empty, mixed, or the suffix is not supported.
+    OutputError
+        If the directory does not exist.
+    """
+    from matplotlib.figure import Figure
+
+    from .._atomic import atomic_path
+    from .bifsets import check_plot_path
+
+    fmt = check_plot_path(Path(path))
+    sweeps = list(sweeps)
+    if not 1 <= len(sweeps) <= 4 or len({s.param for s in sweeps}) != 1:
+        raise ParameterError("`sweeps` must hold one to four sweeps of the same parameter")
+    param = sweeps[0].param
+    gap = param == "gap"
+    fig = Figure(figsize=(5.0 * len(sweeps), 9.0), layout="constrained")
+    axes = fig.subplots(3, len(sweeps), squeeze=False, sharex="col")
+    names = ("v_im / F", "v_{x=0}^+ / F", "mean v_im / F per cycle") if gap else \
+        ("impact velocity v_im", "crossing velocity v_{x=0}^+", "mean v_im per forcing cycle")
+    for col, sw in enumerate(sweeps):
+        xs = sw.values
+        scale = np.array([p.params.F if gap else 1.0 for p in sw.points])
+        chaotic = np.array([p.chaotic for p in sw.points])
+        for row, attr in enumerate(("impact_velocities", "crossing_velocities")):
+            ax = axes[row, col]
+            for flag, color in ((False, "black"), (True, "tab:red")):
+                pts = [(x, v / s) for x, s, c, p in zip(xs, scale, chaotic, sw.points)
+                       if c == flag for v in getattr(p, attr)]
+                if pts:
+                    arr = np.array(pts)
+                    ax.plot(arr[:, 0], arr[:, 1], ".", color=color, markersize=1.5,
+                            label="aperiodic, lambda_1 > 0" if flag else None)
+        lin = np.array([p.linear_impact_velocity for p in sw.points]) / scale
+        if np.any(np.isfinite(lin)):
+            axes[0, col].plot(xs, lin, "-", color="tab:blue", linewidth=1.2,
+                              label="linear estimate, eq. (4.11)")
+        axes[2, col].plot(xs, sw.mean_impact_velocity / scale, ".-", color="black",
+                          markersize=2, linewidth=0.6)
+        for row in range(3):
+            axes[row, col].set_ylabel(names[row])
+            axes[row, col].grid(alpha=0.3)
+        axes[2, col].set_xlabel(_AXIS_LABELS[param])
+        b = sw.base
+        fixed = {"omega": f"F = {b.F:g}", "F": f"omega = {b.omega:g}",
+                 "e": f"F = {b.F:g}, omega = {b.omega:g}", "gap": f"omega = {b.omega:g}"}[param]
+        rest = f"zeta = {b.zeta:g}" + ("" if param == "e" else f", e = {b.e:g}")
+        axes[0, col].set_title(f"({chr(97 + col)}) {sw.direction}-sweep of "
+                               f"{'1/F' if gap else param}\n{fixed}, {rest}", fontsize=10)
+        handles, _ = axes[0, col].get_legend_handles_labels()
+        if handles:
+            axes[0, col].legend(fontsize=7, loc="best")
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=fmt, dpi=150)
+    return Path(path)
+
+
+CSV_COLUMNS = ("direction", "param", "value", "F", "omega", "zeta", "e", "classification",
+               "m", "n", "n_impacts", "mean_impact_velocity", "max_impact_velocity",
+               "linear_impact_velocity", "lyapunov", "sticking", "impact_velocities",
+               "crossing_velocities")
+
+
+def write_sweeps_csv(sweeps: Sequence[Sweep], path: str | os.PathLike[str]) -> Path:
+    """Write sweeps as CSV (atomically): one row per direction and value.
+
+    Columns are :data:`CSV_COLUMNS`; the velocity lists are ``;``-separated
+    in ``repr`` precision, empty numbers are blank.
+
+    Raises
+    ------
+    OutputError
+        If the directory does not exist.
+    """
+    from .._atomic import atomic_path
+
+    def num(x: float | None) -> str:
+        return "" if x is None or not math.isfinite(x) else repr(float(x))
+
+    with atomic_path(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(CSV_COLUMNS)
+        for sw in sweeps:
+            for p in sw.points:
+                lyap = p.lyapunov.exponent if p.lyapunov is not None else None
+                writer.writerow([
+                    sw.direction, sw.param, repr(p.value), repr(p.params.F),
+                    repr(p.params.omega), repr(p.params.zeta), repr(p.params.e),
+                    p.regime.label, p.regime.m, p.regime.n, p.impact_velocities.size,
+                    repr(p.mean_impact_velocity),
+                    num(float(p.impact_velocities.max()) if p.impact_velocities.size else None),
+                    num(p.linear_impact_velocity),
+                    "-inf" if lyap == -math.inf else num(lyap), int(p.sticking),
+                    ";".join(repr(float(v)) for v in p.impact_velocities),
+                    ";".join(repr(float(v)) for v in p.crossing_velocities)])
+    return Path(path)

@@ -1,0 +1,103 @@
+"""``rattle-lab ingest FILE... -o store.h5``: a thin layer over :func:`rattle_lab.ingest.ingest`.
+
+Prints the catalogue rows of the given inputs as a table (or JSON with
+``--json``) on stdout; data-quality warnings go to stderr, one line each.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Any
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    parser = sub.add_parser(
+        "ingest", help="validate record files and ingest them into an HDF5 store",
+        description="Validate record files (rattle HDF5, or HDF5/MATLAB v7.3, TDMS, WAV, LabVIEW "
+                    ".lvm, NumPy .npy through a mapping), check their data, convert to SI and "
+                    "add them to a store with a catalogue. Inputs are opened read-only; the "
+                    "store is written atomically; inputs already in the store are skipped.")
+    parser.add_argument("files", nargs="+", metavar="FILE", help="record files to ingest")
+    parser.add_argument("-o", "--output", required=True, metavar="STORE",
+                        help="the store (.h5): created, or appended to")
+    parser.add_argument("--mapping", metavar="FILE.toml",
+                        help="TOML mapping for foreign layouts (applied to every non-native FILE)")
+    parser.add_argument("--allow-flagged", action="store_true",
+                        help="ingest data with NaN, Inf, clipping, dropouts, rate mismatch, "
+                             "non-monotonic timestamps or empty channels, flagged, instead of "
+                             "failing")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(func=_run)
+
+
+def _warn(finding: Any) -> None:
+    print(f"rattle-lab: warning: {finding.warning_class.__name__}: {finding.message}",
+          file=sys.stderr)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ..ingest import ingest
+
+    report = ingest(args.files, args.output, mapping=args.mapping,
+                    allow_flagged=args.allow_flagged, quiet=args.quiet, on_warning=_warn)
+    if args.json:
+        print(json.dumps(_as_json(report), indent=2, allow_nan=False))
+    else:
+        print(_as_table(report))
+    return 0
+
+
+def _clean(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if hasattr(value, "item"):
+        return _clean(value.item())
+    return value
+
+
+def _as_json(report: Any) -> dict[str, Any]:
+    return {
+        "store": str(report.store),
+        "changed": report.changed,
+        "inputs": [{
+            "path": str(r.path), "sha256": r.sha256, "input_key": r.input_key, "status": r.status,
+            "format": r.format,
+            "skipped": [{"source": s.source, "reason": s.reason} for s in r.skipped],
+            "findings": [{"flag": f.flag, "path": f.path, "field": f.field,
+                          "sample_index": f.sample_index, "n_samples": f.n_samples,
+                          "detail": f.detail, "fatal": f.fatal} for f in r.findings],
+        } for r in report.inputs],
+        "catalogue": [{k: _clean(v) for k, v in row.items()}
+                      for row in report.catalogue.to_dict(orient="records")],
+    }
+
+
+TABLE_COLUMNS = ("campaign_id", "run_id", "protocol", "channel", "quantity", "units",
+                 "sample_rate_hz", "n_samples", "duration_s", "flags")
+
+
+def _fmt(value: Any) -> str:
+    if isinstance(value, float):
+        return "-" if not math.isfinite(value) else f"{value:.6g}"
+    return str(value) if value != "" else "-"
+
+
+def _as_table(report: Any) -> str:
+    rows = [[_fmt(_clean(row[c])) for c in TABLE_COLUMNS]
+            for row in report.catalogue.to_dict(orient="records")]
+    widths = [max([len(c)] + [len(r[i]) for r in rows]) for i, c in enumerate(TABLE_COLUMNS)]
+    lines = ["  ".join(c.ljust(w) for c, w in zip(TABLE_COLUMNS, widths)),
+             "  ".join("-" * w for w in widths)]
+    lines += ["  ".join(v.ljust(w) for v, w in zip(r, widths)) for r in rows]
+    lines.append("")
+    for r in report.inputs:
+        lines.append(f"{r.status}: {r.path} ({r.format}, {r.input_key})")
+        for s in r.skipped:
+            lines.append(f"  skipped {s.source}: {s.reason}")
+    n_added = sum(r.status == "added" for r in report.inputs)
+    lines.append(f"{report.store}: {n_added} added, {len(report.inputs) - n_added} unchanged")
+    return "\n".join(lines)

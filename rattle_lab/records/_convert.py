@@ -1,0 +1,177 @@
+"""Between the validated node tree (+ data sources) and the Record objects.
+
+Both directions live here so that the attribute names are written down once:
+readers build a tree, validate it, then call :func:`record_from_tree`;
+:func:`~rattle_lab.records.write_record` calls :func:`record_to_tree`,
+validates the result and writes it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ._model import (ArraySource, Channel, ImpactTable, Origin, Record, Rig, Run, Sensor,
+                     ThresholdTable, Truth)
+
+ROOT_FIELDS = ("campaign_id", "source", "description", "operator", "created_iso", "writer")
+RIG_FIELDS = ("apparatus", "description", "plate_length_m", "plate_width_m", "plate_thickness_m",
+              "plate_material", "edge_conditions", "striker_x_m", "striker_y_m", "gap_m",
+              "mic_distance_m")
+RUN_FIELDS = ("protocol", "excitation_freq_hz", "freq_end_hz", "freq_step_hz", "nominal_level",
+              "level_end", "nominal_level_units", "start_time_iso", "notes")
+CHANNEL_FIELDS = ("quantity", "units", "sample_rate_hz", "start_time_s", "timestamps",
+                  "sensitivity", "sensitivity_units", "sensor_id", "sensor_model", "sensor_serial",
+                  "calibration_date", "range_min", "range_max", "units_assumed", "description")
+TRUTH_FIELDS = ("gap_m", "f_s_hz", "zeta", "e", "participation", "acoustic_law")
+SCHEMA_NAME = "rattle_record"
+SCHEMA_VERSION = 1
+
+
+def _split(attrs: Mapping[str, Any], fields: tuple[str, ...]) -> tuple[dict[str, Any], dict[str, Any]]:
+    known = {k: v for k, v in attrs.items() if k in fields}
+    extra = {k: v for k, v in attrs.items() if k not in fields}
+    return known, extra
+
+
+def _members(node: Mapping[str, Any], name: str) -> dict[str, Any]:
+    child = node.get("members", {}).get(name)
+    return {} if child is None else child.get("members", {})
+
+
+def record_from_tree(tree: Mapping[str, Any], sources: Mapping[str, ArraySource],
+                     origin: Origin | None = None) -> Record:
+    """Build a :class:`Record` from a validated tree and its dataset sources (keyed by HDF5 path)."""
+    root_attrs = {k: v for k, v in tree["attrs"].items() if k not in ("schema", "schema_version")}
+    root_known, root_extra = _split(root_attrs, ROOT_FIELDS)
+    members = tree["members"]
+
+    rig_known, rig_extra = _split(members["rig"]["attrs"], RIG_FIELDS)
+    sensors = []
+    for sensor_id, node in _members(members["rig"], "sensors").items():
+        attrs = dict(node["attrs"])
+        sensors.append(Sensor(sensor_id=sensor_id, position_m=tuple(attrs.pop("position_m")),
+                              mounted_on=attrs.pop("mounted_on"),
+                              description=attrs.pop("description", ""), extra=attrs))
+    rig = Rig(**rig_known, sensors=tuple(sensors), extra=rig_extra)
+
+    runs = []
+    for run_id, run_node in members["runs"]["members"].items():
+        run_known, run_extra = _split(run_node["attrs"], RUN_FIELDS)
+        channels = []
+        for name, ch_node in _members(run_node, "channels").items():
+            ch_known, ch_extra = _split(ch_node["attrs"], CHANNEL_FIELDS)
+            channels.append(Channel(name=name, data=sources[f"/runs/{run_id}/channels/{name}"],
+                                    **ch_known, extra=ch_extra))
+        timestamps = {name: sources[f"/runs/{run_id}/timestamps/{name}"]
+                      for name in _members(run_node, "timestamps")}
+        runs.append(Run(run_id=run_id, channels=tuple(channels), timestamps=timestamps,
+                        **run_known, extra=run_extra))
+
+    truth = None
+    if "truth" in members:
+        truth = _truth_from_tree(members["truth"], sources)
+    return Record(**root_known, rig=rig, runs=tuple(runs), truth=truth, extra=root_extra,
+                  origin=origin)
+
+
+def _read_all(source: ArraySource) -> np.ndarray:
+    return np.asarray(source.read(0, source.n_samples), dtype=np.float64)
+
+
+def _truth_from_tree(node: Mapping[str, Any], sources: Mapping[str, ArraySource]) -> Truth:
+    known, extra = _split(node["attrs"], TRUTH_FIELDS)
+    impacts = {}
+    for run_id in _members(node, "impacts"):
+        base = f"/truth/impacts/{run_id}"
+        impacts[run_id] = ImpactTable(*(_read_all(sources[f"{base}/{k}"])
+                                        for k in ("t_s", "v_in_m_s", "v_out_m_s")))
+    th_node = node["members"]["thresholds"]
+    thresholds = ThresholdTable(*(_read_all(sources[f"/truth/thresholds/{k}"])
+                                  for k in ("freq_hz", "onset_level", "disappearance_level")),
+                                level_units=th_node["attrs"]["level_units"])
+    return Truth(**known, impacts=impacts, thresholds=thresholds, extra=extra)
+
+
+def _attrs(obj: Any, fields: tuple[str, ...], extra: Mapping[str, Any]) -> dict[str, Any]:
+    out = {}
+    for name in fields:
+        value = getattr(obj, name)
+        if value is None or (name in ("description", "notes") and value == ""):
+            continue
+        if name == "units_assumed" and value is False:
+            continue
+        out[name] = _plain(value)
+    out.update({k: _plain(v) for k, v in extra.items()})
+    return out
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, (np.generic,)):
+        return value.item()
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _dataset_node(source: ArraySource, attrs: dict[str, Any]) -> dict[str, Any]:
+    return {"kind": "dataset", "attrs": attrs, "dtype": np.dtype(source.dtype).str,
+            "shape": [int(source.n_samples)]}
+
+
+def record_to_tree(record: Record) -> tuple[dict[str, Any], dict[str, ArraySource]]:
+    """The node tree and dataset sources (keyed by HDF5 path) that represent ``record``."""
+    from ._model import ArrayData
+
+    sources: dict[str, ArraySource] = {}
+    root_attrs = {"schema": SCHEMA_NAME, "schema_version": SCHEMA_VERSION,
+                  **_attrs(record, ROOT_FIELDS, record.extra)}
+    sensors = {s.sensor_id: {"kind": "group", "members": {},
+                             "attrs": _attrs(s, ("position_m", "mounted_on", "description"), s.extra)}
+               for s in record.rig.sensors}
+    rig_members = {"sensors": {"kind": "group", "attrs": {}, "members": sensors}} if sensors else {}
+    rig = {"kind": "group", "attrs": _attrs(record.rig, RIG_FIELDS, record.rig.extra),
+           "members": rig_members}
+    runs: dict[str, Any] = {}
+    for run in record.runs:
+        channels = {}
+        for ch in run.channels:
+            path = f"/runs/{run.run_id}/channels/{ch.name}"
+            sources[path] = ch.data
+            channels[ch.name] = _dataset_node(ch.data, _attrs(ch, CHANNEL_FIELDS, ch.extra))
+        run_members: dict[str, Any] = {"channels": {"kind": "group", "attrs": {}, "members": channels}}
+        if run.timestamps:
+            ts_nodes = {}
+            for name, src in run.timestamps.items():
+                sources[f"/runs/{run.run_id}/timestamps/{name}"] = src
+                ts_nodes[name] = _dataset_node(src, {"units": "s"})
+            run_members["timestamps"] = {"kind": "group", "attrs": {}, "members": ts_nodes}
+        runs[run.run_id] = {"kind": "group", "attrs": _attrs(run, RUN_FIELDS, run.extra),
+                            "members": run_members}
+    members: dict[str, Any] = {"rig": rig, "runs": {"kind": "group", "attrs": {}, "members": runs}}
+    if record.truth is not None:
+        truth = record.truth
+        impacts = {}
+        for run_id, table in truth.impacts.items():
+            cols = {}
+            for k in ("t_s", "v_in_m_s", "v_out_m_s"):
+                src = ArrayData(np.asarray(getattr(table, k), dtype=np.float64))
+                sources[f"/truth/impacts/{run_id}/{k}"] = src
+                cols[k] = _dataset_node(src, {})
+            impacts[run_id] = {"kind": "group", "attrs": {}, "members": cols}
+        th_cols = {}
+        for k in ("freq_hz", "onset_level", "disappearance_level"):
+            src = ArrayData(np.asarray(getattr(truth.thresholds, k), dtype=np.float64))
+            sources[f"/truth/thresholds/{k}"] = src
+            th_cols[k] = _dataset_node(src, {})
+        members["truth"] = {
+            "kind": "group", "attrs": _attrs(truth, TRUTH_FIELDS, truth.extra),
+            "members": {
+                "impacts": {"kind": "group", "attrs": {}, "members": impacts},
+                "thresholds": {"kind": "group", "attrs": {"level_units": truth.thresholds.level_units},
+                               "members": th_cols},
+            },
+        }
+    return {"kind": "group", "attrs": root_attrs, "members": members}, sources

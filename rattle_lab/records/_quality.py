@@ -1,0 +1,437 @@
+"""Data-quality checks that stream over a channel chunk by chunk.
+
+Findings and their flags (catalogue column ``flags``):
+
+========================== ======= =======================================================
+flag                       fatal   what
+========================== ======= =======================================================
+``nan``                    yes     NaN samples (in a channel or its timestamps)
+``inf``                    yes     infinite samples
+``clipping``               yes     a flat run of >= ``n_clip_min`` samples at the range
+                                   limit: the declared ``range_min``/``range_max``, the
+                                   limits of an integer dtype, or else the channel's own
+                                   minimum or maximum
+``dropout``                yes     a flat run of >= ``max(n_dropout_min, dropout_min_s*fs)``
+                                   identical samples not at a range limit (stuck or
+                                   zero-filled acquisition), a constant channel, or a
+                                   timestamp step over ``gap_factor`` times the nominal step
+``rate_mismatch``          yes     channels of one run with different sample rates
+``nonmonotonic_timestamps`` yes    timestamps not strictly increasing
+``empty``                  yes     a zero-length channel
+``uncalibrated``           no      amplitude in full-scale units ("1")
+``units_assumed``          no      units not stated by the source, assumed by the mapping
+========================== ======= =======================================================
+
+"Fatal" findings raise their :class:`~rattle_lab.records.DataQualityError`
+unless flagged data are allowed; nothing is ever dropped or clamped.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ._errors import (ClippingError, ClippingWarning, DataQualityError, DropoutError,
+                      DropoutWarning, EmptyChannelError, EmptyChannelWarning, InfValueError,
+                      InfValueWarning, NaNGapError, NaNGapWarning, NonMonotonicTimestampsError,
+                      NonMonotonicTimestampsWarning, SampleRateMismatchError,
+                      SampleRateMismatchWarning, UncalibratedWarning)
+from ..exceptions import DataQualityWarning
+
+Flag = Literal["nan", "inf", "clipping", "dropout", "rate_mismatch", "nonmonotonic_timestamps",
+               "empty", "uncalibrated", "units_assumed"]
+
+FLAGS: tuple[str, ...] = ("nan", "inf", "clipping", "dropout", "rate_mismatch",
+                          "nonmonotonic_timestamps", "empty", "uncalibrated", "units_assumed")
+FATAL_FLAGS = frozenset({"nan", "inf", "clipping", "dropout", "rate_mismatch",
+                         "nonmonotonic_timestamps", "empty"})
+
+ERROR_CLASSES: dict[str, type[DataQualityError]] = {
+    "nan": NaNGapError, "inf": InfValueError, "clipping": ClippingError, "dropout": DropoutError,
+    "rate_mismatch": SampleRateMismatchError, "nonmonotonic_timestamps": NonMonotonicTimestampsError,
+    "empty": EmptyChannelError,
+}
+WARNING_CLASSES: dict[str, type[DataQualityWarning]] = {
+    "nan": NaNGapWarning, "inf": InfValueWarning, "clipping": ClippingWarning,
+    "dropout": DropoutWarning, "rate_mismatch": SampleRateMismatchWarning,
+    "nonmonotonic_timestamps": NonMonotonicTimestampsWarning, "empty": EmptyChannelWarning,
+    "uncalibrated": UncalibratedWarning, "units_assumed": UncalibratedWarning,
+}
+
+
+@dataclass(frozen=True)
+class QualityLimits:
+    """Thresholds of the checks.
+
+    Attributes
+    ----------
+    n_clip_min : int
+        Shortest flat run at a range limit that counts as clipping, samples.
+    n_dropout_min : int
+        Shortest flat run that counts as a dropout, samples (at least).
+    dropout_min_s : float
+        Shortest flat run that counts as a dropout, s (``round(dropout_min_s * fs)``
+        samples when that is more than ``n_dropout_min``).
+    gap_factor : float
+        A timestamp step longer than ``gap_factor`` times the nominal step is a dropout.
+    rate_rtol : float
+        Relative tolerance when comparing sample rates of one run.
+    """
+
+    n_clip_min: int = 3
+    n_dropout_min: int = 16
+    dropout_min_s: float = 0.001
+    gap_factor: float = 1.5
+    rate_rtol: float = 1e-6
+
+    def n_dropout(self, sample_rate_hz: float | None) -> int:
+        """Dropout length in samples for a channel sampled at ``sample_rate_hz``."""
+        if sample_rate_hz is None or not math.isfinite(sample_rate_hz):
+            return self.n_dropout_min
+        return max(self.n_dropout_min, round(self.dropout_min_s * sample_rate_hz))
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One data-quality finding.
+
+    Attributes
+    ----------
+    flag : str
+        One of :data:`FLAGS`.
+    file : str
+        The input file.
+    path : str
+        HDF5 path (or the foreign file's equivalent) of the dataset.
+    field : str
+        ``"data"``, ``"timestamps"``, ``"sample_rate_hz"`` or ``"units"``.
+    detail : str
+        What was found, with counts.
+    sample_index : int or None
+        First affected sample.
+    n_samples : int
+        Number of affected samples.
+    """
+
+    flag: str
+    file: str
+    path: str
+    field: str
+    detail: str
+    sample_index: int | None = None
+    n_samples: int = 0
+
+    @property
+    def fatal(self) -> bool:
+        """True when the finding raises unless flagged data are allowed."""
+        return self.flag in FATAL_FLAGS
+
+    @property
+    def message(self) -> str:
+        """``file: path: field: flag: detail`` on one line."""
+        return f"{self.file}: {self.path}: {self.field}: {self.flag}: {self.detail}"
+
+    def error(self) -> DataQualityError:
+        """The exception for this finding."""
+        return ERROR_CLASSES[self.flag](self.message, self)
+
+    @property
+    def warning_class(self) -> type[DataQualityWarning]:
+        """The warning class for this finding."""
+        return WARNING_CLASSES[self.flag]
+
+
+@dataclass
+class _Acc:
+    """Flat runs of one kind: count, samples, first one."""
+
+    n_runs: int = 0
+    n_samples: int = 0
+    first_start: int | None = None
+    first_len: int = 0
+    value: float = math.nan
+
+    def add(self, starts: np.ndarray, lens: np.ndarray, values: np.ndarray) -> None:
+        if starts.size == 0:
+            return
+        self.n_runs += int(starts.size)
+        self.n_samples += int(lens.sum())
+        i = int(np.argmin(starts))
+        if self.first_start is None or starts[i] < self.first_start:
+            self.first_start, self.first_len, self.value = int(starts[i]), int(lens[i]), float(values[i])
+
+
+class ChannelChecker:
+    """Streaming checks of one channel: feed chunks in order to :meth:`update`, then :meth:`finish`.
+
+    Parameters
+    ----------
+    dtype : numpy dtype
+        dtype of the stored samples (integer dtypes are clipped at their limits).
+    range_min, range_max : float or None
+        Declared input range, stored units.
+    n_dropout : int
+        Dropout length in samples (see :meth:`QualityLimits.n_dropout`).
+    limits : QualityLimits
+        The other thresholds.
+    """
+
+    def __init__(self, dtype: np.dtype, *, range_min: float | None = None,
+                 range_max: float | None = None, n_dropout: int = 16,
+                 limits: QualityLimits = QualityLimits()) -> None:
+        dtype = np.dtype(dtype)
+        self.is_float = dtype.kind == "f"
+        self.range_source = "declared range"
+        if range_min is None and dtype.kind in "iu":
+            info = np.iinfo(dtype)
+            range_min, range_max = float(info.min), float(info.max)
+            self.range_source = f"{dtype.name} limit"
+        self.range_min, self.range_max = range_min, range_max
+        self.n_clip_min = limits.n_clip_min
+        self.n_dropout = n_dropout
+        self.pos = 0
+        self.n_nan = 0
+        self.nan_runs = 0
+        self.first_nan: int | None = None
+        self._prev_nan = False
+        self.n_inf = 0
+        self.first_inf: int | None = None
+        self.vmin = math.inf
+        self.vmax = -math.inf
+        self._prev_value: float | None = None
+        self._open: tuple[int, int, float] | None = None  # flat run touching the chunk end
+        self.clip = _Acc()
+        self.dropout = _Acc()
+        # Without a known range: flat runs at the highest / lowest value seen so far.
+        self._hi = _Acc(value=-math.inf)
+        self._lo = _Acc(value=math.inf)
+        # Without a known range, dropouts may turn out to be at an extreme: kept apart.
+        self._dropouts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+
+    def update(self, x: np.ndarray) -> None:
+        """Check the next chunk ``x`` (1-D, stored units)."""
+        n = int(x.shape[0])
+        if n == 0:
+            return
+        start = self.pos
+        # min and max propagate NaN and show +-inf: finite extremes prove every sample finite.
+        lo, hi = float(x.min()), float(x.max())
+        if not (math.isfinite(lo) and math.isfinite(hi)):
+            mask = np.isfinite(x)
+            self._nonfinite(x, mask, start)
+            finite = x[mask]
+            lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (math.inf, -math.inf)
+        else:
+            self._prev_nan = False
+        self.vmin = min(self.vmin, lo)
+        self.vmax = max(self.vmax, hi)
+        self._flat_runs(x, start)
+        self.pos += n
+
+    def _nonfinite(self, x: np.ndarray, mask: np.ndarray, start: int) -> None:
+        isnan = np.isnan(x)
+        n_nan = int(isnan.sum())
+        if n_nan:
+            if self.first_nan is None:
+                self.first_nan = start + int(np.argmax(isnan))
+            self.n_nan += n_nan
+            self.nan_runs += int(isnan[0] and not self._prev_nan)
+            self.nan_runs += int(np.count_nonzero(isnan[1:] & ~isnan[:-1]))
+        self._prev_nan = bool(isnan[-1])
+        isinf = ~mask & ~isnan
+        n_inf = int(isinf.sum())
+        if n_inf:
+            if self.first_inf is None:
+                self.first_inf = start + int(np.argmax(isinf))
+            self.n_inf += n_inf
+
+    def _flat_runs(self, x: np.ndarray, start: int) -> None:
+        eq = x[1:] == x[:-1]
+        boundary = self._prev_value is not None and bool(x[0] == self._prev_value)
+        self._prev_value = x[-1].item()
+        if not boundary and not eq.any():
+            self._close_open()
+            return
+        pos = np.flatnonzero(eq) + 1  # local p with x[p] == x[p-1]
+        if boundary:
+            pos = np.concatenate((np.zeros(1, dtype=pos.dtype), pos))
+        brk = np.flatnonzero(np.diff(pos) != 1)
+        a = pos[np.concatenate(([0], brk + 1))]
+        b = pos[np.concatenate((brk, [pos.size - 1]))]
+        starts = a - 1 + start
+        lens = b - a + 2
+        values = x[b]
+        if self._open is not None:
+            if a[0] == 0:
+                starts[0] = self._open[0]
+                lens[0] = self._open[1] + b[0] + 1
+            else:
+                self._close_open()
+        self._open = None
+        if b[-1] == x.shape[0] - 1:
+            self._open = (int(starts[-1]), int(lens[-1]), float(values[-1]))
+            starts, lens, values = starts[:-1], lens[:-1], values[:-1]
+        self._classify(starts, lens, values.astype(np.float64))
+
+    def _close_open(self) -> None:
+        if self._open is not None:
+            s, n, v = self._open
+            self._open = None
+            self._classify(np.array([s]), np.array([n]), np.array([v]))
+
+    def _classify(self, starts: np.ndarray, lens: np.ndarray, values: np.ndarray) -> None:
+        if starts.size == 0:
+            return
+        long_enough = lens >= self.n_clip_min
+        if self.range_min is not None and self.range_max is not None:
+            at_limit = (values >= self.range_max) | (values <= self.range_min)
+            clip = long_enough & at_limit
+            self.clip.add(starts[clip], lens[clip], values[clip])
+            drop = (lens >= self.n_dropout) & ~at_limit
+            self.dropout.add(starts[drop], lens[drop], values[drop])
+            return
+        cand = long_enough
+        if cand.any():
+            cs, cl, cv = starts[cand], lens[cand], values[cand]
+            for acc, best, better in ((self._hi, cv.max(), np.greater),
+                                      (self._lo, cv.min(), np.less)):
+                if better(best, acc.value):
+                    acc.n_runs, acc.n_samples, acc.first_start, acc.value = 0, 0, None, float(best)
+                if best == acc.value:
+                    sel = cv == best
+                    acc.add(cs[sel], cl[sel], cv[sel])
+        drop = lens >= self.n_dropout
+        if drop.any():
+            self._dropouts.append((starts[drop], lens[drop], values[drop]))
+
+    def finish(self) -> list[tuple[str, int | None, int, str]]:
+        """Findings as ``(flag, sample_index, n_samples, detail)``."""
+        self._close_open()
+        n = self.pos
+        out: list[tuple[str, int | None, int, str]] = []
+        if n == 0:
+            return [("empty", None, 0, "zero-length channel (0 samples)")]
+        if self.n_nan:
+            out.append(("nan", self.first_nan, self.n_nan,
+                        f"{self.n_nan} NaN sample(s) in {self.nan_runs} run(s), first at sample "
+                        f"{self.first_nan}"))
+        if self.n_inf:
+            out.append(("inf", self.first_inf, self.n_inf,
+                        f"{self.n_inf} infinite sample(s), first at sample {self.first_inf}"))
+        constant = self.vmin == self.vmax
+        if self.range_min is None:
+            for acc, side in ((self._hi, "maximum"), (self._lo, "minimum")):
+                at_extreme = acc.value == (self.vmax if side == "maximum" else self.vmin)
+                if acc.n_runs and at_extreme and not constant:
+                    self.clip.add(np.array([acc.first_start]), np.array([acc.first_len]),
+                                  np.array([acc.value]))
+                    self.clip.n_runs += acc.n_runs - 1
+                    self.clip.n_samples += acc.n_samples - acc.first_len
+            for starts, lens, values in self._dropouts:
+                keep = constant | ((values != self.vmax) & (values != self.vmin))
+                self.dropout.add(starts[keep], lens[keep], values[keep])
+            where = "at the channel's own extreme (no declared range)"
+        else:
+            where = f"at the {self.range_source} [{self.range_min:g}, {self.range_max:g}]"
+        if self.clip.n_runs:
+            out.append(("clipping", self.clip.first_start, self.clip.n_samples,
+                        f"{self.clip.n_samples} samples in {self.clip.n_runs} flat run(s) {where}, "
+                        f"first at sample {self.clip.first_start} (value {self.clip.value:g})"))
+        if self.dropout.n_runs:
+            d = self.dropout
+            what = ("channel is constant" if constant and d.first_len == n
+                    else f"{d.n_runs} run(s) of >= {self.n_dropout} identical samples")
+            out.append(("dropout", d.first_start, d.n_samples,
+                        f"{what}: first at sample {d.first_start}, {d.first_len} samples of "
+                        f"value {d.value:g}"))
+        return out
+
+
+class TimestampChecker:
+    """Streaming checks of a timestamp dataset: NaN, order, gaps.
+
+    The nominal step is the median step of the first chunk.
+    """
+
+    def __init__(self, limits: QualityLimits = QualityLimits()) -> None:
+        self.gap_factor = limits.gap_factor
+        self.pos = 0
+        self._prev: float | None = None
+        self.step_s: float | None = None
+        self.first_t: float | None = None
+        self.last_t: float | None = None
+        self.n_nan = 0
+        self.first_nan: int | None = None
+        self.n_back = 0
+        self.first_back: tuple[int, float, float] | None = None
+        self.n_gaps = 0
+        self.n_missing = 0
+        self.first_gap: tuple[int, float] | None = None
+
+    def update(self, t: np.ndarray) -> None:
+        """Check the next chunk of timestamps (s)."""
+        n = int(t.shape[0])
+        if n == 0:
+            return
+        start = self.pos
+        self.pos += n
+        bad = ~np.isfinite(t)
+        if bad.any():
+            self.n_nan += int(bad.sum())
+            if self.first_nan is None:
+                self.first_nan = start + int(np.argmax(bad))
+            return  # order and gaps are meaningless around non-finite times
+        if self.first_t is None:
+            self.first_t = float(t[0])
+        self.last_t = float(t[-1])
+        full = t if self._prev is None else np.concatenate(([self._prev], t))
+        offset = start if self._prev is None else start - 1
+        self._prev = float(t[-1])
+        d = np.diff(full)
+        if d.size == 0:
+            return
+        if self.step_s is None:
+            positive = d[d > 0]
+            self.step_s = float(np.median(positive)) if positive.size else math.nan
+        back = d <= 0
+        if back.any():
+            i = int(np.argmax(back))
+            self.n_back += int(back.sum())
+            if self.first_back is None:
+                self.first_back = (offset + i + 1, float(full[i]), float(full[i + 1]))
+        if self.step_s and math.isfinite(self.step_s):
+            gap = d > self.gap_factor * self.step_s
+            if gap.any():
+                self.n_gaps += int(gap.sum())
+                self.n_missing += int(np.sum(np.round(d[gap] / self.step_s) - 1))
+                if self.first_gap is None:
+                    i = int(np.argmax(gap))
+                    self.first_gap = (offset + i + 1, float(d[i]))
+
+    @property
+    def mean_rate_hz(self) -> float:
+        """``(n - 1) / (t_last - t_first)``, Hz (NaN when undefined)."""
+        if self.first_t is None or self.last_t is None or self.pos < 2 or self.last_t <= self.first_t:
+            return math.nan
+        return (self.pos - 1) / (self.last_t - self.first_t)
+
+    def finish(self) -> list[tuple[str, int | None, int, str]]:
+        """Findings as ``(flag, sample_index, n_samples, detail)``."""
+        out: list[tuple[str, int | None, int, str]] = []
+        if self.n_nan:
+            out.append(("nan", self.first_nan, self.n_nan,
+                        f"{self.n_nan} non-finite timestamp(s), first at sample {self.first_nan}"))
+        if self.first_back is not None:
+            i, t0, t1 = self.first_back
+            out.append(("nonmonotonic_timestamps", i, self.n_back,
+                        f"{self.n_back} step(s) not strictly increasing, first at sample {i} "
+                        f"({t0!r} s -> {t1!r} s)"))
+        if self.first_gap is not None:
+            i, d = self.first_gap
+            out.append(("dropout", i, self.n_missing,
+                        f"{self.n_gaps} gap(s) in the timestamps, {self.n_missing} missing "
+                        f"sample(s); first at sample {i}: step {d:g} s, nominal {self.step_s:g} s"))
+        return out
