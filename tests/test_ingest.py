@@ -419,9 +419,11 @@ def test_a_long_record_ingests_in_bounded_memory(tmp_path):
                          timeout=120)
     result = json.loads(out.stdout)
     assert result["n"] == 4 * n
-    # Loading one channel whole would take 123 MB and the file 491 MB; the interpreter with
-    # numpy, h5py, pandas and jsonschema is about 130 MB.  300 MB bounds the chunked ingest.
-    assert result["maxrss_kib"] < 300 * 1024, result
+    # Loading the file whole would take 491 MB on top of the interpreter with numpy, h5py,
+    # pandas and jsonschema (about 130 MB), i.e. > 620 MB.  The chunked ingest measured
+    # 120-350 MB here (allocator arenas vary with machine load), so 450 MB separates
+    # chunked from whole-file reading with margin on both sides.
+    assert result["maxrss_kib"] < 450 * 1024, result
 
 
 def test_damaged_stores_are_refused(tmp_path):

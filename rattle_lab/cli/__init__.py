@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
@@ -25,6 +26,9 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rattle_lab.cli._model",
     "rattle_lab.cli._demo",
     "rattle_lab.cli._ingest",
+    "rattle_lab.cli._fit",
+    "rattle_lab.cli._explore",
+    "rattle_lab.cli._simulate",
 )
 
 
@@ -58,6 +62,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("rattle-lab: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader went away (e.g. `rattle-lab ... | head`): stop quietly
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,85 @@
+"""``rattle-lab fit store.h5 [--pipeline FILE] [--json]``: a thin layer over :func:`rattle_lab.fit.fit_store`.
+
+Detects impacts, sound peaks, patterns and ramp thresholds in every run of an
+ingest store, fits the grazing curve, the restitution and the SPL laws, and
+writes them under ``/results`` of the store (atomically, with provenance).
+Prints a summary table (or ``--json``) on stdout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from typing import Any
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    parser = sub.add_parser(
+        "fit", help="detect impacts and sound peaks, fit thresholds, restitution and SPL law",
+        description="Detect impacts, sound peaks, impact patterns and ramp thresholds in every "
+                    "run of an ingest store; fit the grazing curve (eq. 3.4), the coefficient of "
+                    "restitution and the SPL law; write them under /results of the store "
+                    "(atomically, with provenance). Runs lacking a channel are reported as "
+                    "skipped.")
+    parser.add_argument("store", metavar="STORE", help="an ingest store (.h5)")
+    parser.add_argument("--pipeline", metavar="FILE.toml",
+                        help="parameters from a pipeline TOML: [detect] and [fit] tables of "
+                             "keyword parameters")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.set_defaults(func=_run)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ..fit import fit_store, load_pipeline
+
+    params = load_pipeline(args.pipeline)
+    result = fit_store(args.store, detect=params["detect"], fit=params["fit"])
+    if args.json:
+        print(json.dumps(result.summary, indent=2, allow_nan=False))
+    else:
+        print(as_table(result.summary))
+    return 0
+
+
+def _num(x: Any, fmt: str = ".6g") -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "-"
+    return format(x, fmt) if isinstance(x, (int, float)) else str(x)
+
+
+def as_table(summary: dict[str, Any]) -> str:
+    """Human summary: fitted values with units and uncertainties, then runs and skips."""
+    lines = ["quantity                         value          stderr         unit",
+             "-------------------------------  -------------  -------------  ----------------"]
+    fits = summary["fits"]
+    rows: list[tuple[str, Any, Any, str]] = []
+    for name, p in fits.get("grazing", {}).items():
+        if isinstance(p, dict) and "value" in p:
+            rows.append((f"grazing.{name}" + ("" if p["vary"] else " (fixed)"), p["value"],
+                         p["stderr"], p["unit"]))
+    for key in ("restitution_ratio", "restitution_down"):
+        if key in fits:
+            rows.append((f"{key}.e", fits[key]["value"], fits[key]["stderr"], "1"))
+    for name in ("first", "max", "rms"):
+        law = fits.get(f"spl_law_{name}")
+        if law:
+            lin = law["linear"]
+            half = None if lin["slope_ci"][0] is None else (lin["slope_ci"][1] - lin["slope_ci"][0]) / 2
+            rows.append((f"spl_law_{name}.slope (95% half)", lin["slope"], half, "Pa/(m/s)"))
+            rows.append((f"spl_law_{name}.r2", lin["r2"], None, "1"))
+            rows.append((f"spl_law_{name}.db_offset", law["db"]["c_db"], None, "dB re 20 uPa @1 m/s"))
+    for label, value, err, unit in rows:
+        lines.append(f"{label:<31}  {_num(value):<13}  {_num(err):<13}  {unit}")
+    for note in fits.get("grazing", {}).get("unidentifiable", []):
+        lines.append(f"note: {note}")
+    for key, why in summary["not_fitted"].items():
+        lines.append(f"not fitted: {key}: {why}")
+    lines.append("")
+    lines.append(f"runs: {summary['n_ok']} analysed, {len(summary['skipped'])} skipped")
+    for r in summary["runs"]:
+        lines.append(f"  {r['input_key']}/{r['run_id']}: {r['n_impacts']} impacts, "
+                     f"pattern {r['pattern'] or '-'}, threshold {_num(r['threshold_accel_ms2'])} m/s^2")
+    for s in summary["skipped"]:
+        lines.append(f"  skipped {s['input_key']}/{s['run_id']}: {s['reason']}")
+    return "\n".join(lines)

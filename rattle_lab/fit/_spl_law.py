@@ -1,0 +1,109 @@
+"""SPL law: sound pressure linear in impact velocity (thesis Fig. 6-7), and its dB form.
+
+Linear law ``p = slope * v + intercept`` by ordinary least squares
+(``scipy.stats.linregress``) with 95 % t-intervals; dB law
+``L = 20 log10(v) + C`` with ``C`` the mean of ``L - 20 log10 v`` (and its
+95 % t-interval), plus the free-slope fit ``L = k log10(v) + C'`` as a check (``k`` near 20).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from ..detect._spl import spl_db
+from ..exceptions import ParameterError
+
+
+@dataclass(frozen=True)
+class LinearLaw:
+    """``p_pa = slope * v_m_s + intercept``.
+
+    Attributes
+    ----------
+    slope, slope_ci : float, (float, float)
+        Pa/(m/s), with its 95 % confidence interval.
+    intercept, intercept_ci : float, (float, float)
+        Pa.
+    r2 : float
+        Coefficient of determination.
+    n : int
+        Points used.
+    """
+
+    slope: float
+    slope_ci: tuple[float, float]
+    intercept: float
+    intercept_ci: tuple[float, float]
+    r2: float
+    n: int
+
+
+@dataclass(frozen=True)
+class DbLaw:
+    """``L_db = 20 log10(v_m_s) + c_db`` (and free slope ``k_db_per_decade``).
+
+    Attributes
+    ----------
+    c_db, c_ci : float, (float, float)
+        Offset, dB re 20 uPa at 1 m/s, with its 95 % interval.
+    k_db_per_decade : float
+        Slope of the free fit ``L = k log10 v + C'`` (20 for a linear law), dB/decade.
+    n : int
+    """
+
+    c_db: float
+    c_ci: tuple[float, float]
+    k_db_per_decade: float
+    n: int
+
+
+def _clean(v: object, p: object) -> tuple[np.ndarray, np.ndarray]:
+    va = np.abs(np.asarray(v, dtype=float))
+    pa = np.abs(np.asarray(p, dtype=float))
+    if va.shape != pa.shape:
+        raise ParameterError(f"`v_m_s` and `p_pa` must have equal shapes, had {va.shape}, {pa.shape}")
+    ok = np.isfinite(va) & np.isfinite(pa) & (va > 0) & (pa > 0)
+    if ok.sum() < 3:
+        raise ParameterError(f"the SPL law needs >= 3 finite positive (v, p) pairs, had {int(ok.sum())}")
+    return va[ok], pa[ok]
+
+
+def fit_linear_law(v_m_s: object, p_pa: object) -> LinearLaw:
+    """Fit ``|p| = slope |v| + intercept``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> law = fit_linear_law([0.1, 0.2, 0.3, 0.4], [0.05, 0.10, 0.15, 0.20])
+    >>> bool(np.isclose(law.slope, 0.5) and np.isclose(law.r2, 1.0))
+    True
+    """
+    v, p = _clean(v_m_s, p_pa)
+    r = stats.linregress(v, p)
+    t = stats.t.ppf(0.975, v.size - 2)
+    return LinearLaw(float(r.slope), (float(r.slope - t * r.stderr), float(r.slope + t * r.stderr)),
+                     float(r.intercept), (float(r.intercept - t * r.intercept_stderr),
+                                          float(r.intercept + t * r.intercept_stderr)),
+                     float(r.rvalue**2), int(v.size))
+
+
+def fit_db_law(v_m_s: object, p_pa: object) -> DbLaw:
+    """Fit ``L = 20 log10 v + C`` (C in dB re 20 uPa at 1 m/s)."""
+    v, p = _clean(v_m_s, p_pa)
+    level = spl_db(p)
+    c = level - 20.0 * np.log10(v)
+    sem = float(stats.sem(c)) if c.size > 1 else np.nan
+    t = stats.t.ppf(0.975, c.size - 1)
+    k = float(stats.linregress(np.log10(v), level).slope)
+    return DbLaw(float(np.mean(c)), (float(np.mean(c) - t * sem), float(np.mean(c) + t * sem)), k,
+                 int(v.size))
+
+
+def law_dict(law: Any) -> dict[str, Any]:
+    """JSON-ready dict of a law."""
+    from dataclasses import asdict
+    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(law).items()}

@@ -1,0 +1,295 @@
+"""The ``rattle-lab fit`` pipeline: detect events in every stored run, then fit.
+
+Per run: impacts from the plate velocity and/or plate acceleration; sound
+peaks, acoustic delay and SPL with a microphone; the impact pattern with an
+excitation frequency; the ramp threshold on ``amplitude_ramp_up/down`` runs
+with a base accelerometer.  Then over the store: the threshold curve, the
+grazing fit (>= 4 upward thresholds), ``e`` from velocity ratios and from the
+downward thresholds, and the SPL laws.  A run without the channels it needs is
+*skipped* with its reason; a run without impacts is a valid result.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import sys
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from .._version import __version__
+from ..detect import (ImpactParams, cross_correlation_delay, detect_impacts, impact_pattern,
+                      impulse_train, rms_spl_db, sound_peaks)
+from ..exceptions import ParameterError, RattleLabError
+from ..ingest import open_stored_record, read_catalogue
+from ..results import RunResult, StoreFit, write_results
+from ..thresholds import ramp_threshold, tabulate_thresholds
+from ._grazing import fit_grazing
+from ._restitution import fit_restitution_down, restitution_from_ratios
+from ._spl_law import fit_db_law, fit_linear_law, law_dict
+
+SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01}
+FIT_KEYS = {"participation": 1.0, "vary_participation": False, "outlier_k": 5.0,
+            "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3}
+_QUANTITIES = ("plate_velocity", "plate_acceleration", "sound_pressure", "base_acceleration")
+
+
+def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, Any]]:
+    """Keyword parameters ``{"detect": {...}, "fit": {...}}`` from a pipeline TOML (or defaults).
+
+    ``[detect]`` takes the fields of :class:`~rattle_lab.detect.ImpactParams` and
+    ``window_s``, ``first_fraction``, ``max_lag_s``; ``[fit]`` takes
+    ``participation``, ``vary_participation``, ``outlier_k``, ``conf_interval``,
+    ``speed_of_sound_m_s``, ``n_confirm``.  Other tables are ignored (they
+    belong to other stages); unknown keys in these two are errors.
+
+    Raises
+    ------
+    ParameterError
+        For an unreadable file or an unknown key.
+    """
+    out: dict[str, dict[str, Any]] = {"detect": {}, "fit": {}}
+    if path is None:
+        return out
+    try:
+        doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise ParameterError(f"{path}: cannot read pipeline TOML: {exc}") from exc
+    allowed = {"detect": {f.name for f in dataclasses.fields(ImpactParams)} | set(SOUND_KEYS),
+               "fit": set(FIT_KEYS)}
+    for table in ("detect", "fit"):
+        values = doc.get(table, {})
+        if not isinstance(values, dict):
+            raise ParameterError(f"{path}: [{table}] must be a table")
+        unknown = sorted(set(values) - allowed[table])
+        if unknown:
+            raise ParameterError(f"{path}: [{table}]: unknown key {unknown[0]!r} "
+                                 f"(known: {', '.join(sorted(allowed[table]))})")
+        out[table] = dict(values)
+    return out
+
+
+def _fs_of(run: Any, ch: Any) -> float:
+    if ch.sample_rate_hz is not None:
+        return float(ch.sample_rate_hz)
+    t = run.timestamps[ch.timestamps].read(0, min(ch.n_samples, 10000))
+    return float(1.0 / np.median(np.diff(t)))
+
+
+def _start_of(run: Any, ch: Any) -> float:
+    if ch.start_time_s is not None:
+        return float(ch.start_time_s)
+    if ch.timestamps is not None:
+        return float(run.timestamps[ch.timestamps].read(0, 1)[0])
+    return 0.0
+
+
+def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Mapping[str, Any],
+                mic_distance_m: float | None = None) -> RunResult:
+    """Detection results of one :class:`~rattle_lab.records.Run`."""
+    by_q: dict[str, Any] = {}
+    for ch in run.channels:
+        by_q.setdefault(ch.quantity, ch)
+    freq = float(run.excitation_freq_hz) if run.excitation_freq_hz else float("nan")
+    vel, acc = by_q.get("plate_velocity"), by_q.get("plate_acceleration")
+    base = dict(input_key=input_key, run_id=run.run_id, protocol=run.protocol, freq_hz=freq)
+    if vel is None and acc is None:
+        return RunResult(status="skipped", reason="no plate_velocity or plate_acceleration channel",
+                         **base)
+    used = [c for c in (vel, acc) if c is not None]
+    fs = _fs_of(run, used[0])
+    if any(abs(_fs_of(run, c) - fs) > 1e-9 * fs or c.n_samples != used[0].n_samples for c in used):
+        used = used[:1]
+        vel, acc = (used[0], None) if used[0] is vel else (None, used[0])
+    t0 = _start_of(run, used[0])
+    params = ImpactParams(**{k: v for k, v in detect.items() if k not in SOUND_KEYS})
+    log = detect_impacts(fs, velocity_m_s=vel.read() if vel is not None else None,
+                         accel_ms2=acc.read() if acc is not None else None, params=params,
+                         start_time_s=t0)
+    names = tuple(c.name for c in used)
+    duration = used[0].n_samples / fs
+    pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)
+    if math.isfinite(freq) and freq > 0 and duration * freq >= 1:
+        pr = impact_pattern(log.t_s, freq, t0, t0 + duration)
+        pattern, pattern_n, counts = pr.pattern, pr.n, pr.counts
+    sk = {**SOUND_KEYS, **{k: v for k, v in detect.items() if k in SOUND_KEYS}}
+    peaks, delay, expected, spl, spl_a = None, np.nan, np.nan, np.nan, np.nan
+    mic = by_q.get("sound_pressure")
+    if mic is not None:
+        fs_mic = _fs_of(run, mic)
+        p = mic.read()
+        t0_mic = _start_of(run, mic)
+        names = names + (mic.name,)
+        peaks = sound_peaks(p, fs_mic, log.t_s, window_s=sk["window_s"],
+                            first_fraction=sk["first_fraction"], start_time_s=t0_mic)
+        spl = rms_spl_db(p)
+        spl_a = rms_spl_db(p, fs_mic, a_weighted=True)
+        if log.n_impacts:
+            train = impulse_train(log.t_s, p.size, fs_mic, t0_mic)
+            delay = cross_correlation_delay(train, p, fs_mic, max_lag_s=sk["max_lag_s"])
+        if mic_distance_m:
+            expected = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0))
+    threshold = None
+    if run.protocol in ("amplitude_ramp_up", "amplitude_ramp_down") and math.isfinite(freq):
+        b = by_q.get("base_acceleration")
+        if b is not None:
+            threshold = ramp_threshold(run.run_id, b.read(), _fs_of(run, b), freq, log.t_s,
+                                       "up" if run.protocol.endswith("up") else "down",
+                                       start_time_s=_start_of(run, b),
+                                       n_confirm=int(fit.get("n_confirm", 3)))
+            names = names + (b.name,)
+    return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
+                     pattern_n=pattern_n, cycle_counts=counts, acoustic_delay_s=delay,
+                     expected_delay_s=expected, spl_rms_db=spl, spl_rms_a_db=spl_a,
+                     threshold=threshold, **base)
+
+
+def _f(x: Any) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _clean(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, (float, np.floating)):
+        return _f(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None = None,
+              fit: Mapping[str, Any] | None = None, write: bool = True) -> StoreFit:
+    """Detect and fit everything in an ingest store; write ``/results`` (see :mod:`rattle_lab.results`).
+
+    Raises
+    ------
+    StoreError
+        If ``store`` is not an ingest store.
+    ParameterError
+        For an unknown parameter.
+    """
+    detect = dict(detect or {})
+    fit = {**FIT_KEYS, **dict(fit or {})}
+    unknown = sorted(set(fit) - set(FIT_KEYS))
+    if unknown:
+        raise ParameterError(f"unknown fit parameter {unknown[0]!r}")
+    store = Path(store)
+    catalogue = read_catalogue(store, level="runs")
+    keys = list(dict.fromkeys(catalogue["input_key"]))
+    runs: list[RunResult] = []
+    inputs: dict[str, str] = {}
+    with h5py.File(store, "r") as fh:
+        for key in keys:
+            inputs[key] = str(fh[f"records/{key}"].attrs.get("ingest_input_sha256", ""))
+    for key in keys:
+        record = open_stored_record(store, key)
+        try:
+            for run in record.runs:
+                runs.append(analyse_run(key, run, detect=detect, fit=fit,
+                                        mic_distance_m=record.rig.mic_distance_m))
+        finally:
+            record.close()
+    curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
+    summary = _summarise(runs, curve, fit)
+    provenance = {"function": "rattle_lab.fit.fit_store", "rattle_lab_version": __version__,
+                  "python": sys.version.split()[0], "parameters": {"detect": detect, "fit": fit},
+                  "inputs": inputs}
+    result = StoreFit(tuple(runs), curve, _clean(summary), _clean(provenance))
+    if write:
+        write_results(store, result)
+    return result
+
+
+def _est(value: float, stderr: float, unit: str, **extra: Any) -> dict[str, Any]:
+    return {"value": value, "stderr": stderr, "unit": unit, **extra}
+
+
+def _summarise(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) -> dict[str, Any]:
+    ok = [r for r in runs if r.status == "ok"]
+    summary: dict[str, Any] = {
+        "n_runs": len(runs), "n_ok": len(ok),
+        "skipped": [{"input_key": r.input_key, "run_id": r.run_id, "reason": r.reason}
+                    for r in runs if r.status == "skipped"],
+        "runs": [{"input_key": r.input_key, "run_id": r.run_id, "protocol": r.protocol,
+                  "freq_hz": r.freq_hz, "n_impacts": r.impacts.n_impacts if r.impacts else 0,
+                  "pattern": r.pattern, "acoustic_delay_s": r.acoustic_delay_s,
+                  "expected_delay_s": r.expected_delay_s, "spl_rms_db": r.spl_rms_db,
+                  "spl_rms_a_db": r.spl_rms_a_db,
+                  "threshold_accel_ms2": r.threshold.accel_ms2 if r.threshold else None}
+                 for r in ok],
+        "thresholds": {"freq_hz": curve.freq_hz.tolist(), "up_ms2": curve.up_ms2.tolist(),
+                       "down_ms2": curve.down_ms2.tolist(),
+                       "hysteresis_ms2": curve.hysteresis_ms2.tolist()},
+        "fits": {},
+        "not_fitted": {},
+    }
+    fits, missing = summary["fits"], summary["not_fitted"]
+    grazing = None
+    n_up = int(np.isfinite(curve.up_ms2).sum())
+    if n_up >= 4:
+        try:
+            grazing = fit_grazing(curve.freq_hz, curve.up_ms2, participation=fit["participation"],
+                                  vary_participation=fit["vary_participation"],
+                                  outlier_k=fit["outlier_k"], conf_interval=fit["conf_interval"])
+            units = {"gap_m": "m", "f_s_hz": "Hz", "zeta": "1", "participation": "1"}
+            fits["grazing"] = {
+                **{n: _est(p.value, p.stderr, units[n], ci=[p.ci_low, p.ci_high], vary=p.vary)
+                   for n, p in grazing.params.items()},
+                "unidentifiable": list(grazing.unidentifiable),
+                "outliers_hz": grazing.freq_hz[grazing.outlier].tolist(),
+                "residuals_ms2": grazing.residuals_ms2.tolist(),
+                "correlation": {"names": list(grazing.varied),
+                                "matrix": grazing.correlation.tolist()},
+                "redchi": grazing.redchi}
+        except RattleLabError as exc:
+            missing["grazing"] = str(exc)
+    else:
+        missing["grazing"] = f"needs >= 4 upward thresholds, had {n_up}"
+    e_all = np.concatenate([r.impacts.e for r in ok if r.impacts is not None] or [np.zeros(0)])
+    st = restitution_from_ratios(e_all)
+    if st.n:
+        fits["restitution_ratio"] = _est(st.mean, st.stderr, "1", std=st.std, median=st.median,
+                                         n=st.n)
+    else:
+        missing["restitution_ratio"] = "no impact with a velocity on both sides"
+    if grazing is not None and np.isfinite(curve.down_ms2).any():
+        p = grazing.params
+        try:
+            rf = fit_restitution_down(curve.freq_hz, curve.down_ms2, gap_m=p["gap_m"].value,
+                                      f_s_hz=p["f_s_hz"].value, zeta=p["zeta"].value,
+                                      participation=p["participation"].value)
+            fits["restitution_down"] = _est(rf.e.value, rf.e.stderr, "1",
+                                            n=int(rf.freq_hz.size))
+        except RattleLabError as exc:
+            missing["restitution_down"] = str(exc)
+    else:
+        missing["restitution_down"] = "needs a grazing fit and downward thresholds"
+    v = np.concatenate([np.abs(r.impacts.v_in_m_s) for r in ok if r.peaks is not None
+                        and r.impacts is not None] or [np.zeros(0)])
+    for name in ("first", "max", "rms"):
+        attr = {"first": "p_first_pa", "max": "p_max_pa", "rms": "p_rms_pa"}[name]
+        pr = np.concatenate([getattr(r.peaks, attr) for r in ok if r.peaks is not None
+                             and r.impacts is not None] or [np.zeros(0)])
+        try:
+            lin, db = fit_linear_law(v, pr), fit_db_law(v, pr)
+            fits[f"spl_law_{name}"] = {"linear": {**law_dict(lin), "slope_unit": "Pa/(m/s)",
+                                                  "intercept_unit": "Pa"},
+                                       "db": {**law_dict(db), "unit": "dB re 20 uPa at 1 m/s"}}
+        except RattleLabError as exc:
+            missing[f"spl_law_{name}"] = str(exc)
+    return summary
+
+
+__all__ = ["analyse_run", "fit_store", "load_pipeline"]

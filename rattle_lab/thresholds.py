@@ -1,0 +1,150 @@
+"""Impact onset thresholds from amplitude-ramp runs (thesis Fig. 6-3).
+
+The excitation amplitude is measured, not taken from the nominal command: the
+base acceleration is demodulated at the run's excitation frequency (lock-in:
+``z(t) = lowpass(x(t) exp(-2 pi i f t))``, amplitude ``2 |z|``), with a
+zero-phase Butterworth low-pass.  On an upward ramp the threshold is the
+amplitude at the first impact of the first sustained group (``n_confirm``
+further impacts, each within ``max_gap_cycles`` forcing periods of the last);
+on a downward ramp, at the last impact of the last sustained group.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from scipy import signal
+
+from .detect._common import as_signal
+from .exceptions import ParameterError
+
+Direction = Literal["up", "down"]
+
+
+def fundamental_amplitude(x: object, fs_hz: float, freq_hz: float, *,
+                          lowpass_hz: float | None = None, order: int = 4) -> np.ndarray:
+    """Amplitude envelope of ``x`` at ``freq_hz`` by quadrature demodulation (lock-in).
+
+    ``lowpass_hz`` defaults to ``freq_hz / 5``.  Units as ``x``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(20000) / 10000.0
+    >>> amp = fundamental_amplitude(3.0 * np.sin(2 * np.pi * 100 * t) + np.sin(2 * np.pi * 300 * t),
+    ...                             10000.0, 100.0)
+    >>> bool(np.allclose(amp[5000:15000], 3.0, rtol=1e-3))
+    True
+    """
+    xs = as_signal(x, "x")
+    if not (np.isfinite(fs_hz) and fs_hz > 0):
+        raise ParameterError(f"`fs_hz` must be > 0, was {fs_hz}")
+    if not (np.isfinite(freq_hz) and 0 < freq_hz < fs_hz / 2):
+        raise ParameterError(f"`freq_hz` must be in (0, fs_hz/2 = {fs_hz / 2}), was {freq_hz}")
+    cutoff = freq_hz / 5.0 if lowpass_hz is None else lowpass_hz
+    if not 0 < cutoff < fs_hz / 2:
+        raise ParameterError(f"`lowpass_hz` must be in (0, fs_hz/2), was {cutoff}")
+    t = np.arange(xs.size) / fs_hz
+    z = xs * np.exp(-2j * np.pi * freq_hz * t)
+    sos = signal.butter(order, cutoff, fs=fs_hz, output="sos")
+    if xs.size <= 3 * (2 * sos.shape[0] + 1):
+        raise ParameterError(f"`x` has {xs.size} samples, too few for the low-pass")
+    zf = signal.sosfiltfilt(sos, z.real) + 1j * signal.sosfiltfilt(sos, z.imag)
+    return 2.0 * np.abs(zf)
+
+
+def sustained_impact_time(impact_t_s: object, freq_hz: float, direction: Direction, *,
+                          n_confirm: int = 3, max_gap_cycles: float = 2.5) -> float:
+    """Time of the first (``"up"``) / last (``"down"``) impact of a sustained group; NaN if none.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.r_[0.05, np.arange(0.5, 0.6, 0.01)]   # a stray hit, then impacts every cycle
+    >>> float(sustained_impact_time(t, 100.0, "up"))
+    0.5
+    """
+    if direction not in ("up", "down"):
+        raise ParameterError(f"`direction` must be 'up' or 'down', was {direction!r}")
+    t = np.sort(np.atleast_1d(np.asarray(impact_t_s, dtype=float)))
+    if direction == "down":
+        t = -t[::-1]
+    gap = max_gap_cycles / freq_hz
+    for i in range(t.size - n_confirm):
+        if np.all(np.diff(t[i:i + n_confirm + 1]) <= gap):
+            return float(abs(t[i]))
+    return float("nan")
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """The measured threshold of one ramp run.
+
+    Attributes
+    ----------
+    run_id : str
+    freq_hz : float
+        Excitation frequency, Hz.
+    direction : {"up", "down"}
+        Ramp direction: appearance (up) or disappearance (down) of impact.
+    accel_ms2 : float
+        Base-acceleration amplitude at the fundamental at that instant, m/s^2
+        (NaN when impact never appeared / never stopped in the run).
+    t_s : float
+        Time of the threshold impact, s.
+    """
+
+    run_id: str
+    freq_hz: float
+    direction: Direction
+    accel_ms2: float
+    t_s: float
+
+
+def ramp_threshold(run_id: str, base_accel_ms2: object, fs_hz: float, freq_hz: float,
+                   impact_t_s: object, direction: Direction, *, start_time_s: float = 0.0,
+                   n_confirm: int = 3, lowpass_hz: float | None = None) -> Threshold:
+    """Threshold of one ramp run from its base acceleration and detected impacts."""
+    t_thr = sustained_impact_time(impact_t_s, freq_hz, direction, n_confirm=n_confirm)
+    if not np.isfinite(t_thr):
+        return Threshold(run_id, float(freq_hz), direction, float("nan"), float("nan"))
+    amp = fundamental_amplitude(base_accel_ms2, fs_hz, freq_hz, lowpass_hz=lowpass_hz)
+    x = (t_thr - start_time_s) * fs_hz
+    value = float(np.interp(x, np.arange(amp.size), amp))
+    return Threshold(run_id, float(freq_hz), direction, value, t_thr)
+
+
+@dataclass(frozen=True)
+class ThresholdCurve:
+    """Thresholds against frequency, with the hysteresis (thesis Fig. 6-3).
+
+    Attributes
+    ----------
+    freq_hz : ndarray
+        Sorted unique excitation frequencies, Hz.
+    up_ms2, down_ms2 : ndarray
+        Appearance / disappearance thresholds (mean over runs at that frequency), m/s^2; NaN if none.
+    hysteresis_ms2 : ndarray
+        ``up_ms2 - down_ms2``, m/s^2.
+    """
+
+    freq_hz: np.ndarray
+    up_ms2: np.ndarray
+    down_ms2: np.ndarray
+    hysteresis_ms2: np.ndarray
+
+
+def tabulate_thresholds(thresholds: Sequence[Threshold]) -> ThresholdCurve:
+    """Collect ramp thresholds into a curve against frequency."""
+    freqs = np.unique([t.freq_hz for t in thresholds]) if thresholds else np.zeros(0)
+    up, down = np.full(freqs.size, np.nan), np.full(freqs.size, np.nan)
+    for i, f in enumerate(freqs):
+        for arr, d in ((up, "up"), (down, "down")):
+            vals = [t.accel_ms2 for t in thresholds if t.freq_hz == f and t.direction == d
+                    and np.isfinite(t.accel_ms2)]
+            if vals:
+                arr[i] = float(np.mean(vals))
+    return ThresholdCurve(freqs, up, down, up - down)

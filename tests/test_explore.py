@@ -1,0 +1,379 @@
+"""The explorer (``rattle-lab explore``), driven headless through its widgets (Agg).
+
+The plotted data are checked against :func:`rattle_lab.sdf.simulate` and
+:func:`rattle_lab.analysis.sweep` called directly, and the forced parts against
+the closed-form particular solution.  The CLI is run through the installed
+entry point without a display.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+
+matplotlib.use("Agg")
+
+from rattle_lab.analysis import sweep  # noqa: E402
+from rattle_lab.exceptions import OutputError, ParameterError  # noqa: E402
+from rattle_lab.explorer import (  # noqa: E402
+    HISTORY_COLUMNS,
+    IMPACT_COLUMNS,
+    Explorer,
+    compute_histories,
+    impacts_path,
+    save_histories,
+)
+from rattle_lab.sdf import SDFParams, SDFState, simulate  # noqa: E402
+
+EXE = Path(sys.executable).with_name("rattle-lab")
+if not EXE.exists():  # pragma: no cover - the venv of the brief
+    EXE = Path("/work/main/.venv/bin/rattle-lab")
+
+BASE = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6)
+CYCLES = 6.0
+N_PER_CYCLE = 50
+FIELDS = ("x", "v", "a", "forced", "transient", "excitation")
+TWO_PI = 2.0 * math.pi
+
+
+def _expected(params: SDFParams, state: SDFState) -> tuple[np.ndarray, object]:
+    """What the explorer should show: the simulator called directly."""
+    duration = CYCLES * params.period
+    t = state.t + np.linspace(0.0, duration, round(CYCLES * N_PER_CYCLE) + 1)
+    res = simulate(params, duration=duration, state=state, dense_t=t, dense_fields=FIELDS)
+    return t, res
+
+
+def _explorer(**kw: object) -> Explorer:
+    options: dict[str, object] = dict(params=BASE, cycles=CYCLES, n_per_cycle=N_PER_CYCLE,
+                                      sweep_points=9, sweep_cycles=30, sweep_discard=20)
+    options.update(kw)
+    return Explorer(**options)  # type: ignore[arg-type]
+
+
+def _click(ex: Explorer, name: str) -> None:
+    ex.buttons[name]._observers.process("clicked", None)
+
+
+def _assert_shows(ex: Explorer, params: SDFParams, state: SDFState) -> None:
+    t, res = _expected(params, state)
+    d = res.dense  # type: ignore[attr-defined]
+    for (q, part), field in {("x", "total"): "x", ("v", "total"): "v", ("a", "total"): "a",
+                             ("x", "forced"): "forced", ("x", "transient"): "transient",
+                             ("a", "excitation"): "excitation"}.items():
+        line = ex.lines[(q, part)]
+        np.testing.assert_array_equal(line.get_xdata(), t)
+        np.testing.assert_array_equal(line.get_ydata(), getattr(d, field))
+    imp = res.impacts  # type: ignore[attr-defined]
+    np.testing.assert_array_equal(ex.histories.impacts.t, imp.t)
+    np.testing.assert_array_equal(ex.histories.impacts.v_in, imp.v_in)
+    phase_line = ex.axes["phase"].get_lines()[0]
+    np.testing.assert_array_equal(phase_line.get_xdata(), d.x)
+    np.testing.assert_array_equal(phase_line.get_ydata(), d.v)
+
+
+# --------------------------------------------------------------------------- time histories
+def test_initial_plot_is_the_simulation_from_rest() -> None:
+    ex = _explorer()
+    assert ex.params == BASE
+    _assert_shows(ex, BASE, SDFState())
+    assert len(ex.histories.impacts) > 0  # F = 0.2 at omega = 1 impacts (1/1 orbit)
+
+
+@pytest.mark.parametrize(("key", "value", "param"), [
+    ("omega", 1.25, "omega"), ("F", 0.35, "F"), ("zeta", 0.1, "zeta"), ("e", 0.8, "e")])
+def test_slider_runs_again_from_the_last_state(key: str, value: float, param: str) -> None:
+    ex = _explorer()
+    before = ex.histories.result.state
+    ex.sliders[key].set_val(value)
+    assert getattr(ex.params, param) == value
+    _assert_shows(ex, BASE.replace(**{param: value}), before)
+
+
+def test_restart_and_advance() -> None:
+    ex = _explorer()
+    ex.sliders["omega"].set_val(1.1)
+    _click(ex, "restart")
+    _assert_shows(ex, BASE.replace(omega=1.1), SDFState())
+    end = ex.histories.result.state
+    _click(ex, "advance")
+    _assert_shows(ex, BASE.replace(omega=1.1), end)
+    assert ex.histories.t[0] == end.t
+
+
+def test_parts_add_up_and_match_the_closed_form_particular_solution() -> None:
+    p = SDFParams(F=0.05, omega=0.7, zeta=0.05, e=0.6)  # no impact: the linear response
+    h = compute_histories(p, cycles=CYCLES, n_per_cycle=N_PER_CYCLE)
+    assert len(h.impacts) == 0
+    # Parts add up to the total by construction (same arrays, one subtraction each).
+    for total, forced, transient in ((h.x, h.x_forced, h.x_transient),
+                                     (h.v, h.v_forced, h.v_transient),
+                                     (h.a, h.a_forced, h.a_transient)):
+        np.testing.assert_allclose(forced + transient, total, rtol=0, atol=1e-15)
+    # x_p = A cos(theta - delta) with A = F / sqrt((1 - w^2)^2 + (2 zeta w)^2), so
+    # x_p^2 + (v_p / w)^2 = A^2 and a_p = -w^2 x_p (rounding only: 4 sqrt(eps)).
+    w, z = p.omega, p.zeta
+    amp2 = p.F**2 / ((1 - w * w) ** 2 + (2 * z * w) ** 2)
+    np.testing.assert_allclose(h.x_forced**2 + (h.v_forced / w) ** 2, amp2,
+                               rtol=4 * math.sqrt(np.finfo(float).eps))
+    np.testing.assert_allclose(h.a_forced, -w * w * h.x_forced, rtol=0,
+                               atol=4 * math.sqrt(np.finfo(float).eps) * math.sqrt(amp2))
+    np.testing.assert_allclose(h.excitation, p.F * np.cos(w * h.t), rtol=0, atol=1e-12)
+
+
+def test_forced_velocity_is_nan_at_the_undamped_resonance() -> None:
+    h = compute_histories(SDFParams(F=0.05, omega=1.0, zeta=0.0, e=0.6), cycles=2)
+    assert np.all(np.isnan(h.v_forced)) and np.all(np.isnan(h.a_forced))
+    assert np.all(np.isfinite(h.x_forced))
+
+
+def test_check_buttons_toggle_the_parts() -> None:
+    ex = _explorer()
+    assert ex.visible_parts == {"total": True, "forced": False, "transient": False,
+                                "excitation": False}
+    assert not ex.lines[("x", "forced")].get_visible()
+    ex.checks.set_active(1)  # forced part
+    assert ex.visible_parts["forced"]
+    assert all(ex.lines[(q, "forced")].get_visible() for q in ("x", "v", "a"))
+    ex.checks.set_active(0)  # total off
+    assert not any(ex.lines[(q, "total")].get_visible() for q in ("x", "v", "a"))
+    ex.checks.set_active(3)
+    assert ex.lines[("a", "excitation")].get_visible()
+    # the method keeps the check boxes in step
+    ex.toggle("transient")
+    assert ex.checks.get_status() == [False, True, True, True]
+    assert all(ex.lines[(q, "transient")].get_visible() for q in ("x", "v", "a"))
+    ex.toggle("transient", False)
+    assert ex.checks.get_status()[2] is False
+    with pytest.raises(ParameterError, match="`part` must be one of"):
+        ex.toggle("velocity")  # type: ignore[arg-type]
+
+
+def test_impact_view_radio() -> None:
+    ex = _explorer()
+    imp = ex.histories.impacts
+    line = ex.axes["impacts"].get_lines()[0]
+    np.testing.assert_array_equal(line.get_xdata(), imp.t)
+    np.testing.assert_array_equal(line.get_ydata(), imp.v_in)
+    ex.radios["impact_view"].set_active(1)
+    np.testing.assert_array_equal(line.get_xdata(), imp.phase)
+    np.testing.assert_array_equal(line.get_ydata(), imp.v_in)
+    assert ex.axes["impacts"].get_xlim() == (0.0, TWO_PI)
+    assert "phase" in ex.axes["impacts"].get_xlabel()
+
+
+# --------------------------------------------------------------------------- physical amplitude
+def test_acceleration_mode_and_gap() -> None:
+    ex = _explorer()
+    f_s, gap = 100.0, 1e-3
+    ex.radios["amplitude"].set_active(1)
+    assert ex.amplitude_mode == "accel"
+    assert ex.sliders["accel_ms2"].ax.get_visible() and not ex.sliders["F"].ax.get_visible()
+    # eq. (2.31) with F_es = A_e: F = A_e / ((2 pi f_s)^2 h)
+    ex.sliders["accel_ms2"].set_val(50.0)
+    F_expected = 50.0 / ((TWO_PI * f_s) ** 2 * gap)
+    assert ex.params.F == pytest.approx(F_expected, rel=1e-14)
+    assert ex.sliders["F"].val == ex.params.F
+    # a wider gap at the same acceleration: smaller F
+    ex.sliders["gap_mm"].set_val(2.0)
+    assert ex.gap_m == pytest.approx(2e-3, rel=1e-15)
+    assert ex.params.F == pytest.approx(F_expected / 2, rel=1e-12)
+    assert ex.accel_ms2 == pytest.approx(50.0, rel=1e-12)
+    # in F mode the gap changes only the physical scale
+    ex.set_amplitude_mode("F")
+    assert ex.radios["amplitude"].index_selected == 0
+    F_before = ex.params.F
+    ex.sliders["gap_mm"].set_val(0.5)
+    assert ex.params.F == F_before
+    assert ex.accel_ms2 == pytest.approx(F_before * (TWO_PI * f_s) ** 2 * 0.5e-3, rel=1e-12)
+
+
+def test_invalid_values_change_nothing() -> None:
+    ex = _explorer()
+    before = ex.histories
+    with pytest.raises(ParameterError, match=r"`e` must be in \[0, 1\], was 1.5"):
+        ex.set_param("e", 1.5)
+    with pytest.raises(ParameterError, match="`gap_m` must be finite and > 0, was 0.0"):
+        ex.set_param("gap_m", 0.0)
+    with pytest.raises(ParameterError, match="`accel_ms2` must be finite and >= 0, was -1.0"):
+        ex.set_param("accel_ms2", -1.0)
+    with pytest.raises(ParameterError, match="`name` must be one of"):
+        ex.set_param("mass", 1.0)  # type: ignore[arg-type]
+    assert ex.params == BASE and ex.histories is before
+    # a slider cannot reach an invalid value; the callback guard turns errors into the status
+    ex.sliders["omega"].set_val(0.0)
+    assert ex.status == "error: `omega` must be > 0, was 0.0"
+    assert ex.params == BASE
+
+
+@pytest.mark.parametrize(("kw", "match"), [
+    ({"gap_m": -1.0}, "`gap_m` must be finite and > 0, was -1.0"),
+    ({"f_s_hz": 0.0}, "`f_s_hz` must be finite and > 0, was 0.0"),
+    ({"participation": 0.0}, "`participation` must be finite and != 0, was 0.0"),
+    ({"cycles": float("nan")}, "`cycles` must be finite and > 0, was nan"),
+    ({"amplitude_mode": "g"}, "`amplitude_mode` must be one of"),
+    ({"sweep_points": 1}, "`sweep_points` must be an integer >= 2, was 1"),
+])
+def test_constructor_validates(kw: dict[str, object], match: str) -> None:
+    with pytest.raises(ParameterError, match=match):
+        _explorer(**kw)
+
+
+# --------------------------------------------------------------------------- sweeps
+@pytest.mark.parametrize(("index", "param", "lo", "hi"), [
+    (0, "omega", 0.2, 3.0), (2, "e", 0.0, 1.0)])
+def test_sweep_button(index: int, param: str, lo: float, hi: float) -> None:
+    ex = _explorer()
+    start = ex.histories.result.state
+    ex.radios["sweep"].set_active(index)
+    _click(ex, "sweep")
+    sw = ex.last_sweep
+    assert sw is not None and sw.param == param and ex.status.startswith("swept")
+    np.testing.assert_allclose(sw.values, np.linspace(lo, hi, 9), rtol=0, atol=1e-15)
+    ref = sweep(param, np.linspace(lo, hi, 9), base=BASE, cycles=30, discard=20, state=start,
+                n_max=5, lyapunov="none")
+    np.testing.assert_array_equal(sw.mean_impact_velocity, ref.mean_impact_velocity)
+    assert sw.labels == ref.labels
+    ax = ex.axes["sweep"]
+    dots, mean = ax.get_lines()[0], ax.get_lines()[1]
+    expected = [(x, v) for x, pt in zip(ref.values, ref.points) for v in pt.impact_velocities]
+    np.testing.assert_array_equal(np.column_stack([dots.get_xdata(), dots.get_ydata()]),
+                                  np.array(expected))
+    np.testing.assert_array_equal(mean.get_ydata(), ref.mean_impact_velocity)
+    assert param in ax.get_xlabel() and "nondimensional" in ax.get_ylabel()
+
+
+def test_amplitude_sweep_in_acceleration_units() -> None:
+    ex = _explorer(amplitude_mode="accel")
+    sw = ex.run_sweep("A")
+    assert sw.param == "F"
+    assert ex.radios["sweep"].index_selected == 1
+    accel = sw.values * (TWO_PI * 100.0) ** 2 * 1e-3
+    xs = ex.axes["sweep"].get_lines()[1].get_xdata()
+    np.testing.assert_allclose(xs, accel, rtol=1e-12)
+    np.testing.assert_allclose(accel[[0, -1]], [ex.sliders["accel_ms2"].valmin,
+                                                ex.sliders["accel_ms2"].valmax], rtol=1e-12)
+    assert "m/s^2" in ex.axes["sweep"].get_xlabel()
+
+
+# --------------------------------------------------------------------------- saving
+def test_save_csv_through_the_text_box(tmp_path: Path) -> None:
+    ex = _explorer()
+    target = tmp_path / "run.csv"
+    ex.textbox.set_val(str(target))
+    _click(ex, "save")
+    assert ex.status == f"saved {target}, {tmp_path / 'run_impacts.csv'}"
+    hist = pd.read_csv(target, comment="#")
+    assert list(hist.columns) == [c for c, _, _ in HISTORY_COLUMNS]
+    table = ex.histories.history_table()
+    for name in hist.columns:
+        np.testing.assert_array_equal(hist[name].to_numpy(), table[name])
+    imp = pd.read_csv(impacts_path(target), comment="#")
+    assert list(imp.columns) == [c for c, _, _ in IMPACT_COLUMNS]
+    np.testing.assert_array_equal(imp["v_in"].to_numpy(), ex.histories.impacts.v_in)
+    # physical columns: eq. (2.29), (2.30), (4.4) with f_s = 100 Hz, h = 1 mm
+    w = TWO_PI * 100.0
+    np.testing.assert_allclose(hist["time_s"], hist["t"] / w, rtol=1e-15)
+    np.testing.assert_allclose(hist["v_ms"], hist["v"] * w * 1e-3, rtol=1e-15)
+    np.testing.assert_allclose(imp["v_in_ms"], imp["v_in"] * w * 1e-3, rtol=1e-15)
+    header = target.read_text().splitlines()[:5]
+    assert any(line.startswith("# units: t [1], time_s [s]") for line in header)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv", "run_impacts.csv"]
+
+
+def test_save_hdf5(tmp_path: Path) -> None:
+    ex = _explorer()
+    (path,) = ex.save(tmp_path / "run.h5")
+    with h5py.File(path, "r") as f:
+        assert f.attrs["F"] == BASE.F and f.attrs["omega"] == BASE.omega
+        assert f.attrs["gap_m"] == 1e-3 and f.attrs["f_s_hz"] == 100.0
+        assert "rattle_lab" in f.attrs["provenance"]
+        assert list(f["time_history"]) == sorted(c for c, _, _ in HISTORY_COLUMNS)
+        for name, unit, _ in HISTORY_COLUMNS:
+            assert f["time_history"][name].attrs["units"] == unit
+        np.testing.assert_array_equal(f["time_history/x"][()], ex.histories.x)
+        np.testing.assert_array_equal(f["impacts/t"][()], ex.histories.impacts.t)
+        assert f["impacts/v_in_ms"].attrs["units"] == "m/s"
+    assert [p.name for p in tmp_path.iterdir()] == ["run.h5"]
+
+
+def test_save_default_path_and_errors(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    ex = _explorer()
+    assert ex.save() == (Path("rattle_explore.h5"),)
+    assert (tmp_path / "rattle_explore.h5").is_file()
+    with pytest.raises(ParameterError, match="must end in one of .csv, .h5, .hdf5"):
+        ex.save(tmp_path / "run.txt")
+    with pytest.raises(OutputError, match="output directory .* does not exist"):
+        ex.save(tmp_path / "missing" / "run.h5")
+    ex.textbox.set_val(str(tmp_path / "missing" / "run.csv"))
+    _click(ex, "save")  # the button reports instead of raising
+    assert ex.status.startswith("error: ") and "does not exist" in ex.status
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rattle_explore.h5"]
+
+
+def test_save_no_impacts_writes_empty_table(tmp_path: Path) -> None:
+    h = compute_histories(SDFParams(F=0.05, omega=0.7, zeta=0.05, e=0.6), cycles=2)
+    a, b = save_histories(h, tmp_path / "quiet.csv")
+    assert len(pd.read_csv(b, comment="#")) == 0
+    assert len(pd.read_csv(a, comment="#")) == h.t.size
+
+
+# --------------------------------------------------------------------------- labels, image
+def test_every_axis_is_labelled_with_units(tmp_path: Path) -> None:
+    ex = _explorer()
+    ex.run_sweep("omega")
+    for name, ax in ex.axes.items():
+        if name in ("x", "v"):  # share the time axis with "a"
+            labels = [ax.get_ylabel()]
+        else:
+            labels = [ax.get_xlabel(), ax.get_ylabel()]
+        for label in labels:
+            assert label, name
+            assert "nondimensional" in label or "[" in label, (name, label)
+    png = ex.save_png(tmp_path / "explorer.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# --------------------------------------------------------------------------- CLI
+def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["MPLBACKEND"] = "Agg"
+    return subprocess.run([str(EXE), "explore", *args], capture_output=True, text=True,
+                          timeout=120, env=env, cwd=cwd)
+
+
+def test_cli_without_display_exits_2_with_one_line(tmp_path: Path) -> None:
+    out = _cli("--F", "0.3", cwd=tmp_path)
+    assert out.returncode == 2
+    assert out.stdout == ""
+    lines = out.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rattle-lab: error: no display")
+    assert "--save-png" in lines[0]
+
+
+def test_cli_save_png(tmp_path: Path) -> None:
+    out = _cli("--accel-ms2", "80", "--omega", "1.1", "--zeta", "0.05", "--e", "0.7",
+               "--cycles", "5", "--save-png", "explorer.png", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout == ""
+    assert (tmp_path / "explorer.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_cli_errors_are_one_line(tmp_path: Path) -> None:
+    out = _cli("--e", "1.5", "--save-png", "x.png", cwd=tmp_path)
+    assert out.returncode == 2 and out.stdout == ""
+    assert out.stderr == "rattle-lab: error: `e` must be in [0, 1], was 1.5\n"
+    out = _cli("--save-png", "x.gif", cwd=tmp_path)
+    assert out.returncode == 2
+    assert out.stderr.startswith("rattle-lab: error: plot file 'x.gif' must end in")
+    assert list(tmp_path.iterdir()) == []
