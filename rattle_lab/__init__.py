@@ -1,6 +1,59 @@
-"""rattle_lab: rattle-noise engineering, from exact impact models to shaker-lab data."""
+"""rattle_lab: rattle-noise engineering, from exact impact models to shaker-lab data.
+
+The public surface is listed in ``__all__`` (pinned by a test).  Names are
+loaded lazily from their modules on first use, so ``import rattle_lab`` (and the
+CLI's start-up) stays fast and does not import numba, scipy or h5py until they
+are needed.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 from ._version import __version__
 from .exceptions import RattleLabError
 
-__all__ = ["__version__", "RattleLabError"]
+#: public name -> module that defines it
+_LAZY: dict[str, str] = {
+    # the nondimensional SDF model and its exact simulator
+    "SDFParams": "rattle_lab.sdf",
+    "SDFState": "rattle_lab.sdf",
+    "simulate": "rattle_lab.sdf",
+    # plate model and scaling
+    "Plate": "rattle_lab.plate",
+    "ritz_modes": "rattle_lab.plate",
+    "table_modes": "rattle_lab.plate",
+    "SDFScaling": "rattle_lab.scaling",
+    "grazing_F": "rattle_lab.linear",
+    "grazing_omegas": "rattle_lab.linear",
+    "linear_impact_velocity": "rattle_lab.linear",
+    # analysis
+    "one_over_n_orbits": "rattle_lab.analysis",
+    "bifurcation_sets": "rattle_lab.analysis",
+    "sweep": "rattle_lab.analysis",
+    "sweep_up_down": "rattle_lab.analysis",
+    "lyapunov_exponent": "rattle_lab.analysis",
+    "regime_map": "rattle_lab.analysis",
+    # records and ingestion
+    "read": "rattle_lab.records",
+    "write_record": "rattle_lab.records",
+    "Record": "rattle_lab.records",
+    "ingest": "rattle_lab.ingest",
+    "read_catalogue": "rattle_lab.ingest",
+}
+
+__all__ = ["__version__", "RattleLabError", *_LAZY]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'rattle_lab' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

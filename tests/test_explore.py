@@ -229,23 +229,24 @@ def test_constructor_validates(kw: dict[str, object], match: str) -> None:
 
 
 # --------------------------------------------------------------------------- sweeps
-@pytest.mark.parametrize(("index", "param", "lo", "hi"), [
-    (0, "omega", 0.2, 3.0), (2, "e", 0.0, 1.0)])
-def test_sweep_button(index: int, param: str, lo: float, hi: float) -> None:
-    ex = _explorer()
+@pytest.mark.parametrize(("index", "param", "lo", "hi", "n"), [
+    (0, "omega", 0.2, 3.0, 17), (2, "e", 0.0, 1.0, 9)])
+def test_sweep_button(index: int, param: str, lo: float, hi: float, n: int) -> None:
+    ex = _explorer(sweep_points=n)
     start = ex.histories.result.state
     ex.radios["sweep"].set_active(index)
     _click(ex, "sweep")
     sw = ex.last_sweep
     assert sw is not None and sw.param == param and ex.status.startswith("swept")
-    np.testing.assert_allclose(sw.values, np.linspace(lo, hi, 9), rtol=0, atol=1e-15)
-    ref = sweep(param, np.linspace(lo, hi, 9), base=BASE, cycles=30, discard=20, state=start,
+    np.testing.assert_allclose(sw.values, np.linspace(lo, hi, n), rtol=0, atol=1e-15)
+    ref = sweep(param, np.linspace(lo, hi, n), base=BASE, cycles=30, discard=20, state=start,
                 n_max=5, lyapunov="none")
     np.testing.assert_array_equal(sw.mean_impact_velocity, ref.mean_impact_velocity)
-    assert sw.labels == ref.labels
+    assert sw.labels == ref.labels and "1/1" in sw.labels
     ax = ex.axes["sweep"]
     dots, mean = ax.get_lines()[0], ax.get_lines()[1]
     expected = [(x, v) for x, pt in zip(ref.values, ref.points) for v in pt.impact_velocities]
+    assert expected
     np.testing.assert_array_equal(np.column_stack([dots.get_xdata(), dots.get_ydata()]),
                                   np.array(expected))
     np.testing.assert_array_equal(mean.get_ydata(), ref.mean_impact_velocity)

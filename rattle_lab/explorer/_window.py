@@ -670,10 +670,9 @@ class Explorer:
             return values
 
         xs = to_x(sw.values)
-        pts = [(x, v) for x, pt in zip(xs, sw.points) for v in pt.impact_velocities]
-        if pts:
-            arr = np.array(pts)
-            ax.plot(arr[:, 0], arr[:, 1], ".", color="black", ms=2, label="v_im")
+        pts = np.array([(x, v) for x, pt in zip(xs, sw.points) for v in pt.impact_velocities])
+        pts = pts.reshape(-1, 2)  # (0, 2) without impacts: the line exists, empty
+        ax.plot(pts[:, 0], pts[:, 1], ".", color="black", ms=2, label="v_im")
         ax.plot(xs, sw.mean_impact_velocity, "-", color="tab:blue", lw=0.8,
                 label="mean v_im per forcing cycle")
         current = {"omega": self._params.omega, "F": self._params.F, "e": self._params.e}

@@ -100,7 +100,7 @@ class AcousticSpec:
     second_peak_probability: float = 0.0
     second_peak_ratio: float = 1.3
     second_peak_delay_s: float = 0.0015
-    mode_pa_per_m_s2: float = 0.002
+    mode_pa_per_m_s2: float = 0.0002
 
     @property
     def delay_s(self) -> float:
@@ -361,7 +361,7 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
             second_peak_probability=ar.number("second_peak_probability", 0.0, low=0.0, high=1.0),
             second_peak_ratio=ar.positive("second_peak_ratio", 1.3),
             second_peak_delay_s=ar.positive("second_peak_delay_s", 0.0015),
-            mode_pa_per_m_s2=ar.number("mode_pa_per_m_s2", 0.002, low=0.0))
+            mode_pa_per_m_s2=ar.number("mode_pa_per_m_s2", 0.0002, low=0.0))
         ar.done()
 
     sensors = []

@@ -1,0 +1,49 @@
+"""Session fixtures: synthetic rattle records built once per test session.
+
+Each fixture returns the path of a written record (a rattle HDF5 file with ``/truth``),
+made by the synthetic rig (:mod:`rattle_lab.rig`) from a scene with its own seed.
+Treat the files as read-only: they are shared by every test in the session.
+
+* ``synthetic_campaign_record``: the embedded default scene (``rattle-lab simulate
+  default``): thesis CFCF plate, 1.3 mm gap, 8 ramps (up/down at 95-98 Hz, 3 s) and 2
+  dwells (96 and 98 Hz, 2 s); channels base, plate, velocity, mic, drive at 20 kHz.
+* ``synthetic_threshold_record``: ``synthetic/threshold_only.toml``: 20 s ramps up and
+  down at 8 frequencies (92-102 Hz), base accelerometer only at 2 kHz; thresholds in
+  ``/truth/thresholds``.
+* ``synthetic_noisy_record``: ``synthetic/noisy_lab.toml``: fan tone, strong shaker
+  harmonics, strong noise, input ranges close to the signals.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rattle_lab.rig import write_synthetic
+
+SCENES = Path(__file__).resolve().parents[1] / "synthetic"
+
+
+@pytest.fixture(scope="session")
+def synthetic_campaign_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Path of the default scene's record (all five channels, ramps and dwells)."""
+    path = tmp_path_factory.mktemp("synthetic") / "campaign.h5"
+    write_synthetic("default", path)
+    return path
+
+
+@pytest.fixture(scope="session")
+def synthetic_threshold_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Path of the threshold-only record (slow ramps, base accelerometer only)."""
+    path = tmp_path_factory.mktemp("synthetic") / "thresholds.h5"
+    write_synthetic(SCENES / "threshold_only.toml", path)
+    return path
+
+
+@pytest.fixture(scope="session")
+def synthetic_noisy_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Path of the noisy real-world record (fan, harmonics, strong noise)."""
+    path = tmp_path_factory.mktemp("synthetic") / "noisy.h5"
+    write_synthetic(SCENES / "noisy_lab.toml", path)
+    return path

@@ -1,0 +1,87 @@
+"""`rattle-lab --version/--help` and `rattle-lab model run`, through the installed entry point."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rattle_lab import __version__
+from rattle_lab.sdf import SDFParams, SDFState, simulate
+
+
+def _exe() -> str:
+    here = Path(sys.executable).parent / "rattle-lab"
+    found = str(here) if here.exists() else shutil.which("rattle-lab")
+    assert found, "the rattle-lab entry point must be installed (pip install -e .)"
+    return found
+
+
+def run(*args: str, check_rc: int | None = 0) -> subprocess.CompletedProcess[str]:
+    proc = subprocess.run([_exe(), *args], capture_output=True, text=True, timeout=300)
+    if check_rc is not None:
+        assert proc.returncode == check_rc, proc.stderr
+    return proc
+
+
+def test_version_and_help():
+    out = run("--version")
+    assert out.stdout.strip() == f"rattle-lab {__version__}"
+    out = run("--help")
+    for command in ("model", "ingest", "demo"):
+        assert command in out.stdout
+    assert "run" in run("model", "--help").stdout
+
+
+def test_model_run_json_has_full_precision():
+    out = run("model", "run", "--F", "0.2", "--omega", "0.95", "--zeta", "0.05", "--e", "0.6",
+              "--cycles", "15", "--x0", "0.1", "--v0", "-0.2", "--phase", "0.3", "--json")
+    assert out.stderr == ""
+    doc = json.loads(out.stdout)
+    ref = simulate(SDFParams(0.2, 0.95, 0.05, 0.6), cycles=15,
+                   state=SDFState(x=0.1, v=-0.2, theta=0.3))
+    assert len(doc["impacts"]) == len(ref.impacts) > 0
+    # the printed floats round-trip exactly
+    np.testing.assert_array_equal([i["t"] for i in doc["impacts"]], ref.impacts.t)
+    np.testing.assert_array_equal([i["v_in"] for i in doc["impacts"]], ref.impacts.v_in)
+    np.testing.assert_array_equal([i["v_out"] for i in doc["impacts"]], ref.impacts.v_out)
+    assert doc["x_end"] == ref.state.x and doc["v_end"] == ref.state.v
+
+
+def test_model_run_table_and_plot(tmp_path):
+    png = tmp_path / "run.png"
+    out = run("model", "run", "--F", "2", "--omega", "0.5", "--zeta", "0.1", "--e", "0.5",
+              "--cycles", "3", "--plot", str(png))
+    assert "impacts" in out.stdout and out.stderr == ""
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not list(tmp_path.glob(".run.png*"))  # no temporary file left behind
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--F", "-1", "--omega", "1", "--zeta", "0.05", "--e", "0.6"], "`F` must be >= 0, was -1.0"),
+    (["--F", "0.2", "--omega", "1", "--zeta", "0.05", "--e", "2"], r"`e` must be in [0, 1], was 2.0"),
+    (["--F", "0.2", "--omega", "1", "--zeta", "0.05", "--e", "0.6", "--cycles", "-3"],
+     "`cycles` must be finite and >= 0, was -3.0"),
+    (["--F", "0.2", "--omega", "1", "--zeta", "0.05", "--e", "0.6", "--plot", "out.gif"],
+     "must end in one of .png, .pdf, .svg"),
+])
+def test_model_run_bad_input_exits_2_with_one_line(tmp_path, args, message):
+    proc = subprocess.run([_exe(), "model", "run", *args], capture_output=True, text=True,
+                          cwd=tmp_path, timeout=300)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0]
+    assert "Traceback" not in proc.stderr
+    assert proc.stdout == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_demo_runs(tmp_path):
+    out = run("demo", "--out", str(tmp_path / "demo"), "--quiet")
+    last = out.stdout.strip().splitlines()[-1]
+    assert Path(last.split()[-1]).exists()
