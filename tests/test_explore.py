@@ -378,3 +378,27 @@ def test_cli_errors_are_one_line(tmp_path: Path) -> None:
     assert out.returncode == 2
     assert out.stderr.startswith("rattle-lab: error: plot file 'x.gif' must end in")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_real_mouse_events_reach_the_widgets() -> None:
+    """Clicks delivered through the canvas (as a window would) drive the explorer."""
+    from matplotlib.backend_bases import MouseEvent
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    ex = _explorer()
+    canvas = FigureCanvasAgg(ex.figure)
+    canvas.draw()
+
+    def click(ax: object, fx: float, fy: float = 0.5) -> None:
+        x, y = ax.transAxes.transform((fx, fy))  # type: ignore[attr-defined]
+        for name in ("button_press_event", "button_release_event"):
+            MouseEvent(name, canvas, x, y, button=1)._process()
+
+    slider = ex.sliders["omega"]
+    click(slider.ax, 0.5)  # the middle of the omega slider
+    assert ex.params.omega == pytest.approx(0.5 * (slider.valmin + slider.valmax), rel=0.02)
+    end = ex.histories.result.state
+    click(ex.buttons["advance"].ax, 0.5)
+    assert ex.histories.start_state == end
+    click(ex.buttons["restart"].ax, 0.5)
+    assert ex.histories.start_state == SDFState()

@@ -668,8 +668,10 @@ def plot_sweeps(sweeps: Sequence[Sweep], path: str | os.PathLike[str]) -> Path:
     gap = param == "gap"
     fig = Figure(figsize=(5.0 * len(sweeps), 9.0), layout="constrained")
     axes = fig.subplots(3, len(sweeps), squeeze=False, sharex="col")
-    names = ("v_im / F", "v_{x=0}^+ / F", "mean v_im / F per cycle") if gap else \
-        ("impact velocity v_im", "crossing velocity v_{x=0}^+", "mean v_im per forcing cycle")
+    names = ("v_im / F (nondim.)", "v_{x=0}^+ / F (nondim.)",
+             "mean v_im / F per cycle (nondim.)") if gap else \
+        ("impact velocity v_im (nondim.)", "crossing velocity v_{x=0}^+ (nondim.)",
+         "mean v_im per forcing cycle (nondim.)")
     for col, sw in enumerate(sweeps):
         xs = sw.values
         scale = np.array([p.params.F if gap else 1.0 for p in sw.points])

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from typing import Any
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -65,10 +66,11 @@ def _run(args: argparse.Namespace) -> int:
         F = float(F_from_accel(args.accel_ms2, args.participation,
                                2.0 * math.pi * args.f_s_hz, args.gap_m))
     params = SDFParams(F=F, omega=args.omega, zeta=args.zeta, e=args.e)
-    options = dict(params=params, gap_m=args.gap_m, f_s_hz=args.f_s_hz,
-                   participation=args.participation, cycles=args.cycles, amplitude_mode=mode)
+    options: dict[str, Any] = dict(params=params, gap_m=args.gap_m, f_s_hz=args.f_s_hz,
+                                   participation=args.participation, cycles=args.cycles,
+                                   amplitude_mode=mode)
     if args.save_png:
-        path = Explorer(**options).save_png(args.save_png)  # type: ignore[arg-type]
+        path = Explorer(**options).save_png(args.save_png)
         print(f"rattle-lab: wrote {path}", file=sys.stderr)
         return 0
     import matplotlib.pyplot as plt
@@ -78,7 +80,7 @@ def _run(args: argparse.Namespace) -> int:
         plt.close(fig)
         return _no_display()
     fig.canvas.manager.set_window_title("rattle-lab explorer")  # type: ignore[union-attr]
-    explorer = Explorer(figure=fig, **options)  # type: ignore[arg-type]
+    explorer = Explorer(figure=fig, **options)
     plt.show()  # ``explorer`` holds the widgets: it must live as long as the window
     del explorer
     return 0

@@ -89,13 +89,14 @@ def display_available() -> bool:
     ``WAYLAND_DISPLAY`` is set (pyplot would fall back to Agg silently).
     """
     import matplotlib
-    from matplotlib.backends import BackendFilter, backend_registry
+    from matplotlib.backends.registry import BackendFilter, backend_registry
 
     if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
                                                  or os.environ.get("WAYLAND_DISPLAY")):
         return False
     backend = matplotlib.get_backend().lower()
-    interactive = {b.lower() for b in backend_registry.list_builtin(BackendFilter.INTERACTIVE)}
+    interactive = {b.lower() for b in backend_registry.list_builtin(  # type: ignore[no-untyped-call]
+        BackendFilter.INTERACTIVE)}
     return backend in interactive
 
 
