@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
+from scipy import signal
 
 from ..exceptions import ParameterError
 
@@ -42,11 +42,16 @@ def robust_sigma(x: np.ndarray) -> float:
 
 
 def detrended_abs(x: np.ndarray, n_window: int) -> np.ndarray:
-    """``|x - moving median of x|`` over ``n_window`` samples (odd, >= 3): removes the smooth part."""
-    n_window = max(3, n_window | 1)
-    if x.size == 0:
-        return x.copy()
-    return np.abs(x - ndimage.median_filter(x, size=n_window, mode="nearest"))
+    """``|x - local cubic fit|`` (Savitzky-Golay, ``n_window`` samples, odd, >= 5).
+
+    A cubic follows the smooth forced response (a moving median would leave
+    its curvature, which on a large sine exceeds the noise), while a spike of
+    one or two samples stays mostly in the residual.
+    """
+    n_window = max(5, n_window | 1)
+    if x.size < n_window:
+        return np.abs(x - np.median(x)) if x.size else x.copy()
+    return np.abs(x - signal.savgol_filter(x, n_window, 3, mode="interp"))
 
 
 def parabolic_peak(y: np.ndarray, k: int) -> tuple[float, float]:

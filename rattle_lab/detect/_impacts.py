@@ -1,8 +1,8 @@
 """Impact detection (ObsPy trigger design: characteristic function, on/off, back-track).
 
 1. Characteristic functions, each in units of its own robust noise (1.4826 MAD):
-   the velocity jump ``|dv - median(dv)|`` between consecutive samples of the
-   vibrometer, placed at the later sample, and the spike ``|a - median(a)|``
+   the velocity jump ``|dv - smooth(dv)|`` (smooth: a local cubic) between consecutive samples of the
+   vibrometer, placed at the later sample, and the spike ``|a - smooth(a)|``
    of the plate accelerometer.  With both channels the mean of the two is
    used (a true impact shows in both; a glitch in one channel is halved).
 2. Trigger on where the function exceeds ``on``, off where it falls below
@@ -12,8 +12,9 @@
 4. Sub-sample time: the centroid of the velocity jump (or of the spike when
    there is no velocity) over the samples above half the peak.
 5. Incoming and rebound velocities: polynomial fits (degree ``poly_degree``)
-   to the velocity over ``fit_window_s`` before the onset and after the end of
-   the trigger, each evaluated at the impact time; ``e = -v_out / v_in``.
+   to the velocity over ``fit_window_s`` before and after the jump (its
+   half-height region, widened by ``guard_s``), each evaluated at the impact
+   time; ``e = -v_out / v_in``.
 """
 
 from __future__ import annotations
@@ -37,30 +38,37 @@ class ImpactParams:
         noise units (``on > off > 0``).
     min_separation_s : float
         Triggers closer than this to the previous peak belong to it, s.
-    median_window_s : float
-        Window of the moving median removed from the characteristic functions, s.
+    detrend_window_s : float
+        Window of the local cubic (Savitzky-Golay) removed from the characteristic
+        functions, s; must span several samples more than a contact pulse.
     fit_window_s : float
         Length of the velocity fits on either side of an impact, s.
     guard_s : float
         Extra time left out between the trigger and each fit window, s.
     poly_degree : int
         Degree of the velocity fits (0 to 3).
+    sigma_floor_rel : float
+        Lower bound of the noise unit, relative to the largest ``|sample|`` of the
+        channel, so that noiseless records do not trigger on rounding and
+        curvature residue (>= 0).
     """
 
     on: float = 12.0
     off: float = 4.0
     min_separation_s: float = 2e-3
-    median_window_s: float = 1e-3
+    detrend_window_s: float = 1e-3
     fit_window_s: float = 1e-3
     guard_s: float = 0.0
     poly_degree: int = 2
+    sigma_floor_rel: float = 1e-4
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.off) and self.off > 0):
             raise ParameterError(f"`off` must be > 0, was {self.off}")
         if not (np.isfinite(self.on) and self.on > self.off):
             raise ParameterError(f"`on` must be > `off` ({self.off}), was {self.on}")
-        for name in ("min_separation_s", "median_window_s", "fit_window_s", "guard_s"):
+        for name in ("min_separation_s", "detrend_window_s", "fit_window_s", "guard_s",
+                     "sigma_floor_rel"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"`{name}` must be >= 0, was {value}")
@@ -110,13 +118,13 @@ class ImpactLog:
         return int(self.t_s.size)
 
 
-def characteristic(x: np.ndarray, sigma_floor: float, n_median: int, *, jump: bool) -> np.ndarray:
+def characteristic(x: np.ndarray, sigma_floor: float, n_detrend: int, *, jump: bool) -> np.ndarray:
     """Characteristic function in robust noise units (``jump``: of the first difference)."""
     if jump:
         d = np.diff(x)
-        cf = np.concatenate([[0.0], detrended_abs(d, n_median)])
+        cf = np.concatenate([[0.0], detrended_abs(d, n_detrend)])
     else:
-        cf = detrended_abs(x, n_median)
+        cf = detrended_abs(x, n_detrend)
     sigma = max(robust_sigma(cf), sigma_floor)
     if sigma == 0.0:
         return np.zeros_like(cf)
@@ -156,8 +164,8 @@ def trigger_onsets(cf: np.ndarray, on: float, off: float, n_min_sep: int
     return out
 
 
-def _centroid(cf: np.ndarray, peak: int, offset: float) -> float:
-    """Centroid index of the contiguous samples around ``peak`` above half its height."""
+def _half_region(cf: np.ndarray, peak: int) -> tuple[int, int]:
+    """The contiguous samples around ``peak`` above half its height (inclusive)."""
     half = 0.5 * cf[peak]
     lo = peak
     while lo > 0 and cf[lo - 1] > half:
@@ -165,6 +173,12 @@ def _centroid(cf: np.ndarray, peak: int, offset: float) -> float:
     hi = peak
     while hi + 1 < cf.size and cf[hi + 1] > half:
         hi += 1
+    return lo, hi
+
+
+def _centroid(cf: np.ndarray, peak: int, offset: float) -> float:
+    """Centroid index of the samples around ``peak`` above half its height."""
+    lo, hi = _half_region(cf, peak)
     idx = np.arange(lo, hi + 1, dtype=float)
     w = cf[lo:hi + 1]
     return float(np.sum(idx * w) / np.sum(w)) + offset
@@ -216,21 +230,21 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     params = params if params is not None else ImpactParams()
     if velocity_m_s is None and accel_ms2 is None:
         raise ParameterError("detect_impacts needs `velocity_m_s` or `accel_ms2` (got neither)")
-    n_median = n_samples_of(params.median_window_s, fs_hz, name="median_window_s")
+    n_detrend = n_samples_of(params.detrend_window_s, fs_hz, name="detrend_window_s")
     cfs: list[np.ndarray] = []
     names: list[str] = []
     v = a = None
     if velocity_m_s is not None:
         v = as_signal(velocity_m_s, "velocity_m_s")
-        floor = 1e-12 * max(float(np.max(np.abs(v), initial=0.0)), 1e-300)
-        cfs.append(characteristic(v, floor, n_median, jump=True))
+        floor = params.sigma_floor_rel * float(np.max(np.abs(v), initial=0.0))
+        cfs.append(characteristic(v, floor, n_detrend, jump=True))
         names.append("velocity")
     if accel_ms2 is not None:
         a = as_signal(accel_ms2, "accel_ms2")
         if v is not None and a.size != v.size:
             raise ParameterError(f"`accel_ms2` has {a.size} samples, `velocity_m_s` {v.size}")
-        floor = 1e-12 * max(float(np.max(np.abs(a), initial=0.0)), 1e-300)
-        cfs.append(characteristic(a, floor, n_median, jump=False))
+        floor = params.sigma_floor_rel * float(np.max(np.abs(a), initial=0.0))
+        cfs.append(characteristic(a, floor, n_detrend, jump=False))
         names.append("acceleration")
     cf = cfs[0] if len(cfs) == 1 else 0.5 * (cfs[0] + cfs[1])
     n_sep = n_samples_of(params.min_separation_s, fs_hz, name="min_separation_s")
@@ -239,10 +253,12 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     n_guard = n_samples_of(params.guard_s, fs_hz, name="guard_s")
     t_idx, onsets, v_in, v_out, strength = [], [], [], [], []
     for j, (start, peak, end) in enumerate(trig):
+        j_lo, j_hi = start, end
         if v is not None:
             # The jump of v[k-1] -> v[k] is at cf index k, i.e. between samples k-1 and k.
             pk = start + int(np.argmax(cfs[0][start:end + 1]))
             t_k = _centroid(cfs[0], pk, -0.5)
+            j_lo, j_hi = _half_region(cfs[0], pk)
         else:
             t_k = _centroid(cf, peak, 0.0)
         t_idx.append(t_k)
@@ -254,9 +270,11 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             continue
         lo_lim = trig[j - 1][2] + 1 if j > 0 else 0
         hi_lim = trig[j + 1][0] - 1 if j + 1 < len(trig) else v.size - 1
-        pre_hi = start - 1 - n_guard
+        # the fits stop at the jump (half-height region of the velocity jump, plus the guard),
+        # not at the trigger's off level, which the detrending side lobes widen
+        pre_hi = j_lo - 1 - n_guard
         pre_lo = max(lo_lim, pre_hi - n_fit + 1)
-        post_lo = end + n_guard
+        post_lo = j_hi + n_guard
         post_hi = min(hi_lim, post_lo + n_fit - 1)
         ti = np.arange(v.size, dtype=float)
         v_in.append(_fit_at(ti[pre_lo:pre_hi + 1], v[pre_lo:pre_hi + 1], t_k, params.poly_degree)

@@ -17,6 +17,7 @@ half-sine contact pulse of ``pulse_s`` centred at each impact, of area
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -111,3 +112,109 @@ def ramp_impacts(freq_hz: float, amp_of_t: np.ndarray, fs_hz: float, threshold_m
     del direction  # the same rule for both directions: impact while A >= threshold
     ti = t_cycles[keep]
     return ti, -(v_min_m_s + v_per_ms2 * np.abs(amp[keep] - threshold_ms2))
+
+
+@dataclass(frozen=True)
+class CampaignTruth:
+    """Truth of :func:`synthetic_campaign`.
+
+    Attributes
+    ----------
+    gap_m, f_s_hz, zeta, e, participation : float
+        Model parameters of the thresholds (eq. 3.4 and the 1/1 saddle-node).
+    up_freq_hz, up_ms2, down_freq_hz, down_ms2 : ndarray
+        True appearance / disappearance thresholds, m/s^2.
+    impacts : dict of run_id to (t_s, v_in_m_s)
+        True impacts of every run.
+    acoustics : Acoustics
+        Sound model (SPL-law slope of the maximum peak: ``gain * max|g|``).
+    """
+
+    gap_m: float
+    f_s_hz: float
+    zeta: float
+    e: float
+    participation: float
+    up_freq_hz: np.ndarray
+    up_ms2: np.ndarray
+    down_freq_hz: np.ndarray
+    down_ms2: np.ndarray
+    impacts: dict[str, tuple[np.ndarray, np.ndarray]]
+    acoustics: Acoustics
+
+
+def synthetic_campaign(*, fs_hz: float = 12800.0, duration_s: float = 1.0,
+                       up_freq_hz: tuple[float, ...] = (80.0, 88.0, 93.0, 94.5, 95.5, 96.0, 96.5,
+                                                        97.5, 99.0, 104.0, 112.0),
+                       down_freq_hz: tuple[float, ...] = (104.0, 108.0, 112.0, 116.0),
+                       gap_m: float = 0.35e-3, f_s_hz: float = 96.0, zeta: float = 0.0085,
+                       e: float = 0.8, participation: float = 1.2, noise_rel: float = 0.01,
+                       seed: int = 0, extra_runs: bool = True) -> tuple[Any, CampaignTruth]:
+    """A rattle record of ramp runs whose thresholds follow eq. (3.4) and the saddle-node.
+
+    Each ramp spans 0.6 to 1.4 times its threshold over ``duration_s``; impacts
+    happen once per cycle while the ramp is above the threshold.  Noise: Gaussian,
+    ``noise_rel`` times 0.02 m/s on the velocity, 10 m/s^2 on the plate
+    acceleration, 0.005 Pa on the pressure, ``noise_rel`` of the threshold on the base.
+    With ``extra_runs``: a dwell without impacts (``dwell_quiet``) and a run with no
+    plate channel (``base_only``, to be skipped).
+    """
+    from ..analysis import saddle_node_forcing
+    from ..linear import threshold_accel_ms2
+    from ..records import Channel, Record, Rig, Run
+
+    rng = np.random.default_rng(seed)
+    n = int(round(duration_s * fs_hz))
+    t = np.arange(n) / fs_hz
+    ac = Acoustics()
+    up_f = np.asarray(up_freq_hz, dtype=float)
+    down_f = np.asarray(down_freq_hz, dtype=float)
+    up_a = np.asarray(threshold_accel_ms2(up_f, gap_m, f_s_hz, zeta, participation), dtype=float)
+    F_sn, _ = saddle_node_forcing(1, down_f / f_s_hz, zeta, e)
+    down_a = gap_m * (2 * np.pi * f_s_hz) ** 2 * np.asarray(F_sn) / participation
+    runs = []
+    impacts: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+
+    def chans(sig: dict[str, np.ndarray], skip_plate: bool = False) -> list[Any]:
+        common = {"sample_rate_hz": fs_hz, "start_time_s": 0.0}
+        out = [Channel("base", "base_acceleration", "m/s^2", sig["base_acc"], **common),
+               Channel("mic", "sound_pressure", "Pa", sig["pressure"], **common)]
+        if not skip_plate:
+            out += [Channel("velocity", "plate_velocity", "m/s", sig["velocity"], **common),
+                    Channel("plate", "plate_acceleration", "m/s^2", sig["plate_acc"], **common)]
+        return out
+
+    for direction, freqs, thrs in (("up", up_f, up_a), ("down", down_f, down_a)):
+        for f, thr in zip(freqs, thrs):
+            lo, hi = 0.6 * thr, 1.4 * thr
+            amp = lo + (hi - lo) * t / duration_s if direction == "up" else hi - (hi - lo) * t / duration_s
+            ti, vin = ramp_impacts(f, amp, fs_hz, thr, direction, phase=float(rng.uniform(0.1, 0.9)),
+                                   v_per_ms2=0.1 / thr)
+            sig = synthetic_signals(fs_hz, n, f, ti, vin, e, base_amp_ms2=amp, acoustics=ac,
+                                    noise_v_m_s=0.02 * noise_rel, noise_a_ms2=10.0 * noise_rel,
+                                    noise_p_pa=0.005 * noise_rel, noise_base_ms2=noise_rel * thr,
+                                    rng=rng)
+            run_id = f"ramp_{direction}_{f:.1f}".replace(".", "p")
+            impacts[run_id] = (ti, vin)
+            runs.append(Run(run_id, f"amplitude_ramp_{direction}", chans(sig),
+                            excitation_freq_hz=float(f),
+                            nominal_level=float(amp[0]), level_end=float(amp[-1]),
+                            nominal_level_units="m/s^2", start_time_iso="2026-01-01T00:00:00Z"))
+    if extra_runs:
+        sig = synthetic_signals(fs_hz, n, 90.0, np.zeros(0), np.zeros(0), e, base_amp_ms2=0.5,
+                                noise_v_m_s=0.02 * noise_rel, noise_a_ms2=10.0 * noise_rel,
+                                noise_p_pa=0.005 * noise_rel, rng=rng)
+        impacts["dwell_quiet"] = (np.zeros(0), np.zeros(0))
+        runs.append(Run("dwell_quiet", "sine_dwell", chans(sig), excitation_freq_hz=90.0,
+                        nominal_level=0.5, nominal_level_units="m/s^2", start_time_iso="2026-01-01T00:00:00Z"))
+        runs.append(Run("base_only", "sine_dwell", chans(sig, skip_plate=True),
+                        excitation_freq_hz=90.0, nominal_level=0.5, nominal_level_units="m/s^2", start_time_iso="2026-01-01T00:00:00Z"))
+    rig = Rig(apparatus="plate_striker", plate_length_m=0.254, plate_width_m=0.2286,
+              plate_thickness_m=0.00096, plate_material="aluminium", edge_conditions="CFCF",
+              striker_x_m=0.127, striker_y_m=0.1143, gap_m=gap_m,
+              mic_distance_m=ac.delay_s * 343.0)
+    record = Record("synthetic_ramps", "measured", rig, runs,
+                    description="hand-built ramp campaign (rattle_lab.detect._synthetic)")
+    truth = CampaignTruth(gap_m, f_s_hz, zeta, e, participation, up_f, up_a, down_f, down_a,
+                          impacts, ac)
+    return record, truth

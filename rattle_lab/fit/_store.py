@@ -116,7 +116,12 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     duration = used[0].n_samples / fs
     pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)
     if math.isfinite(freq) and freq > 0 and duration * freq >= 1:
-        pr = impact_pattern(log.t_s, freq, t0, t0 + duration)
+        lo, hi = t0, t0 + duration
+        if run.protocol.startswith("amplitude_ramp") and log.n_impacts:
+            # a ramp: the pattern while impacting (from the first to the last impact's cycle)
+            lo = t0 + np.floor((log.t_s[0] - t0) * freq) / freq
+            hi = min(t0 + duration, t0 + (np.floor((log.t_s[-1] - t0) * freq) + 1) / freq)
+        pr = impact_pattern(log.t_s, freq, lo, hi)
         pattern, pattern_n, counts = pr.pattern, pr.n, pr.counts
     sk = {**SOUND_KEYS, **{k: v for k, v in detect.items() if k in SOUND_KEYS}}
     peaks, delay, expected, spl, spl_a = None, np.nan, np.nan, np.nan, np.nan

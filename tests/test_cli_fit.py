@@ -1,0 +1,124 @@
+"""``rattle-lab fit``: run the installed entry point on a small synthetic store.
+
+The store is built from :func:`rattle_lab.detect._synthetic.synthetic_campaign`
+(ramp runs whose thresholds follow eq. 3.4 with the thesis values, a quiet dwell
+run and a run without plate channels).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from rattle_lab.detect._synthetic import synthetic_campaign
+from rattle_lab.exceptions import ParameterError
+from rattle_lab.fit import fit_store, load_pipeline
+from rattle_lab.ingest import ingest
+from rattle_lab.records import write_record
+from rattle_lab.records._errors import StoreError
+from rattle_lab.results import read_results
+from record_factory import run_cli
+
+
+@pytest.fixture(scope="module")
+def campaign(tmp_path_factory):
+    d = tmp_path_factory.mktemp("fitcli")
+    record, truth = synthetic_campaign(up_freq_hz=(85.0, 93.0, 95.5, 96.0, 96.5, 99.0, 106.0),
+                                       down_freq_hz=(106.0, 112.0), duration_s=0.6)
+    rec_path = write_record(d / "campaign.h5", record)
+    store = d / "store.h5"
+    ingest([rec_path], store, quiet=True)
+    pipeline = d / "pipeline.toml"
+    pipeline.write_text("[detect]\non = 12.0\n\n[fit]\nparticipation = 1.2\n\n[report]\nx = 1\n")
+    return store, pipeline, truth
+
+
+def test_cli_fit_json(campaign):
+    store, pipeline, truth = campaign
+    proc = run_cli("fit", str(store), "--pipeline", str(pipeline), "--json")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    out = json.loads(proc.stdout)
+    g = out["fits"]["grazing"]
+    assert g["gap_m"]["value"] == pytest.approx(truth.gap_m, rel=0.02)
+    assert g["gap_m"]["unit"] == "m" and g["gap_m"]["stderr"] > 0
+    assert g["f_s_hz"]["value"] == pytest.approx(truth.f_s_hz, rel=0.005)
+    assert g["zeta"]["value"] == pytest.approx(truth.zeta, rel=0.10)
+    assert out["fits"]["restitution_ratio"]["value"] == pytest.approx(truth.e, abs=0.01)
+    assert out["fits"]["restitution_down"]["value"] == pytest.approx(truth.e, abs=0.05)
+    slope = truth.acoustics.gain_pa_per_m_s * truth.acoustics.peaks()[1]
+    assert out["fits"]["spl_law_max"]["linear"]["slope"] == pytest.approx(slope, rel=0.03)
+    assert out["skipped"] == [{"input_key": out["skipped"][0]["input_key"], "run_id": "base_only",
+                               "reason": "no plate_velocity or plate_acceleration channel"}]
+    quiet = [r for r in out["runs"] if r["run_id"] == "dwell_quiet"]
+    assert quiet[0]["n_impacts"] == 0 and quiet[0]["pattern"] == "no impact"
+
+
+def test_cli_fit_table_and_results_in_store(campaign):
+    store, _, truth = campaign
+    proc = run_cli("fit", str(store))
+    assert proc.returncode == 0 and proc.stderr == ""
+    assert "grazing.gap_m" in proc.stdout and "skipped" in proc.stdout
+    assert "grazing.participation (fixed)" in proc.stdout
+    res = read_results(store)
+    assert res.provenance["function"] == "rattle_lab.fit.fit_store"
+    assert len(res.provenance["inputs"]) == 1
+    assert set(res.thresholds) == {"freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2"}
+    key = next(k for k in res.runs if k[1] == "ramp_up_96p0")
+    run = res.runs[key]
+    assert run["status"] == "ok" and run["pattern"] == "1/1"
+    np.testing.assert_allclose(run["t_s"], truth.impacts["ramp_up_96p0"][0], atol=1 / 12800)
+    skipped = next(v for k, v in res.runs.items() if k[1] == "base_only")
+    assert skipped["status"] == "skipped" and "t_s" not in skipped
+    with h5py.File(store, "r") as fh:     # the records are still there, untouched
+        assert list(fh["records"]) == [key[0]]
+
+
+def test_fit_store_library_call_matches(campaign):
+    store, _, _ = campaign
+    result = fit_store(store, fit={"participation": 1.2}, write=False)
+    assert result.summary["n_runs"] == 11 and result.summary["n_ok"] == 10
+
+
+def test_cli_bad_store_exit_2(tmp_path):
+    proc = run_cli("fit", str(tmp_path / "missing.h5"), "--json")
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.count("\n") == 1 and "no such store" in proc.stderr
+
+
+def test_cli_bad_pipeline_exit_2(campaign, tmp_path):
+    store, _, _ = campaign
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[detect]\nbogus = 1\n")
+    proc = run_cli("fit", str(store), "--pipeline", str(bad))
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1
+    assert "unknown key 'bogus'" in proc.stderr
+
+
+def test_load_pipeline_errors(tmp_path):
+    assert load_pipeline(None) == {"detect": {}, "fit": {}}
+    with pytest.raises(ParameterError, match=r"cannot read pipeline TOML"):
+        load_pipeline(tmp_path / "nope.toml")
+    f = tmp_path / "p.toml"
+    f.write_text("detect = 3\n")
+    with pytest.raises(ParameterError, match=r"\[detect\] must be a table"):
+        load_pipeline(f)
+    f.write_text("[fit]\nzeta = 3\n")
+    with pytest.raises(ParameterError, match=r"\[fit\]: unknown key 'zeta'"):
+        load_pipeline(f)
+
+
+def test_fit_store_errors(campaign, tmp_path):
+    store, _, _ = campaign
+    with pytest.raises(ParameterError, match=r"unknown fit parameter 'bogus'"):
+        fit_store(store, fit={"bogus": 1}, write=False)
+    with pytest.raises(StoreError, match=r"no such store"):
+        read_results(tmp_path / "none.h5")
+    empty = tmp_path / "empty.h5"
+    h5py.File(empty, "w").close()
+    with pytest.raises(StoreError, match=r"/results: no results"):
+        read_results(empty)

@@ -1,0 +1,83 @@
+"""Ramp thresholds: lock-in amplitude of the base acceleration, sustained onset, tabulation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rattle_lab.detect import detect_impacts
+from rattle_lab.detect._synthetic import ramp_impacts, synthetic_signals
+from rattle_lab.exceptions import ParameterError
+from rattle_lab.thresholds import (Threshold, fundamental_amplitude, ramp_threshold,
+                                   sustained_impact_time, tabulate_thresholds)
+
+FS_HZ = 12800.0
+
+
+def test_lock_in_rejects_harmonics_and_follows_a_ramp():
+    t = np.arange(int(2 * FS_HZ)) / FS_HZ
+    amp = 1.0 + 2.0 * t                                   # linear ramp, m/s^2
+    x = amp * np.sin(2 * np.pi * 90 * t) + 3.0 * np.sin(2 * np.pi * 180 * t + 0.3)   # strong 2nd harmonic
+    est = fundamental_amplitude(x, FS_HZ, 90.0)
+    mid = slice(int(0.3 * FS_HZ), int(1.7 * FS_HZ))
+    # zero-phase low-pass at 18 Hz: a linear ramp passes exactly; the 180 Hz product is
+    # attenuated by > 100 dB; what is left is the filter's edge transient: 1e-3 relative
+    np.testing.assert_allclose(est[mid], amp[mid], rtol=1e-3)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"fs_hz": 0.0, "freq_hz": 10.0}, r"`fs_hz` must be > 0, was 0.0"),
+    ({"fs_hz": 100.0, "freq_hz": 60.0}, r"`freq_hz` must be in \(0, fs_hz/2 = 50.0\), was 60.0"),
+    ({"fs_hz": 100.0, "freq_hz": 10.0, "lowpass_hz": 80.0}, r"`lowpass_hz` must be in \(0, fs_hz/2\)"),
+])
+def test_lock_in_errors(kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        fundamental_amplitude(np.zeros(1000), **kwargs)
+
+
+def test_lock_in_too_short():
+    with pytest.raises(ParameterError, match=r"`x` has 10 samples, too few for the low-pass"):
+        fundamental_amplitude(np.zeros(10), 1000.0, 100.0)
+
+
+def test_sustained_time_up_and_down():
+    t = np.r_[0.05, np.arange(0.5, 0.6, 0.01), 0.9]      # stray hits before and after
+    assert sustained_impact_time(t, 100.0, "up") == pytest.approx(0.5)
+    assert sustained_impact_time(t, 100.0, "down") == pytest.approx(0.59)
+    assert np.isnan(sustained_impact_time([0.1, 0.5], 100.0, "up"))
+    with pytest.raises(ParameterError, match=r"`direction` must be 'up' or 'down', was 'sideways'"):
+        sustained_impact_time(t, 100.0, "sideways")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("direction", ["up", "down"])
+def test_ramp_threshold_from_synthetic_ramp(direction):
+    f_hz, n = 95.0, int(1.0 * FS_HZ)
+    t = np.arange(n) / FS_HZ
+    amp = 0.5 + 3.0 * t if direction == "up" else 3.5 - 3.0 * t     # m/s^2
+    a_thr = 2.0
+    ti, vin = ramp_impacts(f_hz, amp, FS_HZ, a_thr, direction)
+    s = synthetic_signals(FS_HZ, n, f_hz, ti, vin, 0.8, base_amp_ms2=amp, noise_v_m_s=2e-4,
+                          noise_base_ms2=0.01, rng=np.random.default_rng(5))
+    log = detect_impacts(FS_HZ, velocity_m_s=s["velocity"])
+    assert log.n_impacts == ti.size
+    thr = ramp_threshold("r1", s["base_acc"], FS_HZ, f_hz, log.t_s, direction)
+    # one forcing cycle of the ramp changes A by 3.0/95 = 0.032 m/s^2: the threshold is known
+    # to within one cycle (impacts happen once per cycle)
+    assert thr.accel_ms2 == pytest.approx(a_thr, abs=3.0 / f_hz)
+    assert thr.direction == direction and thr.run_id == "r1"
+
+
+def test_ramp_threshold_without_impacts_is_nan():
+    thr = ramp_threshold("r", np.zeros(1000), 1000.0, 50.0, [], "up")
+    assert np.isnan(thr.accel_ms2) and np.isnan(thr.t_s)
+
+
+def test_tabulate_hysteresis():
+    th = [Threshold("a", 90.0, "up", 2.0, 0.1), Threshold("b", 90.0, "down", 1.5, 0.2),
+          Threshold("c", 100.0, "up", 1.0, 0.1), Threshold("d", 100.0, "up", 1.2, 0.1),
+          Threshold("e", 110.0, "down", float("nan"), float("nan"))]
+    curve = tabulate_thresholds(th)
+    np.testing.assert_array_equal(curve.freq_hz, [90.0, 100.0, 110.0])
+    np.testing.assert_allclose(curve.up_ms2, [2.0, 1.1, np.nan])
+    np.testing.assert_allclose(curve.hysteresis_ms2, [0.5, np.nan, np.nan])
+    assert tabulate_thresholds([]).freq_hz.size == 0
