@@ -3,6 +3,7 @@ the scene records (and only those), and collect everything the rig knows in ``/t
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from dataclasses import dataclass
@@ -13,6 +14,7 @@ import numpy as np
 
 from .._progress import progress
 from .._version import __version__
+from ..exceptions import OutputError
 from ..plate import Plate
 from ..records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable, Truth,
                        scale_to_si, write_record)
@@ -182,7 +184,7 @@ def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz:
             data = chan.data.read(0, chan.n_samples).copy()
             lo = data.size // 2
             data[lo:lo + ch.n_samples(art.dropout_s, fs_hz)] = 0.0
-            chan = Channel(**{**chan.__dict__, "data": data})
+            chan = dataclasses.replace(chan, data=data)
         out.append(chan)
     return out
 
@@ -296,7 +298,18 @@ def write_synthetic(scene: Scene | str | os.PathLike[str], output: str | os.Path
     -------
     Synthesis
         With ``record`` as written.
+
+    Raises
+    ------
+    SceneError
+        If the scene is invalid.
+    OutputError
+        If the output directory does not exist or the file cannot be written.
     """
+    output = Path(output)
+    directory = output.parent if str(output.parent) else Path(".")
+    if not directory.is_dir():   # fail before simulating, not after
+        raise OutputError(f"{output}: output directory {directory} does not exist")
     result = synthesize(scene, seed=seed, counter=counter, quiet=quiet)
-    write_record(Path(output), result.record)
+    write_record(output, result.record)
     return result

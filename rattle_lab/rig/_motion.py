@@ -40,7 +40,16 @@ class Modal:
 
     def F(self, level_m_s2: float) -> float:
         """Nondimensional forcing of a base-acceleration amplitude (eq. 2.27, 2.31)."""
-        return float(scaling.F_from_accel(level_m_s2, self.participation, self.omega_s_rad_s, self.gap_m))
+        # F is linear in the level: convert 1 m/s^2 once (validated), then scale
+        return level_m_s2 * self._F_per_m_s2
+
+    @property
+    def _F_per_m_s2(self) -> float:
+        cached = self.__dict__.get("_F_unit")
+        if cached is None:
+            cached = float(scaling.F_from_accel(1.0, self.participation, self.omega_s_rad_s, self.gap_m))
+            object.__setattr__(self, "_F_unit", cached)
+        return cached
 
 
 @dataclass(frozen=True)
