@@ -41,6 +41,16 @@ _LAZY: dict[str, str] = {
     "Record": "rattle_lab.records",
     "ingest": "rattle_lab.ingest",
     "read_catalogue": "rattle_lab.ingest",
+    # synthetic rigs
+    "load_scene": "rattle_lab.rig",
+    "synthesize": "rattle_lab.rig",
+    "write_synthetic": "rattle_lab.rig",
+    # detection and fitting
+    "detect_impacts": "rattle_lab.detect",
+    "sound_peaks": "rattle_lab.detect",
+    "fit_grazing": "rattle_lab.fit",
+    "fit_store": "rattle_lab.fit",
+    "read_results": "rattle_lab.results",
 }
 
 __all__ = ["__version__", "RattleLabError", *_LAZY]

@@ -17,6 +17,8 @@ def test_all_is_pinned():
         "one_over_n_orbits", "bifurcation_sets", "sweep", "sweep_up_down",
         "lyapunov_exponent", "regime_map",
         "read", "write_record", "Record", "ingest", "read_catalogue",
+        "load_scene", "synthesize", "write_synthetic",
+        "detect_impacts", "sound_peaks", "fit_grazing", "fit_store", "read_results",
     ]
 
 
