@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import copy
 import hashlib
 import math
@@ -17,7 +19,8 @@ from rattle_lab.linear import threshold_accel_ms2
 from rattle_lab.records import read
 from rattle_lab.rig import (Piece, RunMotion, StageCounter, parse_scene, schedule,
                             synthesize, write_synthetic)
-from rattle_lab.rig._channels import contact_kernel, plate_acceleration, sound_pressure
+from rattle_lab.rig._channels import (contact_kernel, plate_acceleration, sound_pressure,
+                                      vibrometer_velocity)
 from rattle_lab.rig._scene import AcousticSpec, ArtefactSpec, ModelSpec, RunSpec
 from rattle_lab.sdf import SDFParams, simulate
 
@@ -100,8 +103,38 @@ def test_plate_pulse_area_is_the_momentum_change():
     a = plate_acceleration(motion, np.zeros(n), model, (), fs)
     # area = -(v_in + v_out) = -(1 + e) v_in: the velocity jump of the impact
     assert a.sum() / fs == pytest.approx(-0.8, rel=1e-12)
-    # FFT convolution leaves round-off (~1e-16 of the peak) outside the pulse
-    assert np.flatnonzero(np.abs(a) > 1e-9 * np.abs(a).max()).tolist() == list(range(200, 206))
+    # the contact is centred on the impact (t = 200 samples, +-3 samples), each sample the mean
+    # over its sampling interval: samples 197..203, symmetric, centroid at the impact
+    assert np.flatnonzero(np.abs(a) > 1e-9 * np.abs(a).max()).tolist() == list(range(197, 204))
+    np.testing.assert_allclose(a[197:204], a[197:204][::-1], rtol=1e-12)
+    assert np.sum(np.arange(n) * a) / np.sum(a) == pytest.approx(200.0, abs=1e-9)
+
+
+def test_vibrometer_spreads_the_jump_over_the_contact_like_the_accelerometer():
+    """The simulated (rigid) jump of -(v_in + v_out) at t_i becomes the running integral of
+    the plate accelerometer's contact pulse: the rigid velocity outside the contact, the
+    same momentum change, both centred on the impact (sub-sample position kept)."""
+    fs, n = 20000.0, 2000
+    t_i = 0.01 + 0.3 / fs
+    t = np.arange(n) / fs
+    motion = one_impact_motion(n, t_i, 0.5, 0.3)
+    rigid = np.where(t < t_i, 0.5, -0.3)
+    motion = dataclasses.replace(motion, v_rel_m_s=rigid)
+    model = ModelSpec(gap_m=1e-3, e=0.6, zeta=0.01, contact_s=0.0003)
+    v = vibrometer_velocity(motion, None, fs, model.contact_s)
+    outside = np.abs(t - t_i) > 0.5 * model.contact_s
+    np.testing.assert_array_equal(v[outside], rigid[outside])
+    assert not np.array_equal(v, rigid)
+    a = plate_acceleration(motion, np.zeros(n), model, (), fs)
+    dv = np.diff(v)
+    assert dv.sum() == pytest.approx(-0.8, rel=1e-12) and a.sum() / fs == pytest.approx(-0.8, rel=1e-12)
+    # centroids (in samples; a velocity increment k sits between samples k and k+1)
+    c_v = np.sum((np.arange(n - 1) + 0.5) * dv) / dv.sum()
+    c_a = np.sum(np.arange(n) * a) / a.sum()
+    assert c_a == pytest.approx(t_i * fs, abs=0.01)     # box-averaged samples of the pulse
+    assert c_v == pytest.approx(t_i * fs, abs=0.01)     # point samples of the smooth step
+    # without a contact the vibrometer is the rigid jump itself
+    np.testing.assert_array_equal(vibrometer_velocity(motion, None, fs, 0.0), rigid)
 
 
 def test_sound_pulse_follows_the_linear_law_after_the_delay():

@@ -42,9 +42,22 @@ def test_lock_in_too_short():
 
 def test_sustained_time_up_and_down():
     t = np.r_[0.05, np.arange(0.5, 0.6, 0.01), 0.9]      # stray hits before and after
-    assert sustained_impact_time(t, 100.0, "up") == pytest.approx(0.5)
-    assert sustained_impact_time(t, 100.0, "down") == pytest.approx(0.59)
+    assert sustained_impact_time(t, 100.0, "up", max_gap_cycles=2.5) == pytest.approx(0.5)
+    assert sustained_impact_time(t, 100.0, "down", max_gap_cycles=2.5) == pytest.approx(0.59)
     assert np.isnan(sustained_impact_time([0.1, 0.5], 100.0, "up"))
+    # default: isolated means more than 100 cycles away
+    t = np.r_[0.05, 2.0 + 0.01 * np.arange(10), 4.0]
+    assert sustained_impact_time(t, 100.0, "up") == pytest.approx(2.0)
+    assert sustained_impact_time(t, 100.0, "down") == pytest.approx(2.09)
+
+
+def test_sustained_time_accepts_intermittent_impacting():
+    """Below resonance the first impacts near grazing come every few to tens of cycles
+    (the rig's 95 Hz ramps): they belong to the onset, not to stray hits."""
+    t = np.r_[1.0, 1.09, 1.17, 1.23, 1.26, np.arange(1.3, 1.4, 0.01)]
+    assert sustained_impact_time(t, 100.0, "up") == pytest.approx(1.0)
+    # the mirror image on a downward ramp: the last impact is 3.0 - 1.0
+    assert sustained_impact_time(3.0 - t, 100.0, "down") == pytest.approx(2.0)
     with pytest.raises(ParameterError, match=r"`direction` must be 'up' or 'down', was 'sideways'"):
         sustained_impact_time(t, 100.0, "sideways")  # type: ignore[arg-type]
 

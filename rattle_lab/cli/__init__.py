@@ -29,6 +29,8 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rattle_lab.cli._fit",
     "rattle_lab.cli._explore",
     "rattle_lab.cli._simulate",
+    "rattle_lab.cli._report",
+    "rattle_lab.cli._run",
 )
 
 

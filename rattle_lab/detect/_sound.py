@@ -4,7 +4,11 @@ For each impact, the pressure in ``[t_impact, t_impact + window_s]`` (cut at
 the next impact) gives the first peak (the first local maximum of ``|p|`` that
 reaches ``first_fraction`` of the window's largest) -- the *impact sound
 pressure* -- and the largest peak -- the *maximum sound pressure* (thesis
-Fig. 6-6).  Peak times are refined by a 3-point parabola.
+Fig. 6-6).  Peak times are refined by a 3-point parabola, except at an onset (the
+sample before the peak below half of it), where the signal is not a smooth maximum and
+the parabola would overshoot.  With the excitation frequency, the low-frequency sound of
+the vibrating plate (at the forcing frequency) is fitted over ``baseline_s`` before each
+impact and subtracted, so that the peaks are those of the impact sound alone.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from scipy import signal
 
 from ..exceptions import ParameterError
 from ._common import as_signal, n_samples_of, parabolic_peak
+from ._impacts import _LocalFit
 from ._spl import spl_db
 
 
@@ -48,9 +53,23 @@ class SoundPeaks:
     p_rms_pa: np.ndarray
 
 
+def _refined(y: np.ndarray, k: int) -> tuple[float, float]:
+    """Parabolic peak of ``y`` at ``k``, unless ``k`` is an onset (``y[k-1] < y[k] / 2``)."""
+    if 0 < k and y[k - 1] < 0.5 * y[k]:
+        return float(k), float(y[k])
+    return parabolic_peak(y, k)
+
+
 def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window_s: float = 5e-3,
-                first_fraction: float = 0.5, start_time_s: float = 0.0) -> SoundPeaks:
+                first_fraction: float = 0.5, start_time_s: float = 0.0,
+                excitation_freq_hz: float | None = None, baseline_s: float = 3e-3) -> SoundPeaks:
     """First and largest pressure peaks in a bounded window after each impact.
+
+    With ``excitation_freq_hz``, the pressure over ``baseline_s`` before each impact
+    (cut at the previous impact's window) is fitted by a forced-mode sinusoid at that
+    frequency (constant, ``cos`` and ``sin``: bounded when extrapolated), which is extrapolated
+    over the window and subtracted: the plate's own low-frequency radiation is then not
+    counted in the impact's peaks.
 
     Examples
     --------
@@ -60,7 +79,16 @@ def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window
     >>> float(pk.p_first_pa[0]), float(pk.p_max_pa[0]), float(pk.delay_max_s[0])
     (0.6, 1.0, 0.01)
     """
-    p = np.abs(as_signal(pressure_pa, "pressure_pa"))
+    p_signed = as_signal(pressure_pa, "pressure_pa")
+    p = np.abs(p_signed)
+    omega = None
+    if excitation_freq_hz is not None:
+        if not (np.isfinite(excitation_freq_hz) and 0 < excitation_freq_hz < fs_hz / 2):
+            raise ParameterError(f"`excitation_freq_hz` must be in (0, fs_hz/2 = {fs_hz / 2}), "
+                                 f"was {excitation_freq_hz}")
+        omega = 2.0 * np.pi * excitation_freq_hz / fs_hz
+    n_base = n_samples_of(baseline_s, fs_hz, name="baseline_s")
+    prev_hi = 0
     t_imp = np.atleast_1d(np.asarray(impact_t_s, dtype=float))
     if not 0 < first_fraction <= 1:
         raise ParameterError(f"`first_fraction` must be in (0, 1], was {first_fraction}")
@@ -75,6 +103,13 @@ def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window
         if hi - lo < 1:
             continue
         seg = p[lo:hi]
+        if omega is not None:
+            b_lo = max(0, lo - n_base, prev_hi)
+            if lo - b_lo >= 9:
+                k_b = np.arange(b_lo, lo, dtype=float)
+                fit = _LocalFit(k_b, p_signed[b_lo:lo], 0, omega)
+                seg = np.abs(p_signed[lo:hi] - fit(np.arange(lo, hi, dtype=float)))
+        prev_hi = hi
         out["rms"][i] = float(np.sqrt(np.mean(seg**2)))
         k_max = int(np.argmax(seg))
         if seg[k_max] == 0.0:
@@ -86,8 +121,8 @@ def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window
                 k_first = k
                 break
         for key_t, key_p, k in (("tf", "pf", k_first), ("tm", "pm", k_max)):
-            loc, height = parabolic_peak(p, lo + k)
-            out[key_t][i] = start_time_s + loc / fs_hz
+            loc, height = _refined(seg, k)
+            out[key_t][i] = start_time_s + (lo + loc) / fs_hz
             out[key_p][i] = height
     return SoundPeaks(out["tf"], out["tm"], out["pf"], out["pm"], out["tf"] - t_imp,
                       out["tm"] - t_imp, spl_db(out["pf"]), spl_db(out["pm"]), out["rms"])

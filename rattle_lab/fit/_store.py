@@ -109,9 +109,13 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
         vel, acc = (used[0], None) if used[0] is vel else (None, used[0])
     t0 = _start_of(run, used[0])
     params = ImpactParams(**{k: v for k, v in detect.items() if k not in SOUND_KEYS})
+    # a constant excitation frequency lets the velocity fits use the forced-mode basis
+    f_end = getattr(run, "freq_end_hz", None)
+    f_fit = freq if (math.isfinite(freq) and 0 < freq < fs / 2
+                     and (f_end is None or f_end == freq)) else None
     log = detect_impacts(fs, velocity_m_s=vel.read() if vel is not None else None,
                          accel_ms2=acc.read() if acc is not None else None, params=params,
-                         start_time_s=t0)
+                         start_time_s=t0, excitation_freq_hz=f_fit)
     names = tuple(c.name for c in used)
     duration = used[0].n_samples / fs
     pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)
@@ -132,7 +136,9 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
         t0_mic = _start_of(run, mic)
         names = names + (mic.name,)
         peaks = sound_peaks(p, fs_mic, log.t_s, window_s=sk["window_s"],
-                            first_fraction=sk["first_fraction"], start_time_s=t0_mic)
+                            first_fraction=sk["first_fraction"], start_time_s=t0_mic,
+                            excitation_freq_hz=f_fit if f_fit is not None and f_fit < fs_mic / 2
+                            else None)
         spl = rms_spl_db(p)
         spl_a = rms_spl_db(p, fs_mic, a_weighted=True)
         if log.n_impacts:

@@ -167,7 +167,7 @@ def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz:
             si = ch.plate_acceleration(motion, a_base, scene.model, ring, fs_hz)
         elif sensor.name == "velocity":
             counter.add("velocity")
-            si = ch.vibrometer_velocity(motion, sensor.band_hz, fs_hz)
+            si = ch.vibrometer_velocity(motion, sensor.band_hz, fs_hz, scene.model.contact_s)
         elif sensor.name == "mic":
             counter.add("mic")
             counter.add("acoustic")

@@ -77,22 +77,66 @@ def contact_kernel(contact_s: float, sample_rate_hz: float) -> np.ndarray:
     return k / (k.sum() / sample_rate_hz)
 
 
+def contact_step(t_s: np.ndarray, contact_s: float) -> np.ndarray:
+    """Momentum transferred by a contact centred on ``t = 0`` as a fraction of the total.
+
+    The contact force is a half-sine over ``-contact_s/2 <= t <= contact_s/2``; the fraction
+    is its running integral ``(1 + sin(pi t / contact_s)) / 2`` (0 before, 1 after).  Centring
+    the contact on the simulator's rigid impact keeps both the impulse and its first moment,
+    so outside the contact the velocity *and* the displacement are exactly the rigid ones.
+    """
+    t = np.asarray(t_s, dtype=float)
+    if contact_s <= 0.0:
+        return (t >= 0.0).astype(float)
+    inside = np.clip(t / contact_s, -0.5, 0.5)
+    return 0.5 * (1.0 + np.sin(math.pi * inside))
+
+
+def contact_force(t_s: np.ndarray, contact_s: float) -> np.ndarray:
+    """Time derivative of :func:`contact_step` (unit area), 1/s: ``pi/(2 contact_s) cos(pi t/contact_s)``
+    inside the contact, 0 outside."""
+    t = np.asarray(t_s, dtype=float)
+    inside = np.abs(t) <= 0.5 * contact_s
+    return np.where(inside, 0.5 * math.pi / contact_s * np.cos(math.pi * t / contact_s), 0.0)
+
+
+def _impact_windows(motion: RunMotion, half_s: float, n: int, sample_rate_hz: float):
+    """Per impact: the sample indices within ``half_s`` of it and their times relative to it."""
+    for k, t_i in enumerate(motion.impact_t_s):
+        lo = max(0, int(math.floor((t_i - half_s) * sample_rate_hz)))
+        hi = min(n, int(math.ceil((t_i + half_s) * sample_rate_hz)) + 1)
+        if hi > lo:
+            idx = np.arange(lo, hi)
+            yield k, idx, idx / sample_rate_hz - t_i
+
+
 def plate_acceleration(motion: RunMotion, a_base: np.ndarray, model: ModelSpec,
                        ringing_freqs_hz: tuple[float, ...], sample_rate_hz: float) -> np.ndarray:
     """Plate-centre acceleration without sensor noise, m/s^2.
 
     ``a_base + a_rel`` (modal motion, W = 1 at the centre) plus, per impact, a half-sine
-    contact pulse of duration ``contact_s`` and area ``-(v_in + v_out)`` (the momentum change
-    per unit mass, ``(1 + e) v_in``) and decaying ringing
+    contact pulse of duration ``contact_s`` *centred on the impact time* (:func:`contact_force`
+    averaged over each sampling interval at the exact sub-sample position) and of area ``-(v_in + v_out)`` (the momentum
+    change per unit mass, ``(1 + e) v_in``), and decaying ringing
     ``ringing_m_s2_per_m_s v_in exp(-t/ringing_decay_s) sin(2 pi f_j t)`` of the higher modes.
+    A contact shorter than a sample is one sample of that area at the nearest sample.
     """
     assert motion.a_rel_m_s2 is not None
     n = a_base.size
     out = a_base + motion.a_rel_m_s2
     if motion.impact_t_s.size:
-        dv = impulse_train(motion.impact_t_s, -(motion.impact_v_in_m_s + motion.impact_v_out_m_s),
-                           n, sample_rate_hz)
-        out += convolve_causal(dv, contact_kernel(model.contact_s, sample_rate_hz))
+        dv = -(motion.impact_v_in_m_s + motion.impact_v_out_m_s)
+        if model.contact_s * sample_rate_hz < 1.0:
+            out += convolve_causal(impulse_train(motion.impact_t_s, dv, n, sample_rate_hz),
+                                   contact_kernel(model.contact_s, sample_rate_hz))
+        else:
+            # each sample is the mean over its sampling interval (an integrating ADC): the
+            # samples then sum to the impulse exactly and keep the pulse's centroid
+            dt = 1.0 / sample_rate_hz
+            half = 0.5 * model.contact_s + dt
+            for k, idx, tr in _impact_windows(motion, half, n, sample_rate_hz):
+                out[idx] += dv[k] * sample_rate_hz * (contact_step(tr + 0.5 * dt, model.contact_s)
+                                                      - contact_step(tr - 0.5 * dt, model.contact_s))
         if ringing_freqs_hz and model.ringing_m_s2_per_m_s:
             t = np.arange(n_samples(6 * model.ringing_decay_s, sample_rate_hz)) / sample_rate_hz
             kern = np.exp(-t / model.ringing_decay_s) * sum(
@@ -103,14 +147,25 @@ def plate_acceleration(motion: RunMotion, a_base: np.ndarray, model: ModelSpec,
     return out
 
 
-def vibrometer_velocity(motion: RunMotion, band_hz: float | None, sample_rate_hz: float) -> np.ndarray:
+def vibrometer_velocity(motion: RunMotion, band_hz: float | None, sample_rate_hz: float,
+                        contact_s: float = 0.0) -> np.ndarray:
     """Plate-centre velocity relative to the base, m/s, low-pass filtered at ``band_hz``.
 
     The vibrometer is taken as differential (reference beam on the base): it measures
-    ``v_rel = v_nd omega_s h``, the modal velocity the simulator computes.
+    ``v_rel = v_nd omega_s h``, the modal velocity the simulator computes, with each rigid
+    velocity jump spread over the finite contact exactly as the plate accelerometer's contact
+    pulse spreads it (:func:`contact_step`, centred on the impact), so that the velocity is
+    the integral of the relative acceleration the accelerometers see.  Outside the contacts
+    it is the simulated velocity.  The band limit is a zero-phase 4th-order Butterworth.
     """
     assert motion.v_rel_m_s is not None
     v = motion.v_rel_m_s
+    if motion.impact_t_s.size and contact_s > 0.0:
+        v = v.copy()
+        # the simulator's jump is -(v_in + v_out) at t_i; replace H(t - t_i) by contact_step
+        jump = -(motion.impact_v_in_m_s + motion.impact_v_out_m_s)
+        for k, idx, tr in _impact_windows(motion, 0.5 * contact_s, v.size, sample_rate_hz):
+            v[idx] += jump[k] * (contact_step(tr, contact_s) - (tr >= 0.0))
     if band_hz is not None and band_hz < 0.45 * sample_rate_hz and v.size > 30:
         sos = signal.butter(4, band_hz, fs=sample_rate_hz, output="sos")
         v = signal.sosfiltfilt(sos, v)

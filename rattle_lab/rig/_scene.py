@@ -64,7 +64,9 @@ class ModelSpec:
 
     ``f_s_hz`` and ``participation`` default to the plate's first mode; ``ringing_freqs_hz``
     defaults to the plate's modes 2-4 (or none without a plate).  ``contact_s`` is the
-    duration of the half-sine contact pulse; ``ringing_m_s2_per_m_s`` the ringing
+    duration of the half-sine contact pulse, centred on the simulated (rigid) impact time,
+    that spreads the velocity jump in the plate accelerometer and the vibrometer alike;
+    ``ringing_m_s2_per_m_s`` the ringing
     amplitude per m/s of impact velocity; ``ringing_decay_s`` its time constant.
     """
 

@@ -1,0 +1,595 @@
+"""Pipelines: declared stages run lazily, with results cached by content hash in the store.
+
+A pipeline TOML (see ``pipelines/``) names the outputs wanted and the
+parameters of each stage::
+
+    [pipeline]
+    name = "threshold_campaign"
+    outputs = ["results"]        # any of: store, detections, thresholds, results, report
+    [simulate]                   # seed = 7 (optional; for scene inputs)
+    [ingest]                     # allow_flagged = false
+    [detect]                     # ImpactParams fields, window_s, first_fraction, max_lag_s
+    [fit]                        # participation, vary_participation, outlier_k, ...
+    [report]                     # model = true
+
+The ``[detect]`` and ``[fit]`` tables are those of ``rattle-lab fit --pipeline``
+(validated by :func:`rattle_lab.fit.load_pipeline`), so one file serves both.
+
+Stages and what they call (the same library functions as the CLI commands):
+
+==========  ============================================  =====================
+stage       calls                                         depends on
+==========  ============================================  =====================
+simulate    :func:`rattle_lab.rig.write_synthetic`        (scene inputs only)
+ingest      :func:`rattle_lab.ingest.ingest`              simulate
+detect      :func:`rattle_lab.fit.analyse_run`, per run   ingest
+thresholds  :func:`rattle_lab.thresholds.tabulate_thresholds`  detect
+fit         the fits of :func:`rattle_lab.fit.fit_store`,  thresholds, detect
+            :func:`rattle_lab.results.write_results`
+report      :func:`rattle_lab.report.write_report`        fit, ingest
+==========  ============================================  =====================
+
+Each stage has a *key*: the SHA-256 of its parameters, the package version and
+the keys of the stages it depends on (the simulate key hashes the scene file's
+bytes; the ingest key the input files' SHA-256).  Keys are computed without
+running anything.  A stage runs only if a requested output needs it and its
+key differs from the one recorded in the store under ``/pipeline_cache`` (or
+its output is gone); so a changed parameter reruns exactly the stages
+downstream of it.  :attr:`PipelineRun.executed` lists the stages run.
+
+Per-run detection is independent across runs: with ``scheduler`` (a
+``dask.distributed`` address, or a ``Client``) it is mapped over the cluster;
+results are identical to the serial run (the same function on the same data).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import importlib
+import json
+import os
+import shutil
+import sys
+import tomllib
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import h5py
+import numpy as np
+
+from ._atomic import atomic_path
+from ._version import __version__
+from .exceptions import DataError, OutputError, ParameterError
+
+Stage = Literal["simulate", "ingest", "detect", "thresholds", "fit", "report"]
+
+#: Stages in execution order.
+STAGES: tuple[Stage, ...] = ("simulate", "ingest", "detect", "thresholds", "fit", "report")
+#: What each stage needs.
+DEPENDS: dict[Stage, tuple[Stage, ...]] = {
+    "simulate": (), "ingest": ("simulate",), "detect": ("ingest",), "thresholds": ("detect",),
+    "fit": ("thresholds", "detect"), "report": ("fit", "ingest")}
+#: Output names a pipeline may request, and the stage that makes each.
+OUTPUTS: dict[str, Stage] = {"store": "ingest", "detections": "detect",
+                             "thresholds": "thresholds", "results": "fit", "report": "report"}
+#: Keys of the tables this module validates itself ([detect] and [fit] are the fit's).
+_OWN_KEYS: dict[str, dict[str, Any]] = {"simulate": {"seed": None},
+                                        "ingest": {"allow_flagged": False},
+                                        "report": {"model": True}}
+#: Parameters of [fit] that the per-run analysis (detect stage) uses.
+_DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
+CACHE_GROUP = "pipeline_cache"
+
+
+@dataclass(frozen=True)
+class Pipeline:
+    """A parsed pipeline file.
+
+    Attributes
+    ----------
+    name : str
+        Names the default store (``OUT/name.h5``) and report (``OUT/name.pdf``).
+    outputs : tuple of str
+        Requested outputs (keys of :data:`OUTPUTS`).
+    params : dict of str to dict
+        Parameters per table: ``simulate, ingest, detect, fit, report``.
+    description : str
+    source : str
+        The file it was read from ("" if built in code).
+    """
+
+    name: str
+    outputs: tuple[str, ...]
+    params: dict[str, dict[str, Any]]
+    description: str = ""
+    source: str = ""
+
+
+@dataclass
+class PipelineRun:
+    """What :func:`run_pipeline` did.
+
+    Attributes
+    ----------
+    store : Path
+    executed : list of str
+        Stages run, in order (``simulate`` once per scene simulated).
+    cached : list of str
+        Stages needed but up to date (not rerun).
+    outputs : dict of str to Path
+        The requested outputs (the store, or the report PDF).
+    keys : dict of str to str
+        The content key of each needed stage.
+    """
+
+    store: Path
+    executed: list[str] = field(default_factory=list)
+    cached: list[str] = field(default_factory=list)
+    outputs: dict[str, Path] = field(default_factory=dict)
+    keys: dict[str, str] = field(default_factory=dict)
+
+
+# --- the pipeline file -----------------------------------------------------------------------
+
+def parse_pipeline(doc: Mapping[str, Any], source: str = "<pipeline>") -> Pipeline:
+    """A :class:`Pipeline` from a parsed TOML document.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown table, key or output (the message names it).
+    """
+    from .fit._store import FIT_KEYS, SOUND_KEYS
+    from .detect import ImpactParams
+
+    known = {"pipeline", "simulate", "ingest", "detect", "thresholds", "fit", "report"}
+    unknown = sorted(set(doc) - known)
+    if unknown:
+        raise ParameterError(f"{source}: unknown table [{unknown[0]}] (known: "
+                             f"{', '.join(sorted(known))})")
+    head = doc.get("pipeline", {})
+    if not isinstance(head, Mapping):
+        raise ParameterError(f"{source}: [pipeline] must be a table")
+    bad = sorted(set(head) - {"name", "description", "outputs"})
+    if bad:
+        raise ParameterError(f"{source}: [pipeline]: unknown key {bad[0]!r}")
+    name = head.get("name", Path(source).stem if source != "<pipeline>" else "pipeline")
+    if not isinstance(name, str) or not name or any(c in name for c in "/\\"):
+        raise ParameterError(f"{source}: [pipeline] name must be a plain file stem, was {name!r}")
+    outputs = head.get("outputs", ["report"])
+    if isinstance(outputs, str):
+        outputs = [outputs]
+    for out in outputs:
+        if out not in OUTPUTS:
+            raise ParameterError(f"{source}: [pipeline] outputs: unknown output {out!r} "
+                                 f"(known: {', '.join(OUTPUTS)})")
+    if not outputs:
+        raise ParameterError(f"{source}: [pipeline] outputs must name at least one output")
+    allowed = {"detect": {f.name for f in dataclasses.fields(ImpactParams)} | set(SOUND_KEYS),
+               "fit": set(FIT_KEYS), "thresholds": set(), **{k: set(v) for k, v in
+                                                             _OWN_KEYS.items()}}
+    params: dict[str, dict[str, Any]] = {}
+    for table, keys in allowed.items():
+        values = doc.get(table, {})
+        if not isinstance(values, Mapping):
+            raise ParameterError(f"{source}: [{table}] must be a table")
+        bad = sorted(set(values) - keys)
+        if bad:
+            hint = (" (n_confirm belongs to [fit], as in `rattle-lab fit --pipeline`)"
+                    if table == "thresholds" else "")
+            raise ParameterError(f"{source}: [{table}]: unknown key {bad[0]!r}{hint}")
+        params[table] = {**_OWN_KEYS.get(table, {}), **dict(values)}
+    seed = params["simulate"]["seed"]
+    if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)):
+        raise ParameterError(f"{source}: [simulate] seed must be an integer, was {seed!r}")
+    for table, key in (("ingest", "allow_flagged"), ("report", "model")):
+        if not isinstance(params[table][key], bool):
+            raise ParameterError(f"{source}: [{table}] {key} must be true or false, "
+                                 f"was {params[table][key]!r}")
+    params["fit"] = {**FIT_KEYS, **params["fit"]}
+    params.pop("thresholds")
+    return Pipeline(name, tuple(outputs), params, str(head.get("description", "")), source)
+
+
+def load_pipeline_file(path: str | os.PathLike[str]) -> Pipeline:
+    """Read and validate a pipeline TOML file.
+
+    Raises
+    ------
+    ParameterError
+        If the file cannot be read or is invalid.
+    """
+    try:
+        doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise ParameterError(f"{path}: cannot read pipeline TOML: {exc}") from exc
+    return parse_pipeline(doc, str(path))
+
+
+# --- content keys and the cache in the store -------------------------------------------------
+
+def _digest(obj: Any) -> str:
+    text = json.dumps(obj, sort_keys=True, default=str, allow_nan=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _is_scene(item: str) -> bool:
+    return item == "default" or Path(item).suffix.lower() == ".toml"
+
+
+def _scene_bytes(item: str) -> bytes:
+    if item == "default":
+        from importlib import resources
+
+        return resources.files("rattle_lab").joinpath("data/scenes/default.toml").read_bytes()
+    try:
+        return Path(item).read_bytes()
+    except OSError as exc:
+        raise ParameterError(f"{item}: cannot read scene: {exc}") from exc
+
+
+def _read_cache(store: Path) -> dict[str, str]:
+    if not store.is_file():
+        return {}
+    try:
+        with h5py.File(store, "r") as fh:
+            g = fh.get(CACHE_GROUP)
+            if g is None:
+                return {}
+            return {k: (v.decode() if isinstance(v, bytes) else str(v)) for k, v in g.attrs.items()}
+    except OSError:
+        return {}
+
+
+@contextmanager
+def _edit_store(store: Path) -> Iterator[h5py.File]:
+    """Open a copy of ``store`` for writing; rename it over the store on success."""
+    try:
+        with atomic_path(store) as tmp:
+            shutil.copyfile(store, tmp)
+            shutil.copymode(store, tmp)
+            with h5py.File(tmp, "a") as fh:
+                yield fh
+    except OSError as exc:
+        if isinstance(exc, OutputError):
+            raise
+        raise OutputError(f"{store}: could not update {CACHE_GROUP}: {exc}") from exc
+
+
+def _record_keys(store: Path, keys: Mapping[str, str]) -> None:
+    with _edit_store(store) as fh:
+        fh.require_group(CACHE_GROUP).attrs.update(dict(keys))
+
+
+# --- serialising detection results (frozen dataclasses of arrays and scalars) ----------------
+
+def _put(group: h5py.Group, name: str, value: Any) -> None:
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        sub = group.create_group(name)
+        cls = type(value)
+        sub.attrs["__class__"] = f"{cls.__module__}:{cls.__qualname__}"
+        for f in dataclasses.fields(value):
+            _put(sub, f.name, getattr(value, f.name))
+    elif isinstance(value, np.ndarray):
+        group.create_dataset(name, data=value)
+    else:
+        group.attrs[name] = json.dumps(value.item() if isinstance(value, np.generic) else value,
+                                       allow_nan=True)
+
+
+def _get(group: h5py.Group) -> Any:
+    path = group.attrs["__class__"]
+    module, _, qualname = (path.decode() if isinstance(path, bytes) else str(path)).partition(":")
+    if not module.startswith("rattle_lab."):  # only our own result classes are rebuilt
+        raise DataError(f"{group.name}: attribute '__class__': {module}:{qualname} is not a "
+                        "rattle_lab class")
+    cls = getattr(importlib.import_module(module), qualname)
+    kwargs: dict[str, Any] = {}
+    for f in dataclasses.fields(cls):
+        if f.name in group:
+            item = group[f.name]
+            kwargs[f.name] = _get(item) if isinstance(item, h5py.Group) else item[()]
+        elif f.name in group.attrs:
+            value = json.loads(group.attrs[f.name])
+            kwargs[f.name] = tuple(value) if isinstance(value, list) else value
+    return cls(**kwargs)
+
+
+def _write_detections(store: Path, runs: Sequence[Any]) -> None:
+    with _edit_store(store) as fh:
+        cache = fh.require_group(CACHE_GROUP)
+        if "detect" in cache:
+            del cache["detect"]
+        g = cache.create_group("detect")
+        g.attrs["n_runs"] = len(runs)
+        for i, r in enumerate(runs):
+            _put(g, f"{i:06d}", r)
+
+
+def read_detections(store: str | os.PathLike[str]) -> tuple[Any, ...]:
+    """The per-run detection results the detect stage cached in ``store``.
+
+    Returns
+    -------
+    tuple of RunResult
+
+    Raises
+    ------
+    DataError
+        If the store holds none.
+    """
+    with h5py.File(store, "r") as fh:
+        g = fh.get(f"{CACHE_GROUP}/detect")
+        if g is None:
+            raise DataError(f"{store}: /{CACHE_GROUP}/detect: no cached detections")
+        return tuple(_get(g[name]) for name in sorted(g))
+
+
+def _has(store: Path, path: str) -> bool:
+    if not store.is_file():
+        return False
+    with h5py.File(store, "r") as fh:
+        return path in fh
+
+
+# --- stage functions --------------------------------------------------------------------------
+
+def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any],
+               fit: Mapping[str, Any]) -> Any:
+    """Detection results of one stored run (:func:`rattle_lab.fit.analyse_run`).
+
+    A pure function of its arguments: what the serial loop and the Dask
+    workers call.
+    """
+    from .fit import analyse_run
+    from .ingest import open_stored_record
+
+    with open_stored_record(store, input_key) as record:
+        return analyse_run(input_key, record.run(run_id), detect=detect, fit=fit,
+                           mic_distance_m=record.rig.mic_distance_m)
+
+
+def _detect_all(store: Path, detect: Mapping[str, Any], fit: Mapping[str, Any],
+                scheduler: Any) -> list[Any]:
+    from .ingest import read_catalogue
+
+    catalogue = read_catalogue(store, level="runs")
+    jobs = [(str(store), str(k), str(r)) for k, r in zip(catalogue["input_key"],
+                                                       catalogue["run_id"])]
+    if scheduler is None:
+        return [detect_run(*job, detect, fit) for job in jobs]
+    from distributed import Client
+
+    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    try:
+        futures = client.map(detect_run, *zip(*jobs), detect=dict(detect), fit=dict(fit),
+                             pure=False) if jobs else []
+        return list(client.gather(futures))
+    finally:
+        if client is not scheduler:
+            client.close()
+
+
+def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipeline) -> None:
+    # The fits of rattle_lab.fit.fit_store on the cached detections (no refitting logic here).
+    from .fit._store import _clean, _summarise
+    from .results import StoreFit, write_results
+
+    fit = pipeline.params["fit"]
+    with h5py.File(store, "r") as fh:
+        inputs = {k: str(g.attrs.get("ingest_input_sha256", "")) for k, g in fh["records"].items()}
+    provenance = {"function": "rattle_lab.fit.fit_store", "via": "rattle_lab.pipeline",
+                  "pipeline": pipeline.name, "rattle_lab_version": __version__,
+                  "python": sys.version.split()[0],
+                  "parameters": {"detect": pipeline.params["detect"], "fit": fit},
+                  "inputs": inputs}
+    summary = _summarise(list(runs), curve, fit)
+    write_results(store, StoreFit(tuple(runs), curve, _clean(summary), _clean(provenance)))
+
+
+def _sha256_file(path: Path) -> str:
+    from .ingest import sha256_file
+
+    return sha256_file(path)
+
+
+# --- the runner -------------------------------------------------------------------------------
+
+def needed_stages(outputs: Sequence[str], *, scenes: bool) -> list[Stage]:
+    """The stages the requested outputs need, in execution order.
+
+    Examples
+    --------
+    >>> needed_stages(["thresholds"], scenes=False)
+    ['ingest', 'detect', 'thresholds']
+    >>> needed_stages(["store"], scenes=True)
+    ['simulate', 'ingest']
+    """
+    need: set[Stage] = set()
+    todo = [OUTPUTS[o] for o in outputs]
+    while todo:
+        stage = todo.pop()
+        if stage in need or (stage == "simulate" and not scenes):
+            continue
+        need.add(stage)
+        todo.extend(DEPENDS[stage])
+    return [s for s in STAGES if s in need]
+
+
+def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *,
+                 store: str | os.PathLike[str] | None = None, out_dir: str | os.PathLike[str] = ".",
+                 scheduler: Any = None, log: Callable[[str], None] | None = None) -> PipelineRun:
+    """Run the stages ``pipeline`` needs for its outputs, skipping those up to date.
+
+    Parameters
+    ----------
+    pipeline : Pipeline
+        From :func:`load_pipeline_file`.
+    inputs : sequence of path-like
+        Record files (any format ``rattle-lab ingest`` reads), or scenes
+        (``.toml`` files, or ``"default"``), which are simulated into
+        ``out_dir/<stem>.h5`` first.
+    store : path-like, optional
+        The store (default ``out_dir/<pipeline.name>.h5``).
+    out_dir : path-like
+        Directory of simulated records and of the report ``<pipeline.name>.pdf``.
+    scheduler : str or distributed.Client, optional
+        Run per-run detection on this Dask cluster (default: serially here).
+    log : callable, optional
+        Called with one line per stage run or skipped.
+
+    Returns
+    -------
+    PipelineRun
+
+    Raises
+    ------
+    ParameterError
+        If there are no inputs, an input is missing, or ``out_dir`` does not exist.
+    RattleLabError
+        Whatever a stage raises (the store is left as the last completed stage wrote it).
+    """
+    say = log or (lambda line: None)
+    items = [str(i) for i in inputs]
+    if not items:
+        raise ParameterError("`inputs` must name at least one record file or scene")
+    out = Path(out_dir)
+    if not out.is_dir():
+        raise ParameterError(f"`out_dir` {str(out)!r} is not a directory")
+    for item in items:
+        if item != "default" and not Path(item).is_file():
+            raise ParameterError(f"input {item!r}: no such file")
+    store_path = Path(store) if store is not None else out / f"{pipeline.name}.h5"
+    scenes = [i for i in items if _is_scene(i)]
+    p = pipeline.params
+    version = __version__
+    # content keys, computed without running anything
+    keys: dict[str, str] = {}
+    sim_keys = {}
+    raw_for: dict[str, Path] = {}
+    for item in scenes:
+        stem = "default" if item == "default" else Path(item).stem
+        raw_for[item] = out / f"{stem}.h5"
+        sim_keys[item] = _digest({"stage": "simulate", "v": version, "params": p["simulate"],
+                                  "scene": hashlib.sha256(_scene_bytes(item)).hexdigest()})
+    ingest_inputs = [sim_keys[i] if i in sim_keys else _sha256_file(Path(i)) for i in items]
+    keys["ingest"] = _digest({"stage": "ingest", "v": version, "params": p["ingest"],
+                              "inputs": sorted(ingest_inputs)})
+    detect_params = {**p["detect"], **{k: p["fit"][k] for k in _DETECT_FIT_KEYS}}
+    keys["detect"] = _digest({"stage": "detect", "v": version, "params": detect_params,
+                              "up": keys["ingest"]})
+    keys["thresholds"] = _digest({"stage": "thresholds", "v": version, "up": keys["detect"]})
+    keys["fit"] = _digest({"stage": "fit", "v": version, "params": p["fit"],
+                           "up": [keys["thresholds"], keys["detect"]]})
+    keys["report"] = _digest({"stage": "report", "v": version, "params": p["report"],
+                              "up": [keys["fit"], keys["ingest"]]})
+    run = PipelineRun(store_path)
+    stages = needed_stages(pipeline.outputs, scenes=bool(scenes))
+    cache = _read_cache(store_path)
+    report_path = out / f"{pipeline.name}.pdf"
+    runs: list[Any] | None = None
+    curve: Any = None
+
+    def fresh(stage: str, key: str, output_ok: bool) -> bool:
+        if cache.get(stage) == key and output_ok:
+            run.cached.append(stage)
+            say(f"{stage}: up to date")
+            return True
+        return False
+
+    def done(stage: str, key: str, extra: Mapping[str, str] | None = None) -> None:
+        run.executed.append(stage)
+        run.keys[stage] = key
+        say(f"{stage}: done")
+        entries = {stage: key, **(extra or {})}
+        cache.update(entries)
+        if store_path.is_file():
+            _record_keys(store_path, entries)
+
+    for stage in stages:
+        if stage == "simulate":
+            from .rig import write_synthetic
+
+            for item in scenes:
+                raw = raw_for[item]
+                ck = f"simulate:{raw.name}"
+                ok = raw.is_file() and cache.get(f"{ck}:sha256") == _sha256_file(raw)
+                if fresh(ck, sim_keys[item], ok):
+                    continue
+                write_synthetic(item, raw, seed=p["simulate"]["seed"])
+                run.executed.append("simulate")
+                say(f"simulate: {item} -> {raw}")
+                cache.update({ck: sim_keys[item], f"{ck}:sha256": _sha256_file(raw)})
+            continue
+        key = keys[stage]
+        run.keys[stage] = key
+        if stage == "ingest":
+            if fresh("ingest", key, store_path.is_file()):
+                continue
+            from .ingest import ingest
+
+            files = [raw_for.get(i, Path(i)) for i in items]
+            if "ingest" in cache and store_path.is_file():
+                # A store this pipeline made, with other inputs (e.g. a scene simulated with a
+                # new seed: same run ids, new data): rebuild it from the current inputs; its
+                # /results and /pipeline_cache are stale anyway.  A store the pipeline did not
+                # make (no cached ingest key) is only ever appended to.
+                with atomic_path(store_path) as tmp:
+                    tmp.unlink()
+                    ingest(files, tmp, allow_flagged=p["ingest"]["allow_flagged"], quiet=True)
+                kept = {k: v for k, v in cache.items() if k.startswith("simulate:")}
+                cache.clear()
+                cache.update(kept)
+            else:
+                ingest(files, store_path, allow_flagged=p["ingest"]["allow_flagged"], quiet=True)
+            # the simulate keys are recorded now that the store exists
+            done("ingest", key, {k: v for k, v in cache.items() if k.startswith("simulate:")})
+        elif stage == "detect":
+            if fresh("detect", key, _has(store_path, f"{CACHE_GROUP}/detect")):
+                continue
+            runs = _detect_all(store_path, p["detect"], {**p["fit"]}, scheduler)
+            _write_detections(store_path, runs)
+            done("detect", key)
+        elif stage == "thresholds":
+            if fresh("thresholds", key, _has(store_path, f"{CACHE_GROUP}/thresholds")):
+                continue
+            from .thresholds import tabulate_thresholds
+
+            if runs is None:
+                runs = list(read_detections(store_path))
+            curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
+            with _edit_store(store_path) as fh:
+                cache_group = fh.require_group(CACHE_GROUP)
+                if "thresholds" in cache_group:
+                    del cache_group["thresholds"]
+                _put(cache_group, "thresholds", curve)
+            done("thresholds", key)
+        elif stage == "fit":
+            if fresh("fit", key, _has(store_path, "results")):
+                continue
+            if runs is None:
+                runs = list(read_detections(store_path))
+            if curve is None:
+                with h5py.File(store_path, "r") as fh:
+                    curve = _get(fh[f"{CACHE_GROUP}/thresholds"])
+            _fit_and_write(store_path, runs, curve, pipeline)
+            done("fit", key)
+        elif stage == "report":
+            ok = report_path.is_file() and cache.get("report:sha256") == _sha256_file(report_path)
+            if fresh("report", key, ok):
+                continue
+            from .report import write_report
+
+            write_report(store_path, report_path, model=p["report"]["model"])
+            done("report", key, {"report:sha256": _sha256_file(report_path)})
+    for name in pipeline.outputs:
+        run.outputs[name] = report_path if name == "report" else store_path
+    return run
+
+
+__all__ = ["Pipeline", "PipelineRun", "STAGES", "DEPENDS", "OUTPUTS", "load_pipeline_file",
+           "parse_pipeline", "run_pipeline", "needed_stages", "read_detections", "detect_run"]

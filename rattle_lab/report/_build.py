@@ -1,0 +1,124 @@
+"""Assemble the report pages into one PDF, atomically and reproducibly."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from matplotlib.figure import Figure
+
+from .._atomic import atomic_path
+from .._version import __version__
+from ..exceptions import ParameterError
+from ..records._write import umask_mode
+from . import _pages
+from ._data import ReportData, gather
+
+#: Sections in page order: (name, builder).  The summary page comes first.
+SECTIONS: tuple[tuple[str, Callable[[ReportData], list[Figure]]], ...] = (
+    ("rig and calibration", _pages.rig_page),
+    ("thresholds", _pages.threshold_page),
+    ("impact patterns", _pages.pattern_page),
+    ("waveforms", _pages.waveform_page),
+    ("SPL law", _pages.spl_page),
+    ("model predictions", _pages.model_pages),
+)
+
+
+@dataclass(frozen=True)
+class ReportResult:
+    """What :func:`write_report` wrote.
+
+    Attributes
+    ----------
+    path : Path
+        The PDF.
+    n_pages : int
+        Pages in it (summary included).
+    sections : tuple of str
+        Sections present, in page order.
+    missing : dict of str to str
+        Sections (or parts) left out, with the reason (also on the summary page).
+    """
+
+    path: Path
+    n_pages: int
+    sections: tuple[str, ...]
+    missing: dict[str, str]
+
+
+def write_report(store: str | os.PathLike[str], output: str | os.PathLike[str], *,
+                 model: bool = True) -> ReportResult:
+    """Write the multi-page PDF report of an ingest store (after ``rattle-lab fit``).
+
+    Each section is drawn only if its data exist; otherwise the summary page
+    says which section is missing and why.  The same store gives the same
+    bytes (fixed PDF dates, no wall-clock time in the content).
+
+    Parameters
+    ----------
+    store : path-like
+        An ingest store, with or without ``/results``.
+    output : path-like
+        The PDF to write (``.pdf``); written atomically.
+    model : bool
+        Include the model predictions (bifurcation sets and sweeps at the fitted
+        parameters; a few seconds).
+
+    Returns
+    -------
+    ReportResult
+
+    Raises
+    ------
+    StoreError
+        If ``store`` does not exist or is not an ingest store.
+    ParameterError
+        If ``output`` does not end in ``.pdf``.
+    OutputError
+        If the output directory does not exist or the file cannot be written.
+    """
+    import matplotlib
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    output = Path(output)
+    if output.suffix.lower() != ".pdf":
+        raise ParameterError(f"`output` must end in .pdf, was {str(output)!r}")
+    data = gather(store)
+    sections: list[str] = []
+    pages: list[tuple[str, Figure]] = []
+    for name, build in SECTIONS:
+        if name == "model predictions" and not model:
+            data.missing[name] = "not requested (model=False)"
+            continue
+        try:
+            figs = build(data)
+        except _pages.Missing as why:
+            data.missing[name] = str(why)
+            continue
+        sections.append(name)
+        pages.extend((name, fig) for fig in figs)
+    lines = _pages.summary_lines(data, __version__)
+    lines.append("")
+    lines.append("Sections")
+    lines.extend(f"  included: {name}" for name in sections)
+    lines.extend(f"  missing: {name}: {why}" for name, why in data.missing.items())
+    summary = _pages.text_page("rattle_lab report: fitted gap, zeta, f_s, e and SPL law", lines)
+    all_pages = [("summary", summary), *pages]
+    n = len(all_pages)
+    for i, (name, fig) in enumerate(all_pages, start=1):
+        fig.text(0.5, 0.008, f"Page {i} of {n}  -  {name}  -  {data.store.name}", ha="center",
+                 va="bottom", fontsize=7, color="0.3")
+    # Fixed metadata (no dates) and fixed hash salt: identical bytes for the same store.
+    metadata = {"Title": f"rattle_lab report: {data.store.name}", "Creator": "rattle_lab",
+                "Subject": "sections: " + ", ".join(["summary", *sections]),
+                "CreationDate": None, "ModDate": None}
+    with matplotlib.rc_context({"pdf.fonttype": 42, "svg.hashsalt": "rattle_lab"}):
+        with atomic_path(output) as tmp:
+            with PdfPages(tmp, metadata=metadata) as pdf:  # type: ignore[arg-type]
+                for _, fig in all_pages:
+                    pdf.savefig(fig)
+            umask_mode(tmp)
+    return ReportResult(output, n, ("summary", *sections), dict(data.missing))

@@ -1,0 +1,179 @@
+"""Gather what a report shows from an ingest store, defensively.
+
+Each stage's data may be absent (no ``/results``, a fit that did not
+converge, a run without a microphone): :func:`gather` never fails for that;
+it records why in :attr:`ReportData.missing` and the section is left out.
+Only a missing file or a file that is not an ingest store raises.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from ..exceptions import RattleLabError
+from ..records._errors import StoreError
+
+
+@dataclass(frozen=True)
+class ChannelInfo:
+    """Rig/calibration facts of one stored channel (first run in which it appears)."""
+
+    input_key: str
+    name: str
+    quantity: str
+    units: str
+    source_units: str
+    scale_to_si: float
+    sensitivity: str
+    sample_rate_hz: float
+    sensor_model: str
+    sensor_serial: str
+    calibration_date: str
+    range_si: str
+    position_m: str
+
+
+@dataclass(frozen=True)
+class RecordInfo:
+    """Rig facts of one ingested input."""
+
+    input_key: str
+    campaign_id: str
+    source: str
+    rig: dict[str, Any]
+    channels: tuple[ChannelInfo, ...]
+    runs: dict[str, dict[str, Any]]  # run_id -> protocol, freq_hz, level, level_end, units
+
+
+@dataclass(frozen=True)
+class ReportData:
+    """Everything a report shows; ``results`` is None when ``/results`` is unusable.
+
+    Attributes
+    ----------
+    store : Path
+    catalogue : pandas.DataFrame
+        One row per channel.
+    records : tuple of RecordInfo
+    provenance_log : list of dict
+        The store's ``/provenance/log`` documents.
+    results : StoredResults or None
+        What ``rattle-lab fit`` wrote.
+    missing : dict of str to str
+        Section name -> why it is left out (filled while gathering and plotting).
+    """
+
+    store: Path
+    catalogue: Any
+    records: tuple[RecordInfo, ...]
+    provenance_log: list[dict[str, Any]]
+    results: Any
+    missing: dict[str, str] = field(default_factory=dict)
+
+
+def _s(value: Any) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, float):
+        return "" if not np.isfinite(value) else f"{value:.6g}"
+    return str(value)
+
+
+def _record_info(store: Path, key: str) -> RecordInfo:
+    from ..ingest import open_stored_record
+
+    with open_stored_record(store, key) as record:
+        rig = record.rig
+        positions = {s.sensor_id: s.position_m for s in rig.sensors}
+        rig_facts = {
+            "apparatus": rig.apparatus, "plate_length_m": rig.plate_length_m,
+            "plate_width_m": rig.plate_width_m, "plate_thickness_m": rig.plate_thickness_m,
+            "plate_material": rig.plate_material, "edge_conditions": rig.edge_conditions,
+            "striker_x_m": rig.striker_x_m, "striker_y_m": rig.striker_y_m,
+            "gap_m": rig.gap_m, "mic_distance_m": rig.mic_distance_m}
+        seen: dict[str, ChannelInfo] = {}
+        runs: dict[str, dict[str, Any]] = {}
+        for run in record.runs:
+            runs[run.run_id] = {"protocol": run.protocol, "freq_hz": run.excitation_freq_hz,
+                                "level": run.nominal_level, "level_end": run.level_end,
+                                "level_units": run.nominal_level_units or ""}
+            for ch in run.channels:
+                if ch.name in seen:
+                    continue
+                ex = ch.extra
+                sens = ex.get("ingest_sensitivity", ch.sensitivity)
+                sens_units = ex.get("ingest_sensitivity_units", ch.sensitivity_units) or ""
+                rng = (f"{_s(ch.range_min)} .. {_s(ch.range_max)}"
+                       if ch.range_min is not None and ch.range_max is not None else "")
+                pos = positions.get(ch.sensor_id or "")
+                seen[ch.name] = ChannelInfo(
+                    key, ch.name, ch.quantity, ch.units, _s(ex.get("ingest_source_units", "")),
+                    float(ex.get("ingest_scale_to_si", 1.0)),
+                    f"{_s(sens)} {_s(sens_units)}".strip() if sens is not None else "",
+                    float(ch.sample_rate_hz) if ch.sample_rate_hz else float("nan"),
+                    _s(ch.sensor_model), _s(ch.sensor_serial), _s(ch.calibration_date), rng,
+                    "(" + ", ".join(f"{x:.3g}" for x in pos) + ")" if pos else "")
+        return RecordInfo(key, record.campaign_id, record.source, rig_facts,
+                          tuple(seen.values()), runs)
+
+
+def _provenance_log(store: Path) -> list[dict[str, Any]]:
+    out: list[dict[str, Any]] = []
+    with h5py.File(store, "r") as fh:
+        log = fh.get("provenance/log")
+        if log is None:
+            return out
+        items = log[()] if isinstance(log, h5py.Dataset) else [log[k][()] for k in sorted(log)]
+        for item in np.atleast_1d(items):
+            try:
+                out.append(json.loads(_s(item)))
+            except (TypeError, ValueError):
+                continue
+    return out
+
+
+def gather(store: str | os.PathLike[str]) -> ReportData:
+    """Read everything a report needs from ``store``.
+
+    Raises
+    ------
+    StoreError
+        If ``store`` does not exist or is not an ingest store.
+    """
+    from ..ingest import read_catalogue
+
+    store = Path(store)
+    if not store.is_file():
+        raise StoreError(f"{store}: no such store")
+    catalogue = read_catalogue(store)  # raises StoreError for a non-store
+    missing: dict[str, str] = {}
+    keys = list(dict.fromkeys(catalogue["input_key"]))
+    records = []
+    for key in keys:
+        try:
+            records.append(_record_info(store, key))
+        except RattleLabError as exc:
+            missing[f"rig ({key})"] = " ".join(str(exc).split())
+    try:
+        log = _provenance_log(store)
+    except (OSError, ValueError) as exc:
+        log, missing["provenance log"] = [], str(exc)
+    results = None
+    try:
+        from ..results import read_results
+
+        results = read_results(store)
+    except ImportError as exc:
+        missing["results"] = f"the fit stage is not available ({exc})"
+    except (RattleLabError, KeyError, ValueError, OSError) as exc:
+        missing["results"] = " ".join(str(exc).split()) or type(exc).__name__
+    return ReportData(store, catalogue, tuple(records), log, results, missing)

@@ -1,0 +1,147 @@
+"""The PDF report (:mod:`rattle_lab.report`): structure, reproducibility, missing sections.
+
+Checked by reading the PDF back with pypdf (page count, text, drawings), not pixels.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pypdf
+import pytest
+
+from rattle_lab.exceptions import OutputError, ParameterError, RattleLabError
+from rattle_lab.fit import fit_store
+from rattle_lab.ingest import ingest
+from rattle_lab.records._errors import StoreError
+from rattle_lab.report import ReportResult, write_report
+from rattle_lab.report._pages import grazing_band_ms2
+
+
+@pytest.fixture(scope="module")
+def stores(synthetic_campaign_record: Path, tmp_path_factory: pytest.TempPathFactory
+           ) -> dict[str, Path]:
+    """An ingest-only store and a fitted copy of it."""
+    d = tmp_path_factory.mktemp("report")
+    bare = d / "bare.h5"
+    ingest([synthetic_campaign_record], bare)
+    fitted = d / "fitted.h5"
+    shutil.copyfile(bare, fitted)
+    fit_store(fitted)
+    return {"bare": bare, "fitted": fitted}
+
+
+@pytest.fixture(scope="module")
+def full_report(stores: dict[str, Path], tmp_path_factory: pytest.TempPathFactory
+                ) -> tuple[ReportResult, Path]:
+    out = tmp_path_factory.mktemp("pdf") / "report.pdf"
+    return write_report(stores["fitted"], out), out
+
+
+def _texts(path: Path) -> list[str]:
+    return [page.extract_text() for page in pypdf.PdfReader(path).pages]
+
+
+def test_full_report_structure(full_report: tuple[ReportResult, Path]) -> None:
+    result, path = full_report
+    assert result.path == path and path.is_file()
+    assert result.sections == ("summary", "rig and calibration", "thresholds", "impact patterns",
+                               "waveforms", "SPL law", "model predictions")
+    assert result.missing == {}
+    texts = _texts(path)
+    n = result.n_pages
+    assert len(texts) == n == 8  # summary, rig, thresholds, patterns, waveforms, SPL, 2 model
+    for i, text in enumerate(texts, start=1):
+        assert f"Page {i} of {n}" in text
+    summary = texts[0]
+    for key in ("gap =", "zeta (damping ratio) =", "f_s (modal frequency) =",
+                "e (velocity ratios) =", "SPL law (first peak)", "Pa/(m/s)", "mm", "Hz",
+                "Data-quality flags", "none", "Provenance", "sha256", "rattle_lab 0."):
+        assert key in summary, key
+    assert "missing:" not in summary
+
+
+def test_every_figure_page_has_labelled_axes_and_drawings(full_report: tuple[ReportResult, Path]
+                                                          ) -> None:
+    _, path = full_report
+    reader = pypdf.PdfReader(path)
+    texts = [p.extract_text() for p in reader.pages]
+    expected = {2: ["channel", "sensitivity", "PCB 352C33", "mV/g"],
+                3: ["excitation frequency (Hz)", "(m/s^2)", "eq. (3.4) fit", "hysteresis"],
+                4: ["excitation frequency (Hz)", "amplitude (m/s^2)", "1 impact per cycle"],
+                5: ["time (s)", "plate acceleration (m/s^2)", "plate velocity (m/s)",
+                    "sound pressure (Pa)", "first peak", "maximum peak"],
+                6: ["impact velocity |v_in| (m/s)", "sound pressure (Pa)", "95 % bands"],
+                7: ["omega = f / f_s (nondimensional)", "F = Q A / (omega_s^2 h) (nondimensional)",
+                    "measured onset"],
+                8: ["excitation frequency (Hz)", "(m/s^2)", "model onset"]}
+    for page, keys in expected.items():
+        for key in keys:
+            assert key in texts[page - 1], (page, key)
+    for page in reader.pages[1:]:  # vector drawings: path operators in the content stream
+        content = page.get_contents().get_data()
+        assert b" l\n" in content or b" l " in content or b" re" in content
+
+
+def test_same_store_gives_identical_bytes(stores: dict[str, Path], full_report, tmp_path: Path
+                                          ) -> None:
+    _, first = full_report
+    again = write_report(stores["fitted"], tmp_path / "again.pdf")
+    assert again.path.read_bytes() == first.read_bytes()
+    meta = pypdf.PdfReader(first).metadata
+    assert "/CreationDate" not in meta and "/ModDate" not in meta
+
+
+def test_store_without_results_says_why(stores: dict[str, Path], tmp_path: Path) -> None:
+    out = tmp_path / "bare.pdf"
+    result = write_report(stores["bare"], out)
+    assert result.sections == ("summary", "rig and calibration")
+    assert set(result.missing) == {"results", "thresholds", "impact patterns", "waveforms",
+                                   "SPL law", "model predictions"}
+    assert "rattle-lab fit" in result.missing["results"]
+    texts = _texts(out)
+    assert len(texts) == result.n_pages == 2
+    assert "missing: thresholds: " in texts[0] and "rattle-lab fit" in texts[0]
+    assert "Page 2 of 2" in texts[1]
+
+
+def test_partial_results_drop_only_their_sections(stores: dict[str, Path], tmp_path: Path
+                                                  ) -> None:
+    store = tmp_path / "partial.h5"
+    shutil.copyfile(stores["fitted"], store)
+    with h5py.File(store, "a") as fh:  # thresholds lost, e.g. a campaign of dwells only
+        for name in ("freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2"):
+            del fh[f"results/thresholds/{name}"]
+            fh["results/thresholds"].create_dataset(name, data=np.zeros(0))
+    result = write_report(store, tmp_path / "partial.pdf", model=False)
+    assert "thresholds" in result.missing and "ramp thresholds" in result.missing["thresholds"]
+    assert result.missing["model predictions"] == "not requested (model=False)"
+    assert {"waveforms", "SPL law", "impact patterns"} <= set(result.sections)
+
+
+def test_grazing_band_against_closed_form() -> None:
+    # one varied parameter (gap): the threshold is linear in gap, so the delta-method band is
+    # exactly 1.96 * stderr * A / gap (tolerance: central differences, relative 1e-6 step).
+    g = {"gap_m": {"value": 1e-3, "stderr": 1e-4}, "f_s_hz": {"value": 96.0, "stderr": None},
+         "zeta": {"value": 0.01, "stderr": None}, "participation": {"value": 1.0},
+         "correlation": {"names": ["gap_m"], "matrix": [[1.0]]}}
+    f = np.array([90.0, 96.0, 100.0])
+    y, half = grazing_band_ms2(f, g)
+    np.testing.assert_allclose(half, 1.96 * 1e-4 * y / 1e-3, rtol=1e-6)
+
+
+def test_errors(stores: dict[str, Path], tmp_path: Path) -> None:
+    with pytest.raises(StoreError, match="no such store"):
+        write_report(tmp_path / "absent.h5", tmp_path / "r.pdf")
+    text = tmp_path / "not_a_store.h5"
+    text.write_text("hello")
+    with pytest.raises(RattleLabError):
+        write_report(text, tmp_path / "r.pdf")
+    with pytest.raises(ParameterError, match=r"`output` must end in \.pdf"):
+        write_report(stores["bare"], tmp_path / "r.png")
+    with pytest.raises(OutputError, match="does not exist"):
+        write_report(stores["bare"], tmp_path / "no_dir" / "r.pdf", model=False)
+    assert not (tmp_path / "r.pdf").exists()
