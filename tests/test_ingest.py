@@ -404,26 +404,31 @@ MEASURE_SCRIPT = textwrap.dedent("""
 """)
 
 
-@pytest.mark.slow
-def test_a_long_record_ingests_in_bounded_memory(tmp_path):
-    # A 10-minute, 4-channel, 51.2 kHz float32 record (491 MB of samples); the full hour
-    # (2.9 GB) is measured by benchmarks/ingest.py.  Each step runs in its own process so that
-    # ru_maxrss is the ingest's own peak.
-    n = 10 * 60 * 51200
-    long_h5 = tmp_path / "long.h5"
+def _ingest_peak_rss_kib(tmp_path, minutes: float) -> int:
+    n = int(minutes * 60 * 51200)
+    long_h5 = tmp_path / f"long_{minutes}.h5"
     subprocess.run([sys.executable, "-c", LONG_RECORD_SCRIPT, str(long_h5), str(n)], check=True,
                    timeout=120)
     assert long_h5.stat().st_size > 4 * 4 * n
     out = subprocess.run([sys.executable, "-c", MEASURE_SCRIPT, str(long_h5),
-                          str(tmp_path / "store.h5")], check=True, capture_output=True, text=True,
-                         timeout=120)
+                          str(tmp_path / f"store_{minutes}.h5")], check=True, capture_output=True,
+                         text=True, timeout=120)
     result = json.loads(out.stdout)
     assert result["n"] == 4 * n
-    # Loading the file whole would take 491 MB on top of the interpreter with numpy, h5py,
-    # pandas and jsonschema (about 130 MB), i.e. > 620 MB.  The chunked ingest measured
-    # 120-350 MB here (allocator arenas vary with machine load), so 450 MB separates
-    # chunked from whole-file reading with margin on both sides.
-    assert result["maxrss_kib"] < 450 * 1024, result
+    return int(result["maxrss_kib"])
+
+
+@pytest.mark.slow
+def test_a_long_record_ingests_in_bounded_memory(tmp_path):
+    # Bounded memory means the peak does not grow with the record: a 10-minute record
+    # (4 channels, 51.2 kHz float32, 491 MB of samples) must peak no higher than a
+    # 1-minute one (49 MB) plus a margin well below the 442 MB of extra samples.  An
+    # absolute RSS bound proved unreliable here (120-580 MB for the same run, varying
+    # with allocator arenas under machine load); each ingest runs in its own process.
+    short = _ingest_peak_rss_kib(tmp_path, 1)
+    long = _ingest_peak_rss_kib(tmp_path, 10)
+    assert long - short < 300 * 1024, (short, long)
+    assert long < 1024 * 1024  # the issue's bound: well under 1 GB
 
 
 def test_damaged_stores_are_refused(tmp_path):
