@@ -379,6 +379,60 @@ def _upper_line_bound(fa, fb, M, L):
 
 
 @jit
+def _shrink_bracket(s, f, lo, hi):
+    """Narrow the sign bracket (lo, hi) of f, f(lo) < 0 <= f(hi), to the side of s that keeps it.
+
+    Parameters
+    ----------
+    s : float
+        A point inside the bracket, nondimensional time.
+    f : float
+        The function value there.
+    lo, hi : float
+        The bracket.
+
+    Returns
+    -------
+    lo, hi : float
+        The narrower bracket: ``hi = s`` where ``f >= 0``, else ``lo = s``.
+    """
+    if f >= 0.0:
+        return lo, s
+    return s, hi
+
+
+@jit
+def _safeguard_newton(s, sn, lo, hi):
+    """Keep a Newton iterate inside the bracket (lo, hi), falling back to bisection.
+
+    Parameters
+    ----------
+    s : float
+        The current iterate, nondimensional time.
+    sn : float
+        The proposed next iterate.
+    lo, hi : float
+        The current bracket.
+
+    Returns
+    -------
+    s_next : float
+        ``sn`` if it lies strictly inside the bracket and moves, else the midpoint.
+    converged : bool
+        True when Newton has stalled and the midpoint is an end of the bracket
+        (the bracket is two neighbouring floats): the caller stops iterating.
+    """
+    if not (lo < sn < hi):
+        sn = 0.5 * (lo + hi)
+    if sn == s:
+        # Newton has converged: finish with the neighbouring float towards the bracket.
+        sn = 0.5 * (lo + hi)
+        if sn == lo or sn == hi:
+            return sn, True
+    return sn, False
+
+
+@jit
 def _root(P, S, c, sig, which, lo, hi, flo, fhi):
     """Bracketed root of f on [lo, hi] with f(lo) < 0 <= f(hi).
 
@@ -401,12 +455,9 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi):
         else:
             f = -gv
             fp = -ga
-        if f >= 0.0:
-            hi = s
-            if f == 0.0:
-                return s
-        else:
-            lo = s
+        if f == 0.0:
+            return s
+        lo, hi = _shrink_bracket(s, f, lo, hi)
         tol = 2.0 * EPS * max(abs(lo), abs(hi), 1e-300)
         if hi - lo <= tol:
             break
@@ -415,14 +466,9 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi):
             if hi - lo > 0.5 * width_old:
                 sn = 0.5 * (lo + hi)
             width_old = hi - lo
-        if not (lo < sn < hi):
-            sn = 0.5 * (lo + hi)
-        if sn == s:
-            # Newton has converged: finish with the neighbouring float towards the bracket.
-            sn = 0.5 * (lo + hi)
-            if sn == lo or sn == hi:
-                break
-        s = sn
+        s, converged = _safeguard_newton(s, sn, lo, hi)
+        if converged:
+            break
     return hi
 
 
@@ -622,22 +668,14 @@ def micro_flight(P, S, s_hi):
             f = f * s + S[J_TAY + k]
         for k in range(N_TAYLOR, 1, -1):
             fp = fp * s + (k - 1) * S[J_TAY + k]
-        if f >= 0.0:
-            hi = s
-            if f == 0.0:
-                return s
-        else:
-            lo = s
+        if f == 0.0:
+            return s
+        lo, hi = _shrink_bracket(s, f, lo, hi)
         if hi - lo <= 2.0 * EPS * hi:
             break
-        sn = s - f / fp
-        if not (lo < sn < hi):
-            sn = 0.5 * (lo + hi)
-        if sn == s:
-            sn = 0.5 * (lo + hi)
-            if sn == lo or sn == hi:
-                break
-        s = sn
+        s, converged = _safeguard_newton(s, s - f / fp, lo, hi)
+        if converged:
+            break
     return hi
 
 
