@@ -473,6 +473,38 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi):
 
 
 @jit
+def _push_chunk(stk, n, sa, sb, ga, gva, gaa, ya, yda, gb, gvb, gab, level):
+    """Write the sub-interval [sa, sb] of a search chunk into row n of the stack.
+
+    Parameters
+    ----------
+    stk : ndarray, shape (MAX_LEVEL + 4, 12)
+        The work stack of :func:`_search_chunk`.
+    n : int
+        The row to write.
+    sa, sb : float
+        Ends of the sub-interval, nondimensional local time.
+    ga, gva, gaa, ya, yda : float
+        ``g, g', g''`` and the homogeneous state ``(y, y')`` at ``sa``.
+    gb, gvb, gab : float
+        ``g, g', g''`` at ``sb``.
+    level : float
+        Number of halvings that made the sub-interval.
+    """
+    stk[n, 0] = sa
+    stk[n, 1] = sb
+    stk[n, 2] = ga
+    stk[n, 3] = gva
+    stk[n, 4] = gaa
+    stk[n, 5] = ya
+    stk[n, 6] = yda
+    stk[n, 7] = gb
+    stk[n, 8] = gvb
+    stk[n, 9] = gab
+    stk[n, 10] = level
+
+
+@jit
 def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag):
     """Earliest s in (sa, sb] with g(s) >= 0, or -1.  va = values at sa (g < 0).
 
@@ -491,18 +523,7 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag):
     out_b[2] = gab
     out_b[3] = yb
     out_b[4] = ydb
-    n = 0
-    stk[0, 0] = sa
-    stk[0, 1] = sb
-    stk[0, 2] = va[0]
-    stk[0, 3] = va[1]
-    stk[0, 4] = va[2]
-    stk[0, 5] = va[3]
-    stk[0, 6] = va[4]
-    stk[0, 7] = gb
-    stk[0, 8] = gvb
-    stk[0, 9] = gab
-    stk[0, 10] = 0.0  # level
+    _push_chunk(stk, 0, sa, sb, va[0], va[1], va[2], va[3], va[4], gb, gvb, gab, 0.0)
     n = 1
     while n > 0:
         n -= 1
@@ -569,31 +590,11 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag):
         m = 0.5 * (a0 + b0)
         gm, gvm, gam, ym, ydm = level_values(P, S, m, c, sig)
         # right half first (processed last)
-        stk[n, 0] = m
-        stk[n, 1] = b0
-        stk[n, 2] = gm
-        stk[n, 3] = gvm
-        stk[n, 4] = gam
-        stk[n, 5] = ym
-        stk[n, 6] = ydm
-        stk[n, 7] = gbb
-        stk[n, 8] = gvbb
-        stk[n, 9] = gabb
-        stk[n, 10] = level + 1.0
+        _push_chunk(stk, n, m, b0, gm, gvm, gam, ym, ydm, gbb, gvbb, gabb, level + 1.0)
         if gm >= 0.0:
             n -= 1  # the root is in the left half; the right half is never needed
         n += 1
-        stk[n, 0] = a0
-        stk[n, 1] = m
-        stk[n, 2] = ga
-        stk[n, 3] = gva
-        stk[n, 4] = gaa
-        stk[n, 5] = ya
-        stk[n, 6] = yda
-        stk[n, 7] = gm
-        stk[n, 8] = gvm
-        stk[n, 9] = gam
-        stk[n, 10] = level + 1.0
+        _push_chunk(stk, n, a0, m, ga, gva, gaa, ya, yda, gm, gvm, gam, level + 1.0)
         n += 1
     return -1.0
 
