@@ -108,6 +108,54 @@ def _grow(a: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True)
+def _rk4_slopes(
+    F: float, omega: float, two_zeta: float, theta0: float, s: float, x: float, v: float, mh: float
+) -> tuple[float, float, float, float]:
+    """The four slopes ``l_i = mh a(...)`` of one step of ``evolve`` (eq. 4.3 as in the Java).
+
+    Parameters
+    ----------
+    F, omega, two_zeta, theta0 : float
+        Forcing amplitude, frequency, ``2 zeta`` and phase at ``s = 0``, nondimensional.
+    s, x, v : float
+        Time since ``t0``, displacement and velocity at the start of the step.
+    mh : float
+        The step, nondimensional (negative for the thesis's backward remainder).
+
+    Returns
+    -------
+    l1, l2, l3, l4 : float
+        Velocity increments of the four stages.
+    """
+    l1 = mh * _acc(F, omega, two_zeta, theta0, s, x, v)
+    l2 = mh * _acc(F, omega, two_zeta, theta0, s + mh / 2.0, x + mh * v / 2.0, v + l1 / 2.0)
+    l3 = mh * _acc(F, omega, two_zeta, theta0, s + mh / 2.0, x + mh * v / 2.0 + mh * l1 / 4.0, v + l2 / 2.0)
+    l4 = mh * _acc(F, omega, two_zeta, theta0, s + mh, x + mh * v + mh * l2 / 2.0, v + l3)
+    return l1, l2, l3, l4
+
+
+@numba.njit(cache=True)
+def _rk4_increments(mh: float, v: float, l1: float, l2: float, l3: float, l4: float) -> tuple[float, float]:
+    """Changes ``(dx, dv)`` of ``(x, v)`` over an RK4 step ``mh`` with slopes ``l1..l4``.
+
+    Parameters
+    ----------
+    mh : float
+        The step, nondimensional.
+    v : float
+        Velocity at the start of the step.
+    l1, l2, l3, l4 : float
+        Slopes from :func:`_rk4_slopes`.
+
+    Returns
+    -------
+    dx, dv : float
+        ``mh (v + (l1 + l2 + l3)/6)`` and ``(l1 + 2 l2 + 2 l3 + l4)/6``.
+    """
+    return mh * (v + (l1 + l2 + l3) / 6.0), (l1 + 2.0 * l2 + 2.0 * l3 + l4) / 6.0
+
+
+@numba.njit(cache=True)
 def _kernel(
     F: float,
     omega: float,
@@ -151,14 +199,12 @@ def _kernel(
         # ---- evolve(ih), thesis Appendix A.1 ----
         stuck = x >= gap
         mh = ih
-        l1 = mh * _acc(F, omega, two_zeta, theta0, s, x, v)
-        l2 = mh * _acc(F, omega, two_zeta, theta0, s + mh / 2.0, x + mh * v / 2.0, v + l1 / 2.0)
-        l3 = mh * _acc(F, omega, two_zeta, theta0, s + mh / 2.0, x + mh * v / 2.0 + mh * l1 / 4.0, v + l2 / 2.0)
-        l4 = mh * _acc(F, omega, two_zeta, theta0, s + mh, x + mh * v + mh * l2 / 2.0, v + l3)
-        if x + mh * (v + (l1 + l2 + l3) / 6.0) < gap:
+        l1, l2, l3, l4 = _rk4_slopes(F, omega, two_zeta, theta0, s, x, v, mh)
+        dx, dv = _rk4_increments(mh, v, l1, l2, l3, l4)
+        if x + dx < gap:
             s += mh
-            x += mh * (v + (l1 + l2 + l3) / 6.0)
-            v += (l1 + 2.0 * l2 + 2.0 * l3 + l4) / 6.0
+            x += dx
+            v += dv
             a = _acc(F, omega, two_zeta, theta0, s, x, v)
         elif stuck:
             s += mh
@@ -169,15 +215,11 @@ def _kernel(
             v_old = v
             # Linear prediction of the time to the stop.
             mh = (gap - x) / (v + (l1 + l2 + l3) / 12.0)
-            l1 = mh * _acc(F, omega, two_zeta, theta0, s, x, v)
-            l2 = mh * _acc(F, omega, two_zeta, theta0, s + mh / 2.0, x + mh * v / 2.0, v + l1 / 2.0)
-            l3 = mh * _acc(
-                F, omega, two_zeta, theta0, s + mh / 2.0, x + mh * v / 2.0 + mh * l1 / 4.0, v + l2 / 2.0
-            )
-            l4 = mh * _acc(F, omega, two_zeta, theta0, s + mh, x + mh * v + mh * l2 / 2.0, v + l3)
+            l1, l2, l3, l4 = _rk4_slopes(F, omega, two_zeta, theta0, s, x, v, mh)
+            dx, dv = _rk4_increments(mh, v, l1, l2, l3, l4)
             s += mh
-            x += mh * (v + (l1 + l2 + l3) / 6.0)
-            v_in = v + (l1 + 2.0 * l2 + 2.0 * l3 + l4) / 6.0
+            x += dx
+            v_in = v + dv
             v = -e * v_in
             if n_imp == imp_t.size:
                 imp_t = _grow(imp_t)
@@ -188,15 +230,11 @@ def _kernel(
             imp_v_in[n_imp] = v_in
             n_imp += 1
             mh = ih - mh
-            l1 = mh * _acc(F, omega, two_zeta, theta0, s, x, v)
-            l2 = mh * _acc(F, omega, two_zeta, theta0, s + mh / 2.0, x + mh * v / 2.0, v + l1 / 2.0)
-            l3 = mh * _acc(
-                F, omega, two_zeta, theta0, s + mh / 2.0, x + mh * v / 2.0 + mh * l1 / 4.0, v + l2 / 2.0
-            )
-            l4 = mh * _acc(F, omega, two_zeta, theta0, s + mh, x + mh * v + mh * l2 / 2.0, v + l3)
+            l1, l2, l3, l4 = _rk4_slopes(F, omega, two_zeta, theta0, s, x, v, mh)
+            dx, dv = _rk4_increments(mh, v, l1, l2, l3, l4)
             s += mh
-            x += mh * (v + (l1 + l2 + l3) / 6.0)
-            v += (l1 + 2.0 * l2 + 2.0 * l3 + l4) / 6.0
+            x += dx
+            v += dv
             a = (v - v_old) / ih
             if x > gap and v > 0.0:
                 a = 0.0
