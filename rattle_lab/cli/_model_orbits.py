@@ -9,11 +9,11 @@ the option and the value (the CLI prints it on one line, exit status 2).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 
 from ..exceptions import ParameterError
+from ._model_args import add_damping_restitution, dump_json, parse_float, parse_int, parse_range
 
 #: Largest n accepted on the command line (the cost grows with n).
 MAX_N = 50
@@ -29,8 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     orbits.add_argument("--F", default="0.2", help="forcing amplitude, nondimensional (default: 0.2)")
     orbits.add_argument("--omega", default="1.0",
                         help="forcing frequency, nondimensional (default: 1.0)")
-    orbits.add_argument("--zeta", default="0.05", help="damping ratio (default: 0.05)")
-    orbits.add_argument("--e", default="0.6", help="coefficient of restitution (default: 0.6)")
+    add_damping_restitution(orbits)
     orbits.add_argument("--json", action="store_true", help="JSON on stdout instead of a table")
     orbits.set_defaults(func=_run_orbits)
 
@@ -42,8 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     bif.add_argument("--n", default="1..4", help="n or a range lo..hi (default: 1..4)")
     bif.add_argument("--omega", default="0.6:1.5", help="frequency range lo:hi (default: 0.6:1.5)")
     bif.add_argument("--F", default="0:0.6", help="amplitude range lo:hi (default: 0:0.6)")
-    bif.add_argument("--zeta", default="0.05", help="damping ratio (default: 0.05)")
-    bif.add_argument("--e", default="0.6", help="coefficient of restitution (default: 0.6)")
+    add_damping_restitution(bif)
     bif.add_argument("--n-omega", default="241", help="frequency grid points (default: 241)")
     bif.add_argument("--n-F", default="121", help="amplitude grid points (default: 121)")
     bif.add_argument("--n-v", default="81",
@@ -57,28 +55,11 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 # Argument parsing (errors name the option and the value)
 # ---------------------------------------------------------------------------
 
-def _float(option: str, text: str) -> float:
-    try:
-        value = float(text)
-    except (TypeError, ValueError):
-        raise ParameterError(f"`{option}` must be a number, was {text!r}") from None
-    if not math.isfinite(value):
-        raise ParameterError(f"`{option}` must be finite, was {text!r}")
-    return value
-
-
-def _int(option: str, text: str) -> int:
-    try:
-        return int(text)
-    except (TypeError, ValueError):
-        raise ParameterError(f"`{option}` must be an integer, was {text!r}") from None
-
-
 def parse_n(text: str) -> list[int]:
     """``"3"`` -> ``[3]``, ``"1..5"`` -> ``[1, 2, 3, 4, 5]``."""
     parts = text.split("..")
     if len(parts) == 1:
-        lo = hi = _int("--n", parts[0].strip())
+        lo = hi = parse_int("--n", parts[0].strip())
     elif len(parts) == 2:
         try:
             lo, hi = int(parts[0]), int(parts[1])
@@ -89,17 +70,6 @@ def parse_n(text: str) -> list[int]:
     if not 1 <= lo <= hi <= MAX_N:
         raise ParameterError(f"`--n` must satisfy 1 <= lo <= hi <= {MAX_N}, was {text!r}")
     return list(range(lo, hi + 1))
-
-
-def parse_range(option: str, text: str) -> tuple[float, float]:
-    """``"0.6:1.5"`` -> ``(0.6, 1.5)``; requires ``lo < hi``."""
-    parts = text.split(":")
-    if len(parts) != 2:
-        raise ParameterError(f"`{option}` must be a range lo:hi, was {text!r}")
-    lo, hi = _float(option, parts[0]), _float(option, parts[1])
-    if not lo < hi:
-        raise ParameterError(f"`{option}` must have lo < hi, was {text!r}")
-    return lo, hi
 
 
 def _num(x: float) -> float | None:
@@ -115,16 +85,15 @@ def _run_orbits(args: argparse.Namespace) -> int:
     from ..sdf._types import SDFParams
 
     ns = parse_n(args.n)
-    params = SDFParams(F=_float("--F", args.F), omega=_float("--omega", args.omega),
-                       zeta=_float("--zeta", args.zeta), e=_float("--e", args.e))
+    params = SDFParams(F=parse_float("--F", args.F), omega=parse_float("--omega", args.omega),
+                       zeta=parse_float("--zeta", args.zeta), e=parse_float("--e", args.e))
     results = [(n, one_over_n_orbits(params, n)) for n in ns]
     if args.json:
         doc = {"params": {"F": params.F, "omega": params.omega, "zeta": params.zeta,
                           "e": params.e},
                "orbits": [{"n": n, "real_roots": bool(orbs),
                            "roots": [o.to_dict() for o in orbs]} for n, orbs in results]}
-        json.dump(doc, sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        dump_json(doc, indent=2)
         return 0
     print(f"1/n orbits at F={params.F:g} omega={params.omega:g} zeta={params.zeta:g} "
           f"e={params.e:g} (nondimensional)")
@@ -151,15 +120,14 @@ def _run_bifsets(args: argparse.Namespace) -> int:
         check_plot_path(args.plot)  # fail before the computation, not after
     sets = bifurcation_sets(
         ns, omega_range=parse_range("--omega", args.omega), F_range=parse_range("--F", args.F),
-        zeta=_float("--zeta", args.zeta), e=_float("--e", args.e),
-        n_omega=_int("--n-omega", args.n_omega), n_F=_int("--n-F", args.n_F),
-        n_v=_int("--n-v", args.n_v))
+        zeta=parse_float("--zeta", args.zeta), e=parse_float("--e", args.e),
+        n_omega=parse_int("--n-omega", args.n_omega), n_F=parse_int("--n-F", args.n_F),
+        n_v=parse_int("--n-v", args.n_v))
     if args.plot:
         plot_bifurcation_sets(sets, args.plot)
         print(f"rattle-lab: wrote {args.plot}", file=sys.stderr)
     if args.json:
-        json.dump(sets.to_dict(), sys.stdout)
-        sys.stdout.write("\n")
+        dump_json(sets.to_dict())
         return 0
     print(f"bifurcation sets, zeta={sets.zeta:g} e={sets.e:g}, omega {sets.omega[0]:g}..."
           f"{sets.omega[-1]:g}, F {sets.F[0]:g}..{sets.F[-1]:g} (nondimensional)")

@@ -12,13 +12,12 @@ stderr and are silenced by ``--quiet``.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from typing import Any
 
 from ..exceptions import ParameterError
-from ._model_orbits import _float, _int, parse_range
+from ._model_args import add_damping_restitution, dump_json, parse_float, parse_int, parse_range
 
 _GAP_HELP = ("gap: the gap h in units of the static deflection F_es / omega_s^2, i.e. "
              "gap = 1/F (eq. 2.31); the dimensional forcing amplitude F_es and omega, zeta, e "
@@ -99,8 +98,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     mp.add_argument("--n-x0", default="41", help="basin: x0 grid points")
     mp.add_argument("--n-v0", default="41", help="basin: v0 grid points")
     mp.add_argument("--theta0", default="0", help="basin: initial forcing phase")
-    mp.add_argument("--zeta", default="0.05", help="damping ratio")
-    mp.add_argument("--e", default="0.6", help="coefficient of restitution")
+    add_damping_restitution(mp)
     mp.add_argument("--cycles", default=None,
                     help="forcing periods per run (default 150; disturbance: 200)")
     mp.add_argument("--discard", default="100", help="regime/basin: periods discarded")
@@ -141,11 +139,6 @@ def _message(args: argparse.Namespace, text: str) -> None:
         print(f"rattle-lab: {text}", file=sys.stderr)
 
 
-def _dump(doc: object) -> None:
-    json.dump(doc, sys.stdout)
-    sys.stdout.write("\n")
-
-
 def _fmt(x: float) -> str:
     return f"{x:.4g}" if math.isfinite(x) else str(x)
 
@@ -175,11 +168,11 @@ def _run_sweep(args: argparse.Namespace) -> int:
         raise ParameterError(f"`--{forbidden}` must not be given with --param {param}, "
                              f"was {getattr(args, forbidden)!r}")
     defaults = {"F": "0.2", "omega": "1.0", "e": "0.6"}
-    values = {k: _float(f"--{k}", getattr(args, k) if getattr(args, k) is not None else d)
+    values = {k: parse_float(f"--{k}", getattr(args, k) if getattr(args, k) is not None else d)
               for k, d in defaults.items()}
-    values["zeta"] = _float("--zeta", args.zeta)
-    grid = sweep_values(_float("--start", args.start), _float("--stop", args.stop),
-                        _float("--step", args.step))
+    values["zeta"] = parse_float("--zeta", args.zeta)
+    grid = sweep_values(parse_float("--start", args.start), parse_float("--stop", args.stop),
+                        parse_float("--step", args.step))
     if param == "gap":
         values["F"] = 1.0 / float(grid[0]) if grid[0] > 0 else 1.0
     # the swept parameter's base value is a placeholder: replaced at every grid value
@@ -187,9 +180,9 @@ def _run_sweep(args: argparse.Namespace) -> int:
     if args.plot:
         check_plot_path(args.plot)  # fail before the computation, not after
     options: dict[str, Any] = dict(
-        cycles=_int("--cycles", args.cycles), discard=_int("--discard", args.discard),
-        n_max=_int("--n-max", args.n_max), rtol=_float("--rtol", args.rtol), lyapunov=lyap,
-        lyapunov_cycles=_float("--lyapunov-cycles", args.lyapunov_cycles),
+        cycles=parse_int("--cycles", args.cycles), discard=parse_int("--discard", args.discard),
+        n_max=parse_int("--n-max", args.n_max), rtol=parse_float("--rtol", args.rtol),
+        lyapunov=lyap, lyapunov_cycles=parse_float("--lyapunov-cycles", args.lyapunov_cycles),
         quiet=args.quiet)
     if direction == "both":
         sweeps = list(sweep_up_down(param, grid, base=base, **options))  # type: ignore[arg-type]
@@ -203,7 +196,7 @@ def _run_sweep(args: argparse.Namespace) -> int:
         _message(args, f"wrote {args.csv}")
         return 0
     if args.json:
-        _dump({"sweeps": [s.to_dict() for s in sweeps]})
+        dump_json({"sweeps": [s.to_dict() for s in sweeps]})
         return 0
     for s in sweeps:
         b = s.base
@@ -229,7 +222,7 @@ def _grid(option: str, text: str, n_option: str, n_text: str) -> Any:
     import numpy as np
 
     lo, hi = parse_range(option, text)
-    n = _int(n_option, n_text)
+    n = parse_int(n_option, n_text)
     if not 1 <= n <= 100_000:
         raise ParameterError(f"`{n_option}` must be in 1..100000, was {n_text!r}")
     return np.linspace(lo, hi, n)
@@ -241,34 +234,35 @@ def _run_map(args: argparse.Namespace) -> int:
     kind = _choice("--kind", args.kind, ("regime", "basin", "disturbance"))
     if args.plot:
         check_plot_path(args.plot)
-    workers = _int("--workers", args.workers)
+    workers = parse_int("--workers", args.workers)
     common: dict[str, Any] = dict(workers=workers, scheduler=args.scheduler, quiet=args.quiet)
-    zeta, e = _float("--zeta", args.zeta), _float("--e", args.e)
+    zeta, e = parse_float("--zeta", args.zeta), parse_float("--e", args.e)
     if kind == "disturbance":
         return _run_disturbance(args, zeta, e, common)
     from ..analysis.maps import basin_map, plot_attractor_map, regime_map
     from ..sdf._types import SDFParams
 
     opts: dict[str, Any] = dict(
-        cycles=_int("--cycles", args.cycles or "150"), discard=_int("--discard", args.discard),
-        n_max=_int("--n-max", args.n_max), rtol=_float("--rtol", args.rtol),
-        lyapunov=not args.no_lyapunov, chunk_size=_int("--chunk-size", args.chunk_size or "256"),
-        **common)
+        cycles=parse_int("--cycles", args.cycles or "150"),
+        discard=parse_int("--discard", args.discard),
+        n_max=parse_int("--n-max", args.n_max), rtol=parse_float("--rtol", args.rtol),
+        lyapunov=not args.no_lyapunov,
+        chunk_size=parse_int("--chunk-size", args.chunk_size or "256"), **common)
     if kind == "regime":
         amap = regime_map(_grid("--F", args.F or "0.02:0.6", "--n-F", args.n_F),
                           _grid("--omega", args.omega or "0.6:1.5", "--n-omega", args.n_omega),
                           zeta=zeta, e=e, **opts)
     else:
-        params = SDFParams(F=_float("--F", args.F or "0.2"),
-                           omega=_float("--omega", args.omega or "1.15"), zeta=zeta, e=e)
+        params = SDFParams(F=parse_float("--F", args.F or "0.2"),
+                           omega=parse_float("--omega", args.omega or "1.15"), zeta=zeta, e=e)
         amap = basin_map(params, _grid("--x0", args.x0, "--n-x0", args.n_x0),
                          _grid("--v0", args.v0, "--n-v0", args.n_v0),
-                         theta0=_float("--theta0", args.theta0), **opts)
+                         theta0=parse_float("--theta0", args.theta0), **opts)
     if args.plot:
         plot_attractor_map(amap, args.plot)
         _message(args, f"wrote {args.plot}")
     if args.json:
-        _dump(amap.to_dict())
+        dump_json(amap.to_dict())
         return 0
     total = amap.code.size
     print(f"{amap.kind} map over {amap.y_name} x {amap.x_name} = {amap.y.size} x {amap.x.size} "
@@ -285,21 +279,23 @@ def _run_disturbance(args: argparse.Namespace, zeta: float, e: float,
 
     from ..analysis.maps import disturbance_map, plot_disturbance_map
 
-    levels = tuple(_float("--levels", t) for t in args.levels.split(","))
+    levels = tuple(parse_float("--levels", t) for t in args.levels.split(","))
     if any(v <= 0 for v in levels):
         raise ParameterError(f"`--levels` must be positive numbers, was {args.levels!r}")
     dmap = disturbance_map(
         _grid("--F", args.F or "0.05:0.3", "--n-F", args.n_F),
         _grid("--omega", args.omega or "1.0:1.3", "--n-omega", args.n_omega), zeta=zeta, e=e,
-        kick_max=_float("--kick-max", args.kick_max), kick_tol=_float("--kick-tol", args.kick_tol),
-        n_scan=_int("--n-scan", args.n_scan), cycles=_int("--cycles", args.cycles or "200"),
-        check_cycles=_int("--check-cycles", args.check_cycles),
-        chunk_size=_int("--chunk-size", args.chunk_size or "16"), **common)
+        kick_max=parse_float("--kick-max", args.kick_max),
+        kick_tol=parse_float("--kick-tol", args.kick_tol),
+        n_scan=parse_int("--n-scan", args.n_scan),
+        cycles=parse_int("--cycles", args.cycles or "200"),
+        check_cycles=parse_int("--check-cycles", args.check_cycles),
+        chunk_size=parse_int("--chunk-size", args.chunk_size or "16"), **common)
     if args.plot:
         plot_disturbance_map(dmap, args.plot, levels=levels)
         _message(args, f"wrote {args.plot}")
     if args.json:
-        _dump(dmap.to_dict())
+        dump_json(dmap.to_dict())
         return 0
     th = dmap.threshold
     print(f"disturbance thresholds over F x omega = {dmap.F.size} x {dmap.omega.size} points "
