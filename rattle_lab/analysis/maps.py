@@ -48,7 +48,8 @@ from ..sdf._types import SDFParams, SDFState
 from ..sdf.simulate import simulate
 from ._dask import check_execution, chunk_rows, run_chunks
 from .lyapunov import lyapunov_from_result
-from .sweep import KIND_NAMES, PERIOD_RTOL, _check_int, _classify
+from .sweep import (KIND_NAMES, PERIOD_RTOL, _check_classification_window, _check_int,
+                    _classify)
 
 MapKind = Literal["regime", "basin"]
 
@@ -252,17 +253,7 @@ def _axis(name: str, values: ArrayLike) -> np.ndarray:
 def _check_map_settings(cycles: object, discard: object, n_max: object, rtol: float,
                         chunk_size: object, workers: object, scheduler: object
                         ) -> tuple[int, int, int, int, str | None]:
-    cycles_i = _check_int("cycles", cycles, 1)
-    discard_i = _check_int("discard", discard, 0)
-    if discard_i >= cycles_i:
-        raise ParameterError(f"`discard` must be < cycles = {cycles_i}, was {discard_i}")
-    n_max_i = _check_int("n_max", n_max, 1)
-    if 2 * n_max_i > cycles_i - discard_i:
-        raise ParameterError(
-            f"`n_max` must be <= (cycles - discard) / 2 = {(cycles_i - discard_i) // 2}, "
-            f"was {n_max_i}")
-    if not (math.isfinite(rtol) and rtol > 0):
-        raise ParameterError(f"`rtol` must be finite and > 0, was {rtol}")
+    cycles_i, discard_i, n_max_i = _check_classification_window(cycles, discard, n_max, rtol)
     _check_int("chunk_size", chunk_size, 1)
     workers_i, sched = check_execution(workers, scheduler)
     return cycles_i, discard_i, n_max_i, workers_i, sched

@@ -442,11 +442,31 @@ def _params_at(param: SweepParam, base: SDFParams, value: float) -> SDFParams:
         raise ParameterError(f"sweep of `{param}`: {exc}") from None
 
 
-def _check_settings(param: object, cycles: object, discard: object, n_max: object,
-                    rtol: float, lyapunov: object, lyapunov_cycles: float,
-                    lyapunov_warmup: float) -> tuple[int, int, int]:
-    if param not in SWEEP_PARAMS:
-        raise ParameterError(f"`param` must be one of {SWEEP_PARAMS}, was {param!r}")
+def _check_classification_window(cycles: object, discard: object, n_max: object,
+                                 rtol: float) -> tuple[int, int, int]:
+    """Validate the simulated and discarded forcing periods and the period detection.
+
+    Shared by the sweeps and the maps (:mod:`rattle_lab.analysis.maps`).
+
+    Parameters
+    ----------
+    cycles, discard : object
+        Forcing periods simulated (>= 1) and discarded (>= 0, < ``cycles``); integers.
+    n_max : object
+        Largest period looked for, in forcing periods: an integer with two periods
+        fitting in the kept ``cycles - discard``.
+    rtol : float
+        Tolerance of :func:`classify_impacts`, finite and > 0.
+
+    Returns
+    -------
+    cycles, discard, n_max : int
+
+    Raises
+    ------
+    ParameterError
+        On an invalid argument, naming it and its value.
+    """
     cycles_i = _check_int("cycles", cycles, 1)
     discard_i = _check_int("discard", discard, 0)
     if discard_i >= cycles_i:
@@ -458,6 +478,15 @@ def _check_settings(param: object, cycles: object, discard: object, n_max: objec
             f"(two periods must fit in the kept cycles), was {n_max_i}")
     if not (math.isfinite(rtol) and rtol > 0):
         raise ParameterError(f"`rtol` must be finite and > 0, was {rtol}")
+    return cycles_i, discard_i, n_max_i
+
+
+def _check_settings(param: object, cycles: object, discard: object, n_max: object,
+                    rtol: float, lyapunov: object, lyapunov_cycles: float,
+                    lyapunov_warmup: float) -> tuple[int, int, int]:
+    if param not in SWEEP_PARAMS:
+        raise ParameterError(f"`param` must be one of {SWEEP_PARAMS}, was {param!r}")
+    cycles_i, discard_i, n_max_i = _check_classification_window(cycles, discard, n_max, rtol)
     if lyapunov not in LYAPUNOV_MODES:
         raise ParameterError(f"`lyapunov` must be one of {LYAPUNOV_MODES}, was {lyapunov!r}")
     if not (math.isfinite(lyapunov_warmup) and lyapunov_warmup >= 0):
