@@ -108,6 +108,30 @@ def _finite(name: str, value: npt.ArrayLike) -> FloatOrArray:
     return float(arr) if arr.ndim == 0 else arr
 
 
+def _excited_participation(participation: npt.ArrayLike) -> FloatOrArray:
+    """``participation`` (``Q1 / Q2``) checked finite and != 0: a mode with Q1 = 0 is not excited.
+
+    Parameters
+    ----------
+    participation : float
+        ``Q1 / Q2`` of the mode.
+
+    Returns
+    -------
+    float
+        ``participation`` as a float.
+
+    Raises
+    ------
+    ParameterError
+        If it is not finite or is 0.
+    """
+    q = _finite("participation", participation)
+    if q == 0.0:
+        raise ParameterError("`participation` must be != 0 (a mode with Q1 = 0 is not excited), was 0.0")
+    return q
+
+
 # --------------------------------------------------------------------------- plate and frequency
 def flexural_rigidity_nm(E_pa: float, h_p_m: float, nu: float) -> float:
     """Flexural rigidity ``D = E h_p**3 / (12 (1 - nu**2))`` [N m] (eq. 2.22).
@@ -539,9 +563,7 @@ def accel_ms2_from_F(F: npt.ArrayLike, participation: float, omega_s_rad_s: floa
     True
     """
     F_c = _nonnegative("F", F)
-    q = _finite("participation", participation)
-    if q == 0.0:
-        raise ParameterError("`participation` must be != 0 (a mode with Q1 = 0 is not excited), was 0.0")
+    q = _excited_participation(participation)
     return F_es_from_F(F_c, omega_s_rad_s, gap_m) / q
 
 
@@ -1052,10 +1074,7 @@ class SDFScaling:
     def __post_init__(self) -> None:
         object.__setattr__(self, "omega_s_rad_s", float(_positive("omega_s_rad_s", self.omega_s_rad_s)))
         object.__setattr__(self, "gap_m", float(_positive("gap_m", self.gap_m)))
-        q = float(_finite("participation", self.participation))
-        if q == 0.0:
-            raise ParameterError("`participation` must be != 0 (a mode with Q1 = 0 is not excited), was 0.0")
-        object.__setattr__(self, "participation", q)
+        object.__setattr__(self, "participation", float(_excited_participation(self.participation)))
         if self.mass_per_area_kg_m2 is not None:
             object.__setattr__(self, "mass_per_area_kg_m2",
                                float(_positive("mass_per_area_kg_m2", self.mass_per_area_kg_m2)))
