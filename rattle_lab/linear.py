@@ -43,6 +43,27 @@ def _out(arr: np.ndarray) -> FloatOrArray:
     return float(arr) if arr.ndim == 0 else arr
 
 
+def _speed_or_nan(omega: npt.ArrayLike, radicand: npt.ArrayLike) -> np.ndarray:
+    """``omega sqrt(radicand)`` where ``radicand >= 0``, NaN elsewhere (no linear impact).
+
+    Parameters
+    ----------
+    omega : float or array
+        Forcing frequency, nondimensional.
+    radicand : float or array
+        ``x_max**2 - 1`` (eq. 4.10) or its counterpart over ``F**2`` (eq. 4.11); NaN
+        propagates.
+
+    Returns
+    -------
+    ndarray
+        The speed (broadcast shape), NaN where ``radicand`` is negative or NaN.
+    """
+    with np.errstate(invalid="ignore"):
+        return np.where(radicand >= 0, omega * np.sqrt(np.where(radicand >= 0, radicand, np.nan)),
+                        np.nan)
+
+
 def grazing_F(omega: npt.ArrayLike, zeta: npt.ArrayLike) -> FloatOrArray:
     """Forcing amplitude at which the linear response just touches the stop (eq. 3.4).
 
@@ -259,10 +280,11 @@ def linear_impact_velocity(F: npt.ArrayLike, omega: npt.ArrayLike, zeta: npt.Arr
     """
     x_max = np.asarray(linear_amplitude(F, omega, zeta))
     w = np.asarray(omega, dtype=float)
+    # Eq. (4.8)-(4.10) with the condition x_max >= 1 (see the docstring); for x_max >= 0
+    # (always) that is x_max**2 - 1 >= 0 also in floating point
     with np.errstate(invalid="ignore"):
-        # Eq. (4.8)-(4.10) with the condition x_max >= 1 (see the docstring)
-        v = np.where(x_max >= 1.0, w * np.sqrt(np.where(x_max >= 1.0, x_max**2 - 1.0, np.nan)), np.nan)
-    return _out(np.asarray(v))
+        radicand = x_max**2 - 1.0
+    return _out(np.asarray(_speed_or_nan(w, radicand)))
 
 
 def linear_v_im_over_F(inv_F: npt.ArrayLike, omega: npt.ArrayLike, zeta: npt.ArrayLike) -> FloatOrArray:
@@ -306,6 +328,5 @@ def linear_v_im_over_F(inv_F: npt.ArrayLike, omega: npt.ArrayLike, zeta: npt.Arr
     w = np.asarray(omega, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         radicand = 1.0 / den2 - q**2
-        # Eq. (4.11) of the thesis (magnitude), impact where x_max = 1/(inv_F * den) >= 1
-        out = np.where(radicand >= 0, w * np.sqrt(np.where(radicand >= 0, radicand, np.nan)), np.nan)
-    return _out(np.asarray(out))
+    # Eq. (4.11) of the thesis (magnitude), impact where x_max = 1/(inv_F * den) >= 1
+    return _out(np.asarray(_speed_or_nan(w, radicand)))
