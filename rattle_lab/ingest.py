@@ -1,36 +1,59 @@
-"""Ingestion: record files in, one HDF5 store with SI data, a catalogue and provenance out.
+"""Ingestion: record files in, one HDF5 store with a catalogue and provenance out.
 
 :func:`ingest` reads each input with :func:`rattle_lab.records.read` (format
 detected, schema validated, files opened read-only), streams every channel in
-chunks through the data-quality checks and the conversion to SI, and writes
-the store atomically (a temporary file renamed into place: an error leaves
-the previous store, or no store, behind).
+chunks through the data-quality checks, works out the conversion to SI, and
+writes the store atomically (a temporary file renamed into place: an error
+leaves the previous store, or no store, behind).
 
-Store layout (``store_format = "rattle_store"``, ``store_version = 1``)::
+Samples are kept as the input stores them (raw volts, ADC counts, or SI), with
+the exact factor to SI beside them, as NWB's ``conversion`` attribute does;
+:meth:`~rattle_lab.records.Channel.read` applies it, so every reader of the
+store gets SI values.  How the samples get into the store (``storage``):
+
+``"link"`` (default)
+    A channel that is a whole 1-D dataset of an HDF5 input (every native
+    record) becomes an HDF5 *virtual dataset* of the store that maps onto the
+    input's dataset: nothing is copied, a week of shaker data is not stored
+    twice, and h5py, MATLAB or HDFView read the store as if it held the data.
+    The input's path, size and modification time are recorded; opening a
+    record whose input has moved or changed raises :class:`StoreError`
+    (re-ingesting the input re-links it).  Other sources (LabVIEW, WAV, TDMS,
+    NumPy, MATLAB matrices) are copied.
+``"copy"``
+    Every sample is copied: the store stands alone.
+
+Store layout (``store_format = "rattle_store"``, ``store_version = 2``)::
 
     /                       attrs: store_format, store_version, created_iso, updated_iso,
                                    rattle_lab_version (of the last writer)
-    /records/{input_key}    one ingested input, itself a valid rattle record (v1 layout)
-                            with channel data in SI units; root attrs add ingest_input_path,
-                            ingest_input_sha256, ingest_input_size_bytes, ingest_format,
+    /records/{input_key}    one ingested input, itself a valid rattle record (v1 layout);
+                            root attrs add ingest_input_path, ingest_input_hash,
+                            ingest_input_size_bytes, ingest_input_mtime_ns, ingest_storage
+                            ("link": some datasets are virtual, or "copy"), ingest_format,
                             ingest_mapping, ingest_mapping_sha256, ingest_time_iso,
                             ingest_rattle_lab_version, ingest_skipped (JSON)
-        .../channels/{name} attrs add ingest_source_units, ingest_scale_to_si,
-                            ingest_sensitivity, ingest_sensitivity_units, ingest_flags
+        .../channels/{name} the input's samples and attributes (virtual or copied); attrs
+                            add ingest_si_units, ingest_scale_to_si, ingest_flags
     /catalogue              one 1-D dataset per column, one row per channel;
                             attrs: columns (JSON list), n_rows
     /provenance/log         one JSON document per ingest call that changed the store
 
-``input_key`` is ``"in_"`` + the first 16 hex digits of SHA-256 over the input's
-SHA-256 (and, for foreign formats, the mapping's): re-ingesting the same
-content is a no-op, and the store file is then not touched at all.
+Content hashes are XXH3-128 (``"xxh3_128:"`` + 32 hex digits, the digits
+``xxhsum -H2`` prints): a non-cryptographic hash that runs at memory speed, so
+hashing a long record costs a fraction of reading it (SHA-256 costs several
+times the read).  ``input_key`` is ``"in_"`` + 16 hex digits of SHA-256 over
+the input's hash (and, for foreign formats, the mapping's): re-ingesting the
+same content is a no-op, and the store file is then not touched at all.
 """
 
 from __future__ import annotations
 
+import collections
 import concurrent.futures
 import hashlib
 import json
+import mmap
 import os
 import platform
 import shutil
@@ -44,6 +67,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import h5py
 import numpy as np
+import xxhash
 
 from ._atomic import atomic_path
 from ._version import __version__
@@ -51,7 +75,7 @@ from .exceptions import ParameterError
 from .records import read
 from .records._convert import record_to_tree
 from .records._errors import DuplicateRunError, StoreError
-from .records._model import DEFAULT_CHUNK_SAMPLES, ArraySource, Channel, Record, Skipped, si_dtype, to_si
+from .records._model import DEFAULT_CHUNK_SAMPLES, ArraySource, Channel, Record, Skipped
 from .records._quality import ChannelChecker, Finding, QualityLimits, TimestampChecker
 from .records._read import detect_format
 from .records._readers.mapping import MappingSpec, load_mapping
@@ -59,18 +83,21 @@ from .records._readers.native import load_group
 from .records._schema import validate_tree
 from .records._write import umask_mode, write_tree
 
+Storage = Literal["link", "copy"]
+
 if TYPE_CHECKING:  # pandas is imported when a catalogue is built, not at import time
     import pandas as pd
 
 STORE_FORMAT = "rattle_store"
-STORE_VERSION = 1
-HASH_BLOCK_BYTES = 4 << 20
+STORE_VERSION = 2
+HASH_ALGORITHM = "xxh3_128"
+HASH_BLOCK_BYTES = 32 << 20  # a multiple of mmap.ALLOCATIONGRANULARITY
 
 #: Catalogue columns (one row per channel) and their kinds.
 CATALOGUE_COLUMNS: tuple[tuple[str, Literal["str", "float", "int"]], ...] = (
     ("input_key", "str"),
     ("file", "str"),
-    ("file_sha256", "str"),
+    ("file_hash", "str"),
     ("format", "str"),
     ("campaign_id", "str"),
     ("source", "str"),
@@ -97,6 +124,7 @@ CATALOGUE_COLUMNS: tuple[tuple[str, Literal["str", "float", "int"]], ...] = (
     ("sensor_serial", "str"),
     ("calibration_date", "str"),
     ("store_path", "str"),
+    ("storage", "str"),
     ("ingested_iso", "str"),
 )
 
@@ -109,12 +137,14 @@ class InputResult:
     ----------
     path : Path
         The input file.
-    sha256 : str
-        SHA-256 of its bytes.
+    file_hash : str
+        Content hash of its bytes (:func:`file_hash`).
     input_key : str
         Its group name under ``/records`` in the store.
     status : str
-        ``"added"`` or ``"unchanged"`` (already in the store, or repeated in the call).
+        ``"added"``, ``"unchanged"`` (already in the store, or repeated in the call), or
+        ``"updated"`` (in the store, but linked to a file that has moved or changed, or
+        linked while ``storage="copy"`` was asked for: ingested again in its place).
     format : str
         Detected format.
     skipped : tuple of Skipped
@@ -124,9 +154,9 @@ class InputResult:
     """
 
     path: Path
-    sha256: str
+    file_hash: str
     input_key: str
-    status: Literal["added", "unchanged"]
+    status: Literal["added", "unchanged", "updated"]
     format: str
     skipped: tuple[Skipped, ...] = ()
     findings: tuple[Finding, ...] = ()
@@ -159,20 +189,40 @@ class IngestReport:
         return tuple(f for r in self.inputs for f in r.findings)
 
 
-def sha256_file(path: str | os.PathLike[str]) -> str:
-    """SHA-256 (hex) of a file's bytes, read in blocks."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        if hasattr(os, "posix_fadvise"):  # read-ahead for a cold cache
-            os.posix_fadvise(fh.fileno(), 0, 0, os.POSIX_FADV_SEQUENTIAL)
-        while block := fh.read(HASH_BLOCK_BYTES):
-            h.update(block)
-    return h.hexdigest()
+def file_hash(path: str | os.PathLike[str]) -> str:
+    """Content hash of a file's bytes: ``"xxh3_128:"`` + 32 hex digits, read in blocks.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     p = pathlib.Path(folder) / "x.bin"
+    ...     _ = p.write_bytes(b"")
+    ...     file_hash(p)            # XXH3-128 of no bytes, as xxhsum -H2 prints it
+    'xxh3_128:99aa06d3014798d86001c324468d497f'
+    """
+    h = xxhash.xxh3_128()
+    with open(path, "rb", buffering=0) as fh:
+        size = os.fstat(fh.fileno()).st_size
+        # Hashing mapped pages spares the copy into a buffer that read() makes (twice the
+        # speed on a warm page cache).  The file is mapped one window at a time, so that the
+        # resident memory stays bounded by the window, not the file.
+        for start in range(0, size, HASH_BLOCK_BYTES):
+            length = min(HASH_BLOCK_BYTES, size - start)
+            with mmap.mmap(fh.fileno(), length, offset=start, access=mmap.ACCESS_READ) as window:
+                if hasattr(window, "madvise"):  # read-ahead for a cold cache
+                    window.madvise(mmap.MADV_SEQUENTIAL)
+                view = memoryview(window)
+                try:
+                    h.update(view)
+                finally:
+                    view.release()
+    return f"{HASH_ALGORITHM}:{h.hexdigest()}"
 
 
-def input_key(file_sha256: str, mapping_sha256: str | None) -> str:
+def input_key(content_hash: str, mapping_sha256: str | None) -> str:
     """Store group name of an input: ``in_`` + 16 hex digits of SHA-256(file hash [+ mapping hash])."""
-    text = file_sha256 if mapping_sha256 is None else f"{file_sha256}:{mapping_sha256}"
+    text = content_hash if mapping_sha256 is None else f"{content_hash}:{mapping_sha256}"
     return "in_" + hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -183,13 +233,23 @@ def _now_iso() -> str:
 # --- the store ------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class _Stored:
+    """An input already in the store."""
+
+    size: int  # bytes of the input
+    storage: Storage
+    link_ok: bool  # for "link": the linked file is where it was, unchanged
+
+
 @dataclass
 class _StoreIndex:
-    """What an existing store holds: input keys with their sizes, and the catalogue columns."""
+    """What an existing store holds: its inputs, and the catalogue columns."""
 
-    keys: dict[str, int] = field(default_factory=dict)  # input_key -> input size in bytes
+    keys: dict[str, _Stored] = field(default_factory=dict)
     columns: dict[str, np.ndarray] = field(default_factory=dict)
-    runs: dict[tuple[str, str], str] = field(default_factory=dict)  # (campaign, run) -> file
+    # (campaign, run) -> (file, input_key)
+    runs: dict[tuple[str, str], tuple[str, str]] = field(default_factory=dict)
 
 
 def _check_store(fh: h5py.File, store: Path) -> None:
@@ -242,13 +302,35 @@ def _read_index(store: Path) -> _StoreIndex:
         records = fh.get("records", {})
         for key in records:
             attrs = records[key].attrs
-            index.keys[key] = int(attrs["ingest_input_size_bytes"])
+            storage = _text(attrs.get("ingest_storage", "copy"))
+            index.keys[key] = _Stored(int(attrs["ingest_input_size_bytes"]),
+                                      "link" if storage == "link" else "copy",
+                                      storage != "link" or _link_problem(attrs) is None)
         index.columns = _read_columns(fh, store)
     cols = index.columns
-    for campaign, run, file in zip(cols.get("campaign_id", []), cols.get("run_id", []),
-                                   cols.get("file", [])):
-        index.runs[(str(campaign), str(run))] = str(file)
+    for campaign, run, file, key in zip(cols.get("campaign_id", []), cols.get("run_id", []),
+                                        cols.get("file", []), cols.get("input_key", [])):
+        index.runs[(str(campaign), str(run))] = (str(file), str(key))
     return index
+
+
+def _text(value: Any) -> str:
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+
+
+def _link_problem(attrs: Any) -> str | None:
+    """Why a linked record's input cannot serve its samples any more, or None if it can."""
+    path = Path(_text(attrs["ingest_input_path"]))
+    try:
+        st = path.stat()
+    except OSError:
+        return f"the linked input {path} is missing"
+    if st.st_size != int(attrs["ingest_input_size_bytes"]):
+        return (f"the linked input {path} has changed since it was ingested (size {st.st_size} "
+                f"bytes, was {int(attrs['ingest_input_size_bytes'])})")
+    if st.st_mtime_ns != int(attrs["ingest_input_mtime_ns"]):
+        return f"the linked input {path} has changed since it was ingested (modification time)"
+    return None
 
 
 def _write_catalogue(fh: h5py.File, columns: Mapping[str, Sequence[Any]]) -> None:
@@ -318,39 +400,49 @@ class _Bar:
 
 def _store_tree(record: Record, plans: Mapping[str, _ChannelPlan]) -> tuple[dict[str, Any],
                                                                            dict[str, ArraySource]]:
-    """The record's node tree rewritten for the store: SI units and dtypes, ingest attributes."""
+    """The record's node tree for the store: the input's own attributes plus the SI conversion."""
     tree, sources = record_to_tree(record)
     for run_id, run_node in tree["members"]["runs"]["members"].items():
         for name, node in run_node["members"]["channels"]["members"].items():
             plan = plans[f"/runs/{run_id}/channels/{name}"]
-            ch = plan.channel
-            attrs = node["attrs"]
-            for key in ("sensitivity", "sensitivity_units"):
-                attrs.pop(key, None)
-            attrs["units"] = plan.si_units
-            if ch.range_min is not None and ch.range_max is not None:
-                attrs["range_min"] = ch.range_min * plan.scale
-                attrs["range_max"] = ch.range_max * plan.scale
-            attrs["ingest_source_units"] = ch.units
-            attrs["ingest_scale_to_si"] = plan.scale
-            if ch.sensitivity is not None:
-                attrs["ingest_sensitivity"] = ch.sensitivity
-                attrs["ingest_sensitivity_units"] = ch.sensitivity_units
-            node["dtype"] = si_dtype(np.dtype(node["dtype"])).str
+            node["attrs"]["ingest_si_units"] = plan.si_units
+            node["attrs"]["ingest_scale_to_si"] = plan.scale
     return tree, sources
 
 
-def _ingest_record(out: h5py.Group, record: Record, label: str, *, limits: QualityLimits,
-                   n_chunk_samples: int, quiet: bool) -> tuple[list[Finding], dict[str, Any]]:
-    """Write ``record`` into ``out`` (SI data, checks on the way); return findings and per-channel stats."""
+def _virtual_dataset(group: h5py.Group, name: str, node: Mapping[str, Any], path: str,
+                     source: ArraySource | None) -> h5py.Dataset | None:
+    """A virtual dataset of ``group`` mapping onto the source's whole 1-D HDF5 dataset, or None.
+
+    A missing source file would read as the fill value: NaN for floats (and
+    :func:`open_stored_record` refuses a record whose linked input has gone).
+    """
+    location = getattr(source, "location", None)
+    shape = tuple(node["shape"])
+    if location is None or len(shape) != 1 or shape[0] == 0:
+        return None
+    file, dataset_path = location
+    dtype = np.dtype(node["dtype"])
+    layout = h5py.VirtualLayout(shape=shape, dtype=dtype)
+    layout[:] = h5py.VirtualSource(str(Path(file).resolve()), dataset_path, shape=shape, dtype=dtype)
+    return group.create_virtual_dataset(name, layout, fillvalue=np.nan if dtype.kind == "f" else 0)
+
+
+def _ingest_record(out: h5py.Group, record: Record, label: str, *, storage: Storage,
+                   limits: QualityLimits, n_chunk_samples: int,
+                   quiet: bool) -> tuple[list[Finding], dict[str, Any], bool]:
+    """Write ``record`` into ``out`` (linked or copied, checked on the way).
+
+    Returns the findings, per-channel statistics, and whether any dataset is linked.
+    """
     plans: dict[str, _ChannelPlan] = {}
     ts_users: dict[str, list[str]] = {}
     for run in record.runs:
         for ch in run.channels:
             path = f"/runs/{run.run_id}/channels/{ch.name}"
-            scale = ch.scale_to_si
             plans[path] = _ChannelPlan(
-                channel=ch, run_id=run.run_id, path=path, scale=scale, si_units=ch.si_units,
+                channel=ch, run_id=run.run_id, path=path, scale=ch.scale_to_si,
+                si_units=ch.si_units,
                 checker=ChannelChecker(ch.data.dtype, range_min=ch.range_min, range_max=ch.range_max,
                                        n_dropout=limits.n_dropout(ch.sample_rate_hz), limits=limits))
             if ch.timestamps is not None:
@@ -358,27 +450,48 @@ def _ingest_record(out: h5py.Group, record: Record, label: str, *, limits: Quali
     ts_checkers = {path: TimestampChecker(limits) for path in ts_users}
     total = sum(p.channel.n_samples for p in plans.values())
     bar = _Bar(total, Path(label).name, quiet)
+    linked: list[str] = []
+
+    def make_dataset(group: h5py.Group, name: str, node: Mapping[str, Any], path: str,
+                     source: ArraySource | None) -> h5py.Dataset | None:
+        ds = _virtual_dataset(group, name, node, path, source) if storage == "link" else None
+        if ds is not None:
+            linked.append(path)
+        return ds
+
+    # The checks of one chunk run on a worker thread while the next chunk is read (they
+    # release the GIL: numpy reductions and the compiled scan); one worker keeps them in order.
+    checks = concurrent.futures.ThreadPoolExecutor(max_workers=1)
 
     def write_data(ds: h5py.Dataset, path: str, source: ArraySource) -> None:
-        plan = plans.get(path)
-        ts_checker = ts_checkers.get(path)
+        checker = plans[path].checker if path in plans else ts_checkers.get(path)
+        copy = not ds.is_virtual
+        if not copy and checker is None:
+            return  # linked, and nothing to check
+        pending: collections.deque[concurrent.futures.Future[None]] = collections.deque()
         n = source.n_samples
-        for start in range(0, n, n_chunk_samples):
-            stop = min(n, start + n_chunk_samples)
-            raw = source.read(start, stop)
-            if plan is not None:
-                plan.checker.update(raw)
-                ds[start:stop] = to_si(raw, plan.scale)
-                bar.update(stop - start)
-            else:
-                if ts_checker is not None:
-                    ts_checker.update(raw)
-                ds[start:stop] = raw
+        try:
+            for start in range(0, n, n_chunk_samples):
+                stop = min(n, start + n_chunk_samples)
+                raw = source.read(start, stop)
+                if checker is not None:
+                    pending.append(checks.submit(checker.update, raw))
+                    if len(pending) > 2:  # at most three chunks in memory
+                        pending.popleft().result()
+                if copy:
+                    ds[start:stop] = raw
+                if path in plans:
+                    bar.update(stop - start)
+            while pending:
+                pending.popleft().result()
+        finally:
+            concurrent.futures.wait(pending)  # after an error: let the worker finish first
 
     tree, sources = _store_tree(record, plans)
     try:
-        write_tree(out, tree, sources, write_data=write_data)
+        write_tree(out, tree, sources, write_data=write_data, make_dataset=make_dataset)
     finally:
+        checks.shutdown(wait=True, cancel_futures=True)
         bar.close()
 
     findings: list[Finding] = []
@@ -423,7 +536,7 @@ def _ingest_record(out: h5py.Group, record: Record, label: str, *, limits: Quali
         stats[path] = {"flags": flags, "rate_hz": rates[path],
                        "min_si": c.vmin * plan.scale if np.isfinite(c.vmin) else np.nan,
                        "max_si": c.vmax * plan.scale if np.isfinite(c.vmax) else np.nan}
-    return findings, stats
+    return findings, stats, bool(linked)
 
 
 def _si_name(ch: Channel) -> str:
@@ -445,8 +558,9 @@ def _effective_rates(plans: Mapping[str, _ChannelPlan],
     return rates
 
 
-def _catalogue_rows(record: Record, key: str, label: str, sha: str, fmt: str,
-                    stats: Mapping[str, Mapping[str, Any]], when: str) -> list[dict[str, Any]]:
+def _catalogue_rows(record: Record, key: str, label: str, content_hash: str, fmt: str,
+                    stats: Mapping[str, Mapping[str, Any]], when: str,
+                    storage: Storage) -> list[dict[str, Any]]:
     rows = []
     for run in record.runs:
         for ch in run.channels:
@@ -454,7 +568,7 @@ def _catalogue_rows(record: Record, key: str, label: str, sha: str, fmt: str,
             st = stats[path]
             rate = st["rate_hz"]
             rows.append({
-                "input_key": key, "file": label, "file_sha256": sha, "format": fmt,
+                "input_key": key, "file": label, "file_hash": content_hash, "format": fmt,
                 "campaign_id": record.campaign_id, "source": record.source, "run_id": run.run_id,
                 "protocol": run.protocol,
                 "excitation_freq_hz": _num(run.excitation_freq_hz),
@@ -471,7 +585,7 @@ def _catalogue_rows(record: Record, key: str, label: str, sha: str, fmt: str,
                 "min_si": st["min_si"], "max_si": st["max_si"], "flags": st["flags"],
                 "sensor_model": ch.sensor_model or "", "sensor_serial": ch.sensor_serial or "",
                 "calibration_date": ch.calibration_date or "",
-                "store_path": f"/records/{key}{path}", "ingested_iso": when,
+                "store_path": f"/records/{key}{path}", "storage": storage, "ingested_iso": when,
             })
     return rows
 
@@ -488,23 +602,25 @@ class _Input:
     path: Path
     label: str
     size: int
+    mtime_ns: int
     format: str
     foreign: bool
-    sha: str | None = None
+    content_hash: str | None = None
     future: concurrent.futures.Future[str] | None = None
+    replaces: bool = False  # its key is in the store and is ingested again in its place
 
     def digest(self) -> str:
-        if self.sha is None:
+        if self.content_hash is None:
             if self.future is not None:
-                self.sha = self.future.result()
+                self.content_hash = self.future.result()
             else:
-                self.sha = sha256_file(self.path)
-        return self.sha
+                self.content_hash = file_hash(self.path)
+        return self.content_hash
 
 
 def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[str], *,
            mapping: str | os.PathLike[str] | Mapping[str, Any] | MappingSpec | None = None,
-           allow_flagged: bool = False, quiet: bool = True,
+           storage: Storage = "link", allow_flagged: bool = False, quiet: bool = True,
            limits: QualityLimits = QualityLimits(),
            n_chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
            on_warning: Callable[[Finding], None] | None = None) -> IngestReport:
@@ -520,6 +636,12 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
         appended; inputs already in it (same content hash) are left alone.
     mapping : path-like, dict or MappingSpec, optional
         TOML mapping applied to the foreign-format inputs.
+    storage : {"link", "copy"}
+        ``"link"``: channels that are whole 1-D HDF5 datasets of the input become
+        virtual datasets of the store that read the input (nothing copied; the
+        input must stay where it is, unchanged); other channels are copied.
+        ``"copy"``: every sample is copied (a self-contained store).  See the
+        module docstring.
     allow_flagged : bool
         Ingest data with fatal findings (NaN, Inf, clipping, dropouts, rate
         mismatch, non-monotonic timestamps, empty channels), flagging them in
@@ -551,6 +673,8 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
         ``store`` exists and is not an ingest store.
     OutputError
         The store cannot be written.  In every error case the store is left as it was.
+    ParameterError
+        For no inputs, ``n_chunk_samples < 1``, another ``storage``, or the store among the inputs.
 
     Warns
     -----
@@ -563,6 +687,8 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
         raise ParameterError("`inputs` must name at least one file")
     if n_chunk_samples < 1:
         raise ParameterError(f"`n_chunk_samples` must be >= 1, was {n_chunk_samples}")
+    if storage not in ("link", "copy"):
+        raise ParameterError(f"`storage` must be 'link' or 'copy', was {storage!r}")
     store = Path(store)
     spec = mapping if isinstance(mapping, MappingSpec) or mapping is None else load_mapping(mapping)
     store_resolved = store.resolve()
@@ -571,38 +697,45 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
         fmt = detect_format(p)
         if p.resolve() == store_resolved:
             raise ParameterError(f"the store {store} is also given as an input")
-        items.append(_Input(path=p, label=str(p), size=p.stat().st_size, format=fmt,
-                            foreign=fmt != "rattle_hdf5"))
+        st = p.stat()
+        items.append(_Input(path=p, label=str(p), size=st.st_size, mtime_ns=st.st_mtime_ns,
+                            format=fmt, foreign=fmt != "rattle_hdf5"))
     index = _read_index(store)
 
     def key_of(item: _Input) -> str:
         return input_key(item.digest(), spec.sha256 if (item.foreign and spec) else None)
 
+    def current(stored: _Stored) -> bool:  # can the stored copy of an input stand as it is?
+        return stored.storage == "copy" or (storage == "link" and stored.link_ok)
+
     results: dict[int, InputResult] = {}
     new: list[_Input] = []
-    sizes = set(index.keys.values())
+    sizes = {stored.size for stored in index.keys.values()}
     with concurrent.futures.ThreadPoolExecutor(max_workers=1) as pool:
         batch_keys: set[str] = set()
         for i, item in enumerate(items):
             # Content can only repeat at an equal size: hash those first; hash the others
-            # in the background while their data are checked and converted.
+            # in the background while their data are checked.
             if item.size in sizes:
                 for other in new:
                     if other.size == item.size:
                         batch_keys.add(key_of(other))
                 key = key_of(item)
-                if key in index.keys or key in batch_keys:
+                if key in batch_keys or (key in index.keys and current(index.keys[key])):
                     results[i] = InputResult(item.path, item.digest(), key, "unchanged", item.format)
                     continue
+                item.replaces = key in index.keys
                 batch_keys.add(key)
             else:
-                item.future = pool.submit(sha256_file, item.path)
+                item.future = pool.submit(file_hash, item.path)
             sizes.add(item.size)
             new.append(item)
         changed = False
+        columns = index.columns
         if new:
-            added = _write_store(store, index, new, spec, key_of, allow_flagged=allow_flagged,
-                                 limits=limits, n_chunk_samples=n_chunk_samples, quiet=quiet,
+            added, columns = _write_store(store, index, new, spec, key_of, storage=storage,
+                                 allow_flagged=allow_flagged, limits=limits,
+                                 n_chunk_samples=n_chunk_samples, quiet=quiet,
                                  unchanged=[items[i] for i in results])
             changed = True
             for item, result in added.items():
@@ -614,7 +747,7 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
                 on_warning(finding)
             else:
                 warnings.warn(finding.message, finding.warning_class, stacklevel=2)
-    catalogue = _frame(_read_columns_from(store) if changed else index.columns)
+    catalogue = _frame(columns)
     keys = {r.input_key for r in ordered}
     if len(catalogue):
         catalogue = catalogue[catalogue["input_key"].isin(keys)].reset_index(drop=True)
@@ -629,13 +762,15 @@ def _read_columns_from(store: Path) -> dict[str, np.ndarray]:
 
 
 def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: MappingSpec | None,
-                 key_of: Callable[[_Input], str], *, allow_flagged: bool, limits: QualityLimits,
-                 n_chunk_samples: int, quiet: bool,
-                 unchanged: list[_Input]) -> dict[_Input, InputResult]:
+                 key_of: Callable[[_Input], str], *, storage: Storage, allow_flagged: bool,
+                 limits: QualityLimits, n_chunk_samples: int, quiet: bool,
+                 unchanged: list[_Input]) -> tuple[dict[_Input, InputResult], dict[str, list[Any]]]:
+    """Write the new inputs into (a copy of) the store; return their results and the catalogue."""
     when = _now_iso()
     added: dict[_Input, InputResult] = {}
     rows: list[dict[str, Any]] = []
-    runs = dict(index.runs)
+    replaced = {key_of(item) for item in new if item.replaces}
+    runs = {run: where for run, where in index.runs.items() if where[1] not in replaced}
     with atomic_path(store) as tmp:
         if store.exists():
             shutil.copyfile(store, tmp)
@@ -656,11 +791,12 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
                         if other is not None:
                             raise DuplicateRunError(
                                 f"{item.label}: /runs/{run.run_id}: run id {run.run_id!r} of "
-                                f"campaign {record.campaign_id!r} is already ingested from {other}")
-                        runs[(record.campaign_id, run.run_id)] = item.label
+                                f"campaign {record.campaign_id!r} is already ingested from {other[0]}")
+                        runs[(record.campaign_id, run.run_id)] = (item.label, "")
                     pending = records.create_group("_pending", track_order=True)
-                    findings, stats = _ingest_record(pending, record, item.label, limits=limits,
-                                                     n_chunk_samples=n_chunk_samples, quiet=quiet)
+                    findings, stats, linked = _ingest_record(
+                        pending, record, item.label, storage=storage, limits=limits,
+                        n_chunk_samples=n_chunk_samples, quiet=quiet)
                     fatal = [f for f in findings if f.fatal]
                     if fatal and not allow_flagged:
                         more = (f" (and {len(fatal) - 1} more fatal findings)" if len(fatal) > 1
@@ -669,15 +805,20 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
                         err.args = (err.args[0] + more + "; use --allow-flagged (allow_flagged=True) "
                                     "to ingest with flags",)
                         raise err
-                    sha = item.digest()
+                    content_hash = item.digest()
                     key = key_of(item)
+                    if key in records:  # an outdated link, ingested again in its place
+                        del records[key]
                     records.move("_pending", key)
                     group = records[key]
                     skipped = record.origin.skipped if record.origin else ()
+                    kept: Storage = "link" if linked else "copy"
                     group.attrs.update({
                         "ingest_input_path": str(item.path.resolve()),
-                        "ingest_input_sha256": sha,
+                        "ingest_input_hash": content_hash,
                         "ingest_input_size_bytes": item.size,
+                        "ingest_input_mtime_ns": item.mtime_ns,
+                        "ingest_storage": kept,
                         "ingest_format": item.format,
                         "ingest_mapping": spec.label if (spec and item.foreign) else "",
                         "ingest_mapping_sha256": spec.sha256 if (spec and item.foreign) else "",
@@ -685,11 +826,15 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
                         "ingest_rattle_lab_version": __version__,
                         "ingest_skipped": json.dumps([[s.source, s.reason] for s in skipped]),
                     })
-                    rows.extend(_catalogue_rows(record, key, str(item.path.resolve()), sha,
-                                                item.format, stats, when))
-                    added[item] = InputResult(item.path, sha, key, "added", item.format,
+                    rows.extend(_catalogue_rows(record, key, str(item.path.resolve()), content_hash,
+                                                item.format, stats, when, kept))
+                    added[item] = InputResult(item.path, content_hash, key,
+                                              "updated" if item.replaces else "added", item.format,
                                               tuple(skipped), tuple(findings))
-            columns = {name: list(index.columns.get(name, [])) for name, _ in CATALOGUE_COLUMNS}
+            keep = [i for i, key in enumerate(index.columns.get("input_key", []))
+                    if str(key) not in replaced]
+            columns = {name: [index.columns[name][i] for i in keep] if name in index.columns else []
+                       for name, _ in CATALOGUE_COLUMNS}
             for row in rows:
                 for name, _ in CATALOGUE_COLUMNS:
                     columns[name].append(row[name])
@@ -700,14 +845,15 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
                 "command": "ingest", "time_iso": when, "rattle_lab_version": __version__,
                 "python": platform.python_version(), "numpy": np.__version__,
                 "h5py": h5py.__version__, "hdf5": h5py.version.hdf5_version,
-                "allow_flagged": allow_flagged,
+                "allow_flagged": allow_flagged, "storage": storage,
                 "mapping": {"path": spec.label, "sha256": spec.sha256} if spec else None,
-                "inputs": [{"path": str(i.path.resolve()), "sha256": r.sha256, "input_key": r.input_key,
-                            "format": i.format, "status": "added"} for i, r in added.items()]
-                + [{"path": str(i.path.resolve()), "sha256": i.digest(), "input_key": key_of(i),
+                "inputs": [{"path": str(i.path.resolve()), "hash": r.file_hash,
+                            "input_key": r.input_key, "format": i.format, "status": r.status}
+                           for i, r in added.items()]
+                + [{"path": str(i.path.resolve()), "hash": i.digest(), "input_key": key_of(i),
                     "format": i.format, "status": "unchanged"} for i in unchanged],
             })
-    return added
+    return added, columns
 
 
 # --- reading the store ------------------------------------------------------------------------
@@ -772,20 +918,31 @@ def read_catalogue(store: str | os.PathLike[str],
 
 
 def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
-    """An ingested input as a :class:`~rattle_lab.records.Record` (SI data, read lazily).
+    """An ingested input as a :class:`~rattle_lab.records.Record` (read lazily).
+
+    :meth:`Channel.read <rattle_lab.records.Channel.read>` gives SI values.
 
     Raises
     ------
     StoreError
-        If ``store`` is not an ingest store or has no such input.
+        If ``store`` is not an ingest store or has no such input, or if the
+        input is linked (``storage="link"``) and its file has moved or changed
+        since it was ingested.
     """
     from .records._convert import record_from_tree
     from .records._model import Origin
 
     store = Path(store)
     with _open_store(store) as fh:
-        if f"records/{input_key}" not in fh:
+        group = fh.get(f"records/{input_key}")
+        if not isinstance(group, h5py.Group):
             raise StoreError(f"{store}: /records/{input_key}: no such ingested input")
+        if _text(group.attrs.get("ingest_storage", "copy")) == "link":
+            problem = _link_problem(group.attrs)
+            if problem is not None:
+                raise StoreError(f"{store}: /records/{input_key}: attribute 'ingest_input_path': "
+                                 f"{problem}; ingest it again to re-link it (or ingest with "
+                                 "--copy for a store that stands alone)")
     raw = load_group(store, f"/records/{input_key}")
     label = f"{store}: /records/{input_key}"
     try:
@@ -799,4 +956,4 @@ def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
 
 
 __all__ = ["ingest", "read_catalogue", "open_stored_record", "IngestReport", "InputResult",
-           "CATALOGUE_COLUMNS", "sha256_file", "input_key"]
+           "CATALOGUE_COLUMNS", "file_hash", "input_key"]

@@ -66,6 +66,26 @@ def test_json_output_and_rerun_is_unchanged(tmp_path):
     assert store.stat().st_mtime_ns == stamp
 
 
+def test_copy_flag_and_a_moved_input(tmp_path):
+    src = write(tmp_path)
+    store = tmp_path / "store.h5"
+    linked = json.loads(run_cli("ingest", str(src), "-o", str(store), "--json").stdout)
+    assert {row["storage"] for row in linked["catalogue"]} == {"link"}
+    assert linked["inputs"][0]["file_hash"].startswith("xxh3_128:")
+    copied = run_cli("ingest", str(src), "-o", str(store), "--copy")
+    assert copied.returncode == 0, copied.stderr
+    assert copied.stdout.splitlines()[-1] == f"{store}: 0 added, 1 updated, 0 unchanged"
+    assert set(read_catalogue(store)["storage"]) == {"copy"}
+    # a store whose linked input has gone: `fit` says so in one line, exit 2
+    other = tmp_path / "other.h5"
+    run_cli("ingest", str(src), "-o", str(other), "--quiet")
+    src.unlink()
+    proc = run_cli("fit", str(other))
+    assert proc.returncode == 2 and len(proc.stderr.splitlines()) == 1
+    assert "rec.h5 is missing; ingest it again to re-link it" in proc.stderr
+    assert run_cli("fit", str(store)).returncode == 0  # the copied store stands alone
+
+
 def test_allow_flagged_warns_on_stderr_and_flags_in_json(tmp_path):
     rec = make_record()
     mic = rec.runs[0].channel("mic").read(si=False).copy()

@@ -13,13 +13,14 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+import xxhash
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from record_factory import FS_HZ, N_SAMPLES, make_record, replace_channel, write
 
 from rattle_lab.exceptions import OutputError, ParameterError
-from rattle_lab.ingest import (CATALOGUE_COLUMNS, ingest, input_key, open_stored_record,
-                               read_catalogue, sha256_file)
+from rattle_lab.ingest import (CATALOGUE_COLUMNS, file_hash, ingest, input_key,
+                               open_stored_record, read_catalogue)
 from rattle_lab.records import (ClippingWarning, DuplicateRunError, NaNGapError, NaNGapWarning,
                                 StoreError, UncalibratedWarning)
 from rattle_lab.records._quality import ChannelChecker, QualityLimits, TimestampChecker
@@ -28,6 +29,11 @@ from rattle_lab.records._units import G0_MS2
 
 def _digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _xxh3(path: Path) -> str:
+    """The content hash computed independently of rattle_lab (one-shot over the bytes)."""
+    return "xxh3_128:" + xxhash.xxh3_128(path.read_bytes()).hexdigest()
 
 
 # --- the streaming checks, on hand-built signals ------------------------------------------------
@@ -153,7 +159,7 @@ def test_timestamp_checks():
 # --- ingest ---------------------------------------------------------------------------------------
 
 
-def test_ingest_converts_to_si_and_builds_the_catalogue(tmp_path):
+def test_ingest_links_the_samples_and_builds_the_catalogue(tmp_path):
     src = write(tmp_path)
     store = tmp_path / "store.h5"
     report = ingest([src], store)
@@ -163,41 +169,107 @@ def test_ingest_converts_to_si_and_builds_the_catalogue(tmp_path):
     assert list(cat["channel"]) == ["base", "plate", "velocity", "mic", "drive"]
     assert list(cat["units"]) == ["m/s^2", "m/s^2", "m/s", "Pa", "V"]
     assert list(cat["source_units"]) == ["V", "m/s^2", "V", "V", "V"]
+    assert set(cat["storage"]) == {"link"}
     row = cat.iloc[0]
     assert row["campaign_id"] == "plate96" and row["protocol"] == "sine_dwell"
     assert row["n_samples"] == N_SAMPLES and row["sample_rate_hz"] == FS_HZ
     assert row["duration_s"] == N_SAMPLES / FS_HZ and row["flags"] == ""
-    assert row["file_sha256"] == sha256_file(src) and row["sensor_serial"] == "LW123"
-    assert row["input_key"] == input_key(sha256_file(src), None)
+    assert row["file_hash"] == _xxh3(src) == file_hash(src) and row["sensor_serial"] == "LW123"
+    assert row["input_key"] == input_key(_xxh3(src), None)
+    # 100 mV/g: m/s^2 = V / 0.1 * g0
+    assert row["scale_to_si"] == pytest.approx(G0_MS2 / 0.1, rel=1e-15)
     with h5py.File(store, "r") as fh, h5py.File(src, "r") as raw:
         volts = raw["runs/dwell_094/channels/base"][()]
-        si = fh[row["store_path"]][()]
-        # 100 mV/g: m/s^2 = V / 0.1 * g0, computed in float32 (two roundings).
-        np.testing.assert_allclose(si, volts.astype(np.float64) / 0.1 * G0_MS2,
-                                   rtol=2 * np.finfo(np.float32).eps)
-        assert row["min_si"] == pytest.approx(float(si.min()), rel=1e-6)
-        vel = fh[cat.iloc[2]["store_path"]][()]
-        np.testing.assert_allclose(vel, raw["runs/dwell_094/channels/velocity"][()] * 0.025,
-                                   rtol=2 * np.finfo(np.float32).eps)
-        attrs = fh[row["store_path"]].attrs
-        assert attrs["units"] == "m/s^2" and attrs["ingest_sensitivity_units"] == "mV/g"
-        assert attrs["range_max"] == pytest.approx(10.0 / 0.1 * G0_MS2)
+        ds = fh[row["store_path"]]
+        # A virtual dataset onto the input's dataset: the input's own samples and attributes.
+        assert ds.is_virtual and ds.virtual_sources()[0].file_name == str(src.resolve())
+        np.testing.assert_array_equal(ds[()], volts)
+        assert ds.attrs["units"] == "V" and ds.attrs["sensitivity_units"] == "mV/g"
+        assert ds.attrs["ingest_si_units"] == "m/s^2"
+        assert ds.attrs["ingest_scale_to_si"] == row["scale_to_si"]
+        assert row["min_si"] == pytest.approx(float(volts.min()) / 0.1 * G0_MS2, rel=1e-12)
+        assert row["max_si"] == pytest.approx(float(volts.max()) / 0.1 * G0_MS2, rel=1e-12)
     runs = read_catalogue(store, level="runs")
     assert list(runs["run_id"]) == ["dwell_094"] and list(runs["n_channels"]) == [5]
 
 
-def test_stored_record_is_a_valid_record_in_si(tmp_path):
+def test_stored_record_reads_in_si(tmp_path):
     src = write(tmp_path, record=make_record(synthetic=True))
     report = ingest([src], tmp_path / "store.h5")
     with open_stored_record(tmp_path / "store.h5", report.inputs[0].input_key) as rec:
         mic = rec.run("dwell_094").channel("mic")
-        assert mic.units == "Pa" and mic.sensitivity is None and mic.scale_to_si == 1.0
+        assert (mic.units, mic.sensitivity, mic.si_units) == ("V", 50.0, "Pa")
         assert rec.truth is not None and rec.truth.impacts["dwell_094"].t_s.tolist() == [0.01, 0.02]
+        base = rec.run("dwell_094").channel("base")
         with h5py.File(src, "r") as raw:
+            # 50 mV/Pa and 100 mV/g, applied in float32 (one rounding of a float32 product)
             np.testing.assert_allclose(mic.read(), raw["runs/dwell_094/channels/mic"][()] / 0.05,
+                                       rtol=2 * np.finfo(np.float32).eps)
+            np.testing.assert_allclose(base.read(),
+                                       raw["runs/dwell_094/channels/base"][()] / 0.1 * G0_MS2,
                                        rtol=2 * np.finfo(np.float32).eps)
     with pytest.raises(StoreError, match=r"/records/in_0000000000000000: no such ingested input"):
         open_stored_record(tmp_path / "store.h5", "in_0000000000000000")
+
+
+def test_copy_storage_makes_a_store_that_stands_alone(tmp_path):
+    src = write(tmp_path, record=make_record(synthetic=True))
+    with h5py.File(src, "r") as raw:
+        volts = raw["runs/dwell_094/channels/mic"][()]
+    store = tmp_path / "store.h5"
+    report = ingest([src], store, storage="copy")
+    cat = read_catalogue(store)
+    assert set(cat["storage"]) == {"copy"}
+    with h5py.File(store, "r") as fh:
+        paths = list(cat["store_path"])
+        assert not any(fh[p].is_virtual for p in paths)
+        assert fh[f"records/{report.inputs[0].input_key}"].attrs["ingest_storage"] == "copy"
+    src.unlink()
+    with open_stored_record(store, report.inputs[0].input_key) as rec:
+        mic = rec.run("dwell_094").channel("mic")
+        np.testing.assert_array_equal(mic.read(si=False), volts)  # the samples, bit for bit
+        assert rec.truth is not None
+
+
+def test_a_moved_or_changed_linked_input_is_refused_then_relinked(tmp_path):
+    src = write(tmp_path)
+    store = tmp_path / "store.h5"
+    key = ingest([src], store).inputs[0].input_key
+    moved = tmp_path / "moved.h5"
+    src.rename(moved)
+    with pytest.raises(StoreError, match=r"store\.h5: /records/in_[0-9a-f]{16}: attribute "
+                                         r"'ingest_input_path': the linked input .*rec\.h5 is "
+                                         r"missing; ingest it again to re-link it"):
+        open_stored_record(store, key)
+    # Ingesting the file again (same content, new place) re-links it under the same key.
+    report = ingest([moved], store)
+    assert [(r.status, r.input_key) for r in report.inputs] == [("updated", key)]
+    assert len(read_catalogue(store)) == 5
+    with open_stored_record(store, key) as rec:
+        assert rec.run("dwell_094").channel("mic").read().size == N_SAMPLES
+    os.utime(moved, ns=(moved.stat().st_atime_ns, moved.stat().st_mtime_ns + 10**9))
+    with pytest.raises(StoreError, match=r"moved\.h5 has changed since it was ingested "
+                                         r"\(modification time\)"):
+        open_stored_record(store, key)
+    # Asking for a copy of a linked input replaces the link; then the input may go.
+    report = ingest([moved], store, storage="copy")
+    assert [r.status for r in report.inputs] == ["updated"]
+    moved.unlink()
+    with open_stored_record(store, key) as rec:
+        assert rec.run("dwell_094").channel("mic").read().size == N_SAMPLES
+    with h5py.File(store, "r") as fh:
+        assert [json.loads(x)["inputs"][0]["status"] for x in fh["provenance/log"].asstr()[()]] == [
+            "added", "updated", "updated"]
+
+
+def test_linked_samples_read_from_a_read_only_input(tmp_path):
+    src = write(tmp_path)
+    os.chmod(src, 0o444)
+    store = tmp_path / "store.h5"
+    key = ingest([src], store).inputs[0].input_key
+    with open_stored_record(store, key) as rec, h5py.File(src, "r") as raw:
+        np.testing.assert_array_equal(rec.run("dwell_094").channel("plate").read(si=False),
+                                      raw["runs/dwell_094/channels/plate"][()])
 
 
 def test_inputs_are_opened_read_only_and_never_modified(tmp_path, monkeypatch):
@@ -252,8 +324,8 @@ def test_adding_files_appends(tmp_path):
         np.testing.assert_array_equal(fh[f"records/{key_a}/runs/dwell_094/channels/mic"][()], data_a)
         log = [json.loads(x) for x in fh["provenance/log"].asstr()[()]]
     assert len(log) == 2
-    assert [(i["status"], i["sha256"]) for i in log[1]["inputs"]] == [
-        ("added", sha256_file(b)), ("unchanged", sha256_file(a))]
+    assert [(i["status"], i["hash"]) for i in log[1]["inputs"]] == [
+        ("added", _xxh3(b)), ("unchanged", _xxh3(a))]
 
 
 def test_provenance_is_recorded(tmp_path):
@@ -264,14 +336,16 @@ def test_provenance_is_recorded(tmp_path):
     report = ingest([src], store)
     with h5py.File(store, "r") as fh:
         attrs = fh[f"records/{report.inputs[0].input_key}"].attrs
-        assert attrs["ingest_input_sha256"] == sha256_file(src)
+        assert attrs["ingest_input_hash"] == _xxh3(src)
+        assert attrs["ingest_input_size_bytes"] == src.stat().st_size
+        assert attrs["ingest_input_mtime_ns"] == src.stat().st_mtime_ns
         assert attrs["ingest_rattle_lab_version"] == __version__
         assert attrs["ingest_input_path"] == str(src.resolve())
         assert attrs["ingest_time_iso"].endswith("Z")
         [entry] = [json.loads(x) for x in fh["provenance/log"].asstr()[()]]
-        assert fh.attrs["store_format"] == "rattle_store" and fh.attrs["store_version"] == 1
+        assert fh.attrs["store_format"] == "rattle_store" and fh.attrs["store_version"] == 2
     assert entry["rattle_lab_version"] == __version__ and entry["allow_flagged"] is False
-    assert entry["inputs"][0]["sha256"] == sha256_file(src)
+    assert entry["inputs"][0]["hash"] == _xxh3(src) and entry["storage"] == "link"
 
 
 def test_a_failing_input_leaves_the_previous_store_intact(tmp_path):
@@ -309,7 +383,7 @@ def test_allow_flagged_ingests_unchanged_data_with_flags_and_warnings(tmp_path):
         stored = fh[cat.loc["mic", "store_path"]][()]
         assert np.isnan(stored[[5, 6]]).all() and np.isfinite(np.delete(stored, [5, 6])).all()
         assert fh[cat.loc["mic", "store_path"]].attrs["ingest_flags"] == "nan"
-        assert np.all(fh[cat.loc["base", "store_path"]][200:210] == np.float32(10.0 / 0.1 * G0_MS2))
+        assert np.all(fh[cat.loc["base", "store_path"]][200:210] == np.float32(10.0))  # volts
 
 
 def test_uncalibrated_channels_are_flagged_and_warned(tmp_path):
@@ -354,6 +428,8 @@ def test_argument_errors(tmp_path):
         ingest([src], src)
     with pytest.raises(ParameterError, match=r"`n_chunk_samples` must be >= 1, was 0"):
         ingest([src], tmp_path / "s.h5", n_chunk_samples=0)
+    with pytest.raises(ParameterError, match=r"`storage` must be 'link' or 'copy', was 'move'"):
+        ingest([src], tmp_path / "s.h5", storage="move")
     with pytest.raises(OutputError, match=r"output directory .*missing does not exist"):
         ingest([src], tmp_path / "missing" / "s.h5")
 
@@ -438,8 +514,8 @@ def test_damaged_stores_are_refused(tmp_path):
     newer = tmp_path / "newer.h5"
     newer.write_bytes(store.read_bytes())
     with h5py.File(newer, "a") as fh:
-        fh.attrs["store_version"] = 2
-    with pytest.raises(StoreError, match=r"newer\.h5: /: attribute 'store_version': 2 is not supported"):
+        fh.attrs["store_version"] = 3
+    with pytest.raises(StoreError, match=r"newer\.h5: /: attribute 'store_version': 3 is not supported"):
         ingest([src], newer)
     no_cat = tmp_path / "no_cat.h5"
     no_cat.write_bytes(store.read_bytes())

@@ -17,9 +17,11 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     parser = sub.add_parser(
         "ingest", help="validate record files and ingest them into an HDF5 store",
         description="Validate record files (rattle HDF5, or HDF5/MATLAB v7.3, TDMS, WAV, LabVIEW "
-                    ".lvm, NumPy .npy through a mapping), check their data, convert to SI and "
-                    "add them to a store with a catalogue. Inputs are opened read-only; the "
-                    "store is written atomically; inputs already in the store are skipped.")
+                    ".lvm, NumPy .npy through a mapping), check their data, work out the conversion "
+                    "to SI and add them to a store with a catalogue. Inputs are opened read-only; "
+                    "the store is written atomically; inputs already in the store are skipped. "
+                    "Datasets of HDF5 inputs are linked, not copied (HDF5 virtual datasets): keep "
+                    "the inputs where they are, or use --copy.")
     parser.add_argument("files", nargs="+", metavar="FILE", help="record files to ingest")
     parser.add_argument("-o", "--output", required=True, metavar="STORE",
                         help="the store (.h5): created, or appended to")
@@ -29,6 +31,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         help="ingest data with NaN, Inf, clipping, dropouts, rate mismatch, "
                              "non-monotonic timestamps or empty channels, flagged, instead of "
                              "failing")
+    parser.add_argument("--copy", action="store_true",
+                        help="copy every sample into the store, so that it stands alone (default: "
+                             "link the datasets of HDF5 inputs, copy the rest)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_run)
@@ -43,7 +48,8 @@ def _run(args: argparse.Namespace) -> int:
     from ..ingest import ingest
 
     report = ingest(args.files, args.output, mapping=args.mapping,
-                    allow_flagged=args.allow_flagged, quiet=args.quiet, on_warning=_warn)
+                    storage="copy" if args.copy else "link", allow_flagged=args.allow_flagged,
+                    quiet=args.quiet, on_warning=_warn)
     if args.json:
         print(json.dumps(_as_json(report), indent=2, allow_nan=False))
     else:
@@ -64,7 +70,7 @@ def _as_json(report: Any) -> dict[str, Any]:
         "store": str(report.store),
         "changed": report.changed,
         "inputs": [{
-            "path": str(r.path), "sha256": r.sha256, "input_key": r.input_key, "status": r.status,
+            "path": str(r.path), "file_hash": r.file_hash, "input_key": r.input_key, "status": r.status,
             "format": r.format,
             "skipped": [{"source": s.source, "reason": s.reason} for s in r.skipped],
             "findings": [{"flag": f.flag, "path": f.path, "field": f.field,
@@ -98,6 +104,8 @@ def _as_table(report: Any) -> str:
         lines.append(f"{r.status}: {r.path} ({r.format}, {r.input_key})")
         for s in r.skipped:
             lines.append(f"  skipped {s.source}: {s.reason}")
-    n_added = sum(r.status == "added" for r in report.inputs)
-    lines.append(f"{report.store}: {n_added} added, {len(report.inputs) - n_added} unchanged")
+    counts = {status: sum(r.status == status for r in report.inputs)
+              for status in ("added", "updated", "unchanged")}
+    lines.append(f"{report.store}: " + ", ".join(f"{n} {status}" for status, n in counts.items()
+                                                  if n or status != "updated"))
     return "\n".join(lines)

@@ -220,6 +220,13 @@ class H5Source:
         self._ds: h5py.Dataset | None = obj
         return obj
 
+    @property
+    def location(self) -> tuple[Path, str] | None:
+        """``(file, dataset path)`` when the samples are a whole 1-D dataset (they can be linked)."""
+        if self.index is None and self._squeeze_axis is None:
+            return self.handle.path, self.dataset_path
+        return None
+
     def read(self, start: int, stop: int) -> np.ndarray:
         """Samples ``start:stop`` as a 1-D array of the stored dtype."""
         ds = self._dataset()

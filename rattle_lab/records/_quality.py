@@ -34,6 +34,7 @@ from typing import Literal
 
 import numpy as np
 
+from ._scan import count_equal, flat_runs
 from ._errors import (ClippingError, ClippingWarning, DataQualityError, DropoutError,
                       DropoutWarning, EmptyChannelError, EmptyChannelWarning, InfValueError,
                       InfValueWarning, NaNGapError, NaNGapWarning, NonMonotonicTimestampsError,
@@ -201,8 +202,11 @@ class ChannelChecker:
         self.first_inf: int | None = None
         self.vmin = math.inf
         self.vmax = -math.inf
-        self._prev_value: float | None = None
-        self._open: tuple[int, int, float] | None = None  # flat run touching the chunk end
+        # Flat runs shorter than this cannot be clipping or a dropout: not reported by the scan.
+        self._min_len = max(2, min(self.n_clip_min, self.n_dropout))
+        self._tail = np.empty(0, dtype=dtype.newbyteorder("="))  # last sample seen
+        self._open_start = 0  # the run of identical samples that reaches the last sample seen
+        self._open_len = 0
         self.clip = _Acc()
         self.dropout = _Acc()
         # Without a known range: flat runs at the highest / lowest value seen so far.
@@ -216,6 +220,8 @@ class ChannelChecker:
         n = int(x.shape[0])
         if n == 0:
             return
+        if not x.dtype.isnative:  # the compiled scan reads native byte order only
+            x = x.astype(x.dtype.newbyteorder("="))
         start = self.pos
         # min and max propagate NaN and show +-inf: finite extremes prove every sample finite.
         lo, hi = float(x.min()), float(x.max())
@@ -249,38 +255,27 @@ class ChannelChecker:
             self.n_inf += n_inf
 
     def _flat_runs(self, x: np.ndarray, start: int) -> None:
-        eq = x[1:] == x[:-1]
-        boundary = self._prev_value is not None and bool(x[0] == self._prev_value)
-        self._prev_value = x[-1].item()
-        if not boundary and not eq.any():
+        n = int(x.shape[0])
+        if count_equal(x, self._tail) == 0:
+            # No sample equals its neighbour: the open run ends before this chunk.
             self._close_open()
-            return
-        pos = np.flatnonzero(eq) + 1  # local p with x[p] == x[p-1]
-        if boundary:
-            pos = np.concatenate((np.zeros(1, dtype=pos.dtype), pos))
-        brk = np.flatnonzero(np.diff(pos) != 1)
-        a = pos[np.concatenate(([0], brk + 1))]
-        b = pos[np.concatenate((brk, [pos.size - 1]))]
-        starts = a - 1 + start
-        lens = b - a + 2
-        values = x[b]
-        if self._open is not None:
-            if a[0] == 0:
-                starts[0] = self._open[0]
-                lens[0] = self._open[1] + b[0] + 1
-            else:
-                self._close_open()
-        self._open = None
-        if b[-1] == x.shape[0] - 1:
-            self._open = (int(starts[-1]), int(lens[-1]), float(values[-1]))
-            starts, lens, values = starts[:-1], lens[:-1], values[:-1]
-        self._classify(starts, lens, values.astype(np.float64))
+            self._open_start, self._open_len = start + n - 1, 1
+        else:
+            cap = n // self._min_len + 2  # each reported run but the first lies inside the chunk
+            starts = np.empty(cap, dtype=np.int64)
+            lens = np.empty(cap, dtype=np.int64)
+            values = np.empty(cap, dtype=np.float64)
+            k, self._open_start, self._open_len = flat_runs(
+                x, self._tail, start, self._open_start, self._open_len, self._min_len,
+                starts, lens, values)
+            self._classify(starts[:k], lens[:k], values[:k])
+        self._tail = x[-1:].copy()
 
     def _close_open(self) -> None:
-        if self._open is not None:
-            s, n, v = self._open
-            self._open = None
-            self._classify(np.array([s]), np.array([n]), np.array([v]))
+        if self._open_len >= self._min_len:
+            self._classify(np.array([self._open_start]), np.array([self._open_len]),
+                           self._tail.astype(np.float64))
+        self._open_len = 0
 
     def _classify(self, starts: np.ndarray, lens: np.ndarray, values: np.ndarray) -> None:
         if starts.size == 0:

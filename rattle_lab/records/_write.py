@@ -23,6 +23,11 @@ from ._schema import validate_tree
 #: ``write_data(dataset, hdf5_path, source)`` fills a created dataset from its source.
 DataWriter = Callable[[h5py.Dataset, str, ArraySource], None]
 
+#: ``make_dataset(group, name, node, hdf5_path, source)`` creates a dataset itself (a link
+#: to the source, say) and returns it, or returns None to have an ordinary one created.
+DatasetMaker = Callable[[h5py.Group, str, Mapping[str, Any], str, ArraySource | None],
+                        h5py.Dataset | None]
+
 
 def _attr_value(value: Any) -> Any:
     if isinstance(value, bool):
@@ -46,13 +51,16 @@ def copy_chunks(n_chunk_samples: int = DEFAULT_CHUNK_SAMPLES) -> DataWriter:
 
 
 def write_tree(group: h5py.Group, tree: Mapping[str, Any], sources: Mapping[str, ArraySource],
-               *, write_data: DataWriter | None = None, path: str = "/") -> None:
+               *, write_data: DataWriter | None = None, make_dataset: DatasetMaker | None = None,
+               path: str = "/") -> None:
     """Write a node tree into ``group``: attributes, subgroups and datasets.
 
     Groups keep their creation order (HDF5 ``track_order``), so runs and channels
-    read back in the order they were written.  Datasets are created with the
-    tree's ``dtype`` and ``shape`` and filled by
-    ``write_data`` (default: :func:`copy_chunks`) from ``sources[path]``.
+    read back in the order they were written.  Datasets are made by
+    ``make_dataset`` when it returns one, else created with the tree's ``dtype``
+    and ``shape``; either way ``write_data`` (default: :func:`copy_chunks`) is
+    then called with ``sources[path]`` (a ``write_data`` that only reads, to check
+    the samples, suits a linked dataset).
     """
     write_data = write_data or copy_chunks()
     for key, value in tree.get("attrs", {}).items():
@@ -61,9 +69,13 @@ def write_tree(group: h5py.Group, tree: Mapping[str, Any], sources: Mapping[str,
         child_path = path.rstrip("/") + "/" + name
         if node["kind"] == "group":
             write_tree(group.create_group(name, track_order=True), node, sources, write_data=write_data,
-                       path=child_path)
+                       make_dataset=make_dataset, path=child_path)
         else:
-            ds = group.create_dataset(name, shape=tuple(node["shape"]), dtype=np.dtype(node["dtype"]))
+            ds = (make_dataset(group, name, node, child_path, sources.get(child_path))
+                  if make_dataset is not None else None)
+            if ds is None:
+                ds = group.create_dataset(name, shape=tuple(node["shape"]),
+                                          dtype=np.dtype(node["dtype"]))
             for key, value in node.get("attrs", {}).items():
                 ds.attrs[key] = _attr_value(value)
             if ds.size:

@@ -109,15 +109,14 @@ def _record_info(store: Path, key: str) -> RecordInfo:
             for ch in run.channels:
                 if ch.name in seen:
                     continue
-                ex = ch.extra
-                sens = ex.get("ingest_sensitivity", ch.sensitivity)
-                sens_units = ex.get("ingest_sensitivity_units", ch.sensitivity_units) or ""
-                rng = (f"{_s(ch.range_min)} .. {_s(ch.range_max)}"
+                # the store keeps the input's units and sensitivity; ranges shown in SI
+                sens, sens_units = ch.sensitivity, ch.sensitivity_units or ""
+                scale = ch.scale_to_si
+                rng = (f"{_s(ch.range_min * scale)} .. {_s(ch.range_max * scale)}"
                        if ch.range_min is not None and ch.range_max is not None else "")
                 pos = positions.get(ch.sensor_id or "")
                 seen[ch.name] = ChannelInfo(
-                    key, ch.name, ch.quantity, ch.units, _s(ex.get("ingest_source_units", "")),
-                    float(ex.get("ingest_scale_to_si", 1.0)),
+                    key, ch.name, ch.quantity, ch.si_units, ch.units, scale,
                     f"{_s(sens)} {_s(sens_units)}".strip() if sens is not None else "",
                     float(ch.sample_rate_hz) if ch.sample_rate_hz else float("nan"),
                     _s(ch.sensor_model), _s(ch.sensor_serial), _s(ch.calibration_date), rng,

@@ -57,6 +57,8 @@ class _LazyH5Source:
         self.dtype = np.dtype(node["dtype"])
         self.n_samples = int(node["shape"][0]) if node["shape"] else 0
         self._source: H5Source | None = None
+        #: ``(file, dataset path)`` of a 1-D dataset (see :attr:`H5Source.location`).
+        self.location = (handle.path, dataset_path) if len(node["shape"]) == 1 else None
 
     def read(self, start: int, stop: int) -> Any:
         if self._source is None:
