@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -18,6 +19,9 @@ from .exceptions import OutputError
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike[str], suffix: str | None = None) -> Iterator[Path]:
     """Yield a temporary path; on success rename it onto ``target``.
+
+    The temporary file already has the mode the result should have: that of
+    the file it replaces, or that of a new file (0o666 less the umask).
 
     Parameters
     ----------
@@ -40,7 +44,16 @@ def atomic_path(target: str | os.PathLike[str], suffix: str | None = None) -> It
         prefix=f".{target.name}.", suffix=suffix if suffix is not None else target.suffix + ".tmp",
         dir=directory,
     )
-    os.close(fd)
+    try:
+        # mkstemp makes the file 0o600; the result should have the mode of the file it
+        # replaces, or else that of any new file (0o666 less the umask).
+        try:
+            mode = stat.S_IMODE(os.stat(target).st_mode)
+        except OSError:
+            mode = 0o666 & ~_umask()
+        os.fchmod(fd, mode)
+    finally:
+        os.close(fd)
     tmp = Path(tmp_name)
     try:
         yield tmp
@@ -49,6 +62,19 @@ def atomic_path(target: str | os.PathLike[str], suffix: str | None = None) -> It
         with contextlib.suppress(OSError):
             tmp.unlink()
         raise
+
+
+def _umask() -> int:
+    try:  # Linux: read it without changing it (os.umask would, briefly, for every thread)
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except OSError:
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def atomic_write_text(target: str | os.PathLike[str], text: str) -> None:

@@ -81,7 +81,7 @@ from .records._read import detect_format
 from .records._readers.mapping import MappingSpec, load_mapping
 from .records._readers.native import load_group
 from .records._schema import validate_tree
-from .records._write import umask_mode, write_tree
+from .records._write import write_tree
 
 Storage = Literal["link", "copy"]
 
@@ -774,10 +774,8 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
     with atomic_path(store) as tmp:
         if store.exists():
             shutil.copyfile(store, tmp)
-            shutil.copymode(store, tmp)
             fh = h5py.File(tmp, "a")
         else:
-            umask_mode(tmp)
             fh = h5py.File(tmp, "w", track_order=True)
             fh.attrs["store_format"] = STORE_FORMAT
             fh.attrs["store_version"] = STORE_VERSION

@@ -15,7 +15,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .._atomic import atomic_path
+from .._atomic import _umask, atomic_path
 from ._convert import record_to_tree
 from ._model import DEFAULT_CHUNK_SAMPLES, ArraySource, Record
 from ._schema import validate_tree
@@ -85,23 +85,9 @@ def write_tree(group: h5py.Group, tree: Mapping[str, Any], sources: Mapping[str,
 def umask_mode(path: str | os.PathLike[str]) -> None:
     """Give ``path`` the mode a new file gets (0o666 less the umask).
 
-    :func:`~rattle_lab._atomic.atomic_path` makes its temporary file with
-    ``mkstemp``, i.e. mode 0o600; the renamed result should be an ordinary file.
+    Not needed after :func:`~rattle_lab._atomic.atomic_path`, which sets the mode itself.
     """
     os.chmod(path, 0o666 & ~_umask())
-
-
-def _umask() -> int:
-    try:  # Linux: read it without changing it (os.umask would, briefly, for every thread)
-        with open("/proc/self/status", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except OSError:
-        pass
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
 
 
 def write_record(path: str | os.PathLike[str], record: Record, *,
@@ -153,5 +139,4 @@ def write_record(path: str | os.PathLike[str], record: Record, *,
     with atomic_path(target) as tmp:
         with h5py.File(tmp, "w", track_order=True) as fh:
             write_tree(fh, tree, sources, write_data=copy_chunks(n_chunk_samples))
-        umask_mode(tmp)
     return target
