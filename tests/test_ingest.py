@@ -126,6 +126,14 @@ def test_constant_channel_is_a_dropout():
     assert (flag, index, count) == ("dropout", 0, 64) and detail.startswith("channel is constant")
 
 
+def test_big_endian_samples_are_checked_like_native_ones():
+    x = np.sin(np.linspace(0, 30, 300))
+    x[100:140] = 0.0
+    native = _check(x.astype("<f4"), chunk=13, n_dropout=16)
+    assert _check(x.astype(">f4"), chunk=13, n_dropout=16) == native
+    assert [f[:3] for f in native] == [("dropout", 100, 40)]
+
+
 def test_empty_channel():
     assert _check(np.zeros(0), n_dropout=16) == [("empty", None, 0, "zero-length channel (0 samples)")]
 
