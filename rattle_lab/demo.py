@@ -1,7 +1,9 @@
 """``make demo`` / ``rattle-lab demo``: the main job on the embedded default scene.
 
-simulate (synthetic rig, default scene) -> ingest -> fit -> report, ending with the
-PDF's path; a table compares the fitted values with the rig's truth.
+simulate (synthetic rig, default scene) -> ingest -> detect, thresholds, fit -> report,
+through the same pipeline as ``rattle-lab run`` (:mod:`rattle_lab.pipeline`), with
+progress bars on a terminal.  It prints a table of the fitted values against the
+rig's truth and ends with the PDF's path.
 """
 
 from __future__ import annotations
@@ -12,6 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from .exceptions import OutputError
+
+#: What the demo writes into its output directory.
+RAW_NAME, STORE_NAME, REPORT_NAME = "raw.h5", "store.h5", "report.pdf"
 
 
 def _row(name: str, unit: str, fitted: Any, stderr: Any, truth: float) -> str:
@@ -24,39 +29,22 @@ def _row(name: str, unit: str, fitted: Any, stderr: Any, truth: float) -> str:
     return f"{name:<26} {fmt(fitted):>12} {fmt(stderr):>12} {fmt(truth):>12} {err:>10}  {unit}"
 
 
-def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
-    """Run the demo into ``out_dir``; print the summary and, last, the PDF path.
+def truth_table(fits: dict[str, Any], truth: Any) -> list[str]:
+    """Lines of the table of fitted values (``summary["fits"]``) against the rig's truth.
 
-    Raises
-    ------
-    OutputError
-        If ``out_dir`` exists and is not a directory.
+    Parameters
+    ----------
+    fits : dict
+        The ``fits`` entry of a fit summary (:func:`rattle_lab.fit.summarise_fits`).
+    truth : Truth
+        The synthetic record's truth (:attr:`rattle_lab.rig.Synthesis.record` ``.truth``).
+
+    Returns
+    -------
+    list of str
+        A header and one line per quantity: fitted value, standard error (for the
+        SPL slope: half the 95 % interval), truth, relative error, unit.
     """
-    from .fit import fit_store
-    from .ingest import ingest
-    from .rig import load_scene, write_synthetic
-
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise OutputError(f"{out}: exists and is not a directory")
-    out.mkdir(parents=True, exist_ok=True)
-    raw = out / "raw.h5"
-    store = out / "store.h5"
-
-    scene = load_scene("default")
-    print(f"[1/4] simulate: embedded default scene {scene.campaign_id!r} -> {raw}", file=sys.stderr)
-    synthesis = write_synthetic(scene, raw, quiet=quiet)
-    truth = synthesis.record.truth
-    assert truth is not None
-    print(f"[2/4] ingest: {raw} -> {store}", file=sys.stderr)
-    if store.exists():
-        store.unlink()  # the demo starts from a clean store each time
-    ingest([raw], store, quiet=quiet)
-    print(f"[3/4] fit: {store}", file=sys.stderr)
-    # the engineer knows the plate: its first mode gives the participation factor
-    result = fit_store(store, fit={"participation": float(synthesis.modal.participation)})
-    fits = result.summary["fits"]
-
     lines = [
         f"{'quantity':<26} {'fitted':>12} {'std. error':>12} {'rig truth':>12} {'error':>10}  unit",
     ]
@@ -75,16 +63,65 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
     half = 0.5 * (ci[1] - ci[0]) if None not in ci else None
     lines.append(_row("SPL slope, 1st peak (95%)", "Pa/(m/s)", law.get("slope"), half,
                       float(truth.extra.get("acoustic_pa_per_m_s", float("nan")))))
-    print("\nfitted values against the rig's truth:")
-    print("\n".join(lines))
+    return lines
 
-    print("[4/4] report", file=sys.stderr)
-    pdf = out / "report.pdf"
-    try:
-        from .report import write_report  # type: ignore[attr-defined]
-    except ImportError:
-        print(f"\nreport: not available in this version; results are in {store.resolve()}")
-        return 0
-    write_report(store, pdf)
-    print(f"\nreport: {pdf.resolve()}")
+
+def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
+    """Run the demo into ``out_dir``; print the summary table and, last, the PDF path.
+
+    Writes ``raw.h5`` (the simulated record, with truth), ``store.h5`` (the
+    ingest store with ``/results``; made afresh each time) and ``report.pdf``.
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Output directory (created if needed).
+    quiet : bool
+        No progress bars (they are drawn on a terminal only, in any case).
+
+    Returns
+    -------
+    int
+        0.
+
+    Raises
+    ------
+    OutputError
+        If ``out_dir`` exists and is not a directory.
+    """
+    from .pipeline import parse_pipeline, run_pipeline
+    from .results import read_results
+    from .rig import load_scene, write_synthetic
+
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"{out}: exists and is not a directory")
+    out.mkdir(parents=True, exist_ok=True)
+    raw, store = out / RAW_NAME, out / STORE_NAME
+
+    def say(line: str) -> None:
+        print(line, file=sys.stderr, flush=True)
+
+    scene = load_scene("default")
+    say(f"[1/4] simulate: embedded default scene {scene.campaign_id!r} -> {raw}")
+    synthesis = write_synthetic(scene, raw, quiet=quiet)
+    truth = synthesis.record.truth
+    assert truth is not None  # a synthetic record always carries its truth
+    if store.exists():
+        store.unlink()  # the demo starts from a clean store each time
+    # The engineer knows the plate: its first mode gives the participation factor.
+    pipeline = parse_pipeline({
+        "pipeline": {"name": Path(REPORT_NAME).stem, "outputs": ["results", "report"]},
+        "fit": {"participation": float(synthesis.modal.participation)},
+        "report": {"model": True}}, "<demo>")
+    steps = {"ingest": f"[2/4] ingest: {raw} -> {store}", "detect": "[3/4] detect impacts and "
+             "sound peaks, per run", "thresholds": "      thresholds", "fit": "      fit: gap, "
+             "f_s, zeta (eq. 3.4), e, SPL law", "report": f"[4/4] report: {out / REPORT_NAME}"}
+    run = run_pipeline(pipeline, [raw], store=store, out_dir=out, quiet=quiet,
+                       log=lambda line: say(steps[line.split(":")[0]])
+                       if line.endswith(": running") and line.split(":")[0] in steps else None)
+    fits = read_results(store).summary.get("fits", {})
+    print("\nfitted values against the rig's truth:")
+    print("\n".join(truth_table(fits, truth)))
+    print(f"\nreport: {run.outputs['report'].resolve()}")
     return 0

@@ -37,9 +37,19 @@ key differs from the one recorded in the store under ``/pipeline_cache`` (or
 its output is gone); so a changed parameter reruns exactly the stages
 downstream of it.  :attr:`PipelineRun.executed` lists the stages run.
 
+A stage's output is also checked before it counts as up to date: the store's
+records must be those of the inputs (``ingest``), ``/results`` must be the one
+the fit stage wrote (``fit``; a later ``rattle-lab fit`` on the store replaces
+it), the report must have the bytes it was written with.
+
 Per-run detection is independent across runs: with ``scheduler`` (a
 ``dask.distributed`` address, or a ``Client``) it is mapped over the cluster;
 results are identical to the serial run (the same function on the same data).
+Each task checks that its worker runs the same rattle_lab code as this process
+(:func:`code_fingerprint`); a worker with another installation, or with a
+source tree edited since this process imported it, fails the stage with a
+:class:`~rattle_lab.exceptions.ParameterError` instead of mixing results of
+different code.
 """
 
 from __future__ import annotations
@@ -62,6 +72,7 @@ import h5py
 import numpy as np
 
 from ._atomic import atomic_path
+from ._progress import progress
 from ._version import __version__
 from .exceptions import DataError, OutputError, ParameterError
 
@@ -83,6 +94,45 @@ _OWN_KEYS: dict[str, dict[str, Any]] = {"simulate": {"seed": None},
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
 CACHE_GROUP = "pipeline_cache"
+#: Seconds to wait for a scheduler given by address.
+CONNECT_TIMEOUT_S = 10
+
+
+def _source_digest() -> str:
+    # rattle_lab's version and the SHA-256 of its Python sources (relative path + bytes).
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256(__version__.encode())
+    for path in sorted(root.rglob("*.py")):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0")
+        h.update(path.read_bytes())
+    return f"{__version__}+{h.hexdigest()[:16]}"
+
+
+# The detection code is imported with this module, and the digest taken at the same moment,
+# so the fingerprint describes the code this process runs (not the files as they are later).
+from . import fit as _fit  # noqa: E402,F401  (imports detect, thresholds, ingest, records)
+
+_FINGERPRINT = _source_digest()
+
+
+def code_fingerprint() -> str:
+    """Version and source digest of the rattle_lab code this process runs.
+
+    ``"<version>+<16 hex digits>"``: the SHA-256 of every ``.py`` file of the
+    package (relative path and bytes), taken when :mod:`rattle_lab.pipeline`
+    was imported, together with the detection code it imports.  Two processes
+    (this one and a Dask worker) with equal fingerprints run the same code.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> code_fingerprint().startswith(__version__ + "+")
+    True
+    """
+    return _FINGERPRINT
 
 
 @dataclass(frozen=True)
@@ -336,65 +386,141 @@ def _has(store: Path, path: str) -> bool:
         return path in fh
 
 
+def _output_digest(store: Path, stage: str) -> str:
+    """A digest of what ``stage`` left in the store ("" if absent).
+
+    ``ingest``: the records and their input hashes; ``fit``: the ``/results``
+    header (summary, provenance, time written), which any rewrite changes.
+    """
+    if not store.is_file():
+        return ""
+    try:
+        with h5py.File(store, "r") as fh:
+            if stage == "ingest":
+                group = fh.get("records")
+                if group is None:
+                    return ""
+                items = sorted((k, str(g.attrs.get("ingest_input_hash", "")))
+                               for k, g in group.items())
+            else:
+                group = fh.get("results")
+                if group is None:
+                    return ""
+                items = sorted((k, str(v)) for k, v in group.attrs.items())
+    except OSError:
+        return ""
+    return _digest(items)
+
+
 # --- stage functions --------------------------------------------------------------------------
 
 def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any],
-               fit: Mapping[str, Any]) -> Any:
+               fit: Mapping[str, Any], code: str | None = None) -> Any:
     """Detection results of one stored run (:func:`rattle_lab.fit.analyse_run`).
 
     A pure function of its arguments: what the serial loop and the Dask
     workers call.
+
+    Parameters
+    ----------
+    store : str
+        The ingest store.
+    input_key, run_id : str
+        The run.
+    detect, fit : mapping
+        The ``[detect]`` and ``[fit]`` parameters.
+    code : str, optional
+        The caller's :func:`code_fingerprint`; if given, this process must run
+        the same code.
+
+    Returns
+    -------
+    RunResult
+
+    Raises
+    ------
+    ParameterError
+        If ``code`` differs from this process's fingerprint (a Dask worker with
+        another rattle_lab).
     """
     from .fit import analyse_run
     from .ingest import open_stored_record
+
+    if code is not None and code != _FINGERPRINT:
+        raise ParameterError(f"`scheduler`: a worker runs other rattle_lab code ({_FINGERPRINT}) "
+                             f"than the caller ({code}); install the same rattle_lab on the "
+                             "workers (or restart them after editing the sources)")
 
     with open_stored_record(store, input_key) as record:
         return analyse_run(input_key, record.run(run_id), detect=detect, fit=fit,
                            mic_distance_m=record.rig.mic_distance_m)
 
 
+def _connect(scheduler: Any) -> tuple[Any, bool]:
+    """A ``distributed.Client`` for ``scheduler`` and whether this call owns it."""
+    from distributed import Client
+
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if not isinstance(scheduler, str) or not scheduler.strip():
+        raise ParameterError(f"`scheduler` must be an address like 'tcp://host:8786' or a "
+                             f"distributed.Client, was {scheduler!r}")
+    try:
+        return Client(scheduler.strip(), timeout=CONNECT_TIMEOUT_S), True
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ParameterError(f"`scheduler` {scheduler!r}: cannot connect "
+                             f"({' '.join(str(exc).split()) or type(exc).__name__})") from None
+
+
 def _detect_all(store: Path, detect: Mapping[str, Any], fit: Mapping[str, Any],
-                scheduler: Any) -> list[Any]:
+                scheduler: Any, quiet: bool = True) -> list[Any]:
     from .ingest import read_catalogue
 
     catalogue = read_catalogue(store, level="runs")
     jobs = [(str(store), str(k), str(r)) for k, r in zip(catalogue["input_key"],
                                                        catalogue["run_id"])]
     if scheduler is None:
-        return [detect_run(*job, detect, fit) for job in jobs]
-    from distributed import Client
+        return [detect_run(*job, detect, fit) for job in progress(
+            jobs, total=len(jobs), desc="detect", quiet=quiet, unit="run")]
+    from distributed import as_completed
 
-    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    client, owned = _connect(scheduler)
     try:
         futures = client.map(detect_run, *zip(*jobs), detect=dict(detect), fit=dict(fit),
-                             pure=False) if jobs else []
-        return list(client.gather(futures))
+                             code=_FINGERPRINT, pure=False) if jobs else []
+        position = {f.key: i for i, f in enumerate(futures)}
+        results: list[Any] = [None] * len(futures)
+        for fut in progress(as_completed(futures), total=len(futures), desc="detect",
+                            quiet=quiet, unit="run"):
+            results[position[fut.key]] = fut.result()
+        return results
     finally:
-        if client is not scheduler:
+        if owned:
             client.close()
 
 
 def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipeline) -> None:
     # The fits of rattle_lab.fit.fit_store on the cached detections (no refitting logic here).
-    from .fit._store import _clean, _summarise
+    from .fit import json_ready, summarise_fits
     from .results import StoreFit, write_results
 
     fit = pipeline.params["fit"]
     with h5py.File(store, "r") as fh:
-        inputs = {k: str(g.attrs.get("ingest_input_sha256", "")) for k, g in fh["records"].items()}
+        inputs = {k: str(g.attrs.get("ingest_input_hash", "")) for k, g in fh["records"].items()}
     provenance = {"function": "rattle_lab.fit.fit_store", "via": "rattle_lab.pipeline",
                   "pipeline": pipeline.name, "rattle_lab_version": __version__,
                   "python": sys.version.split()[0],
                   "parameters": {"detect": pipeline.params["detect"], "fit": fit},
                   "inputs": inputs}
-    summary = _summarise(list(runs), curve, fit)
-    write_results(store, StoreFit(tuple(runs), curve, _clean(summary), _clean(provenance)))
+    summary = summarise_fits(list(runs), curve, fit)
+    write_results(store, StoreFit(tuple(runs), curve, json_ready(summary),
+                                  json_ready(provenance)))
 
 
-def _sha256_file(path: Path) -> str:
-    from .ingest import sha256_file
+def _file_hash(path: Path) -> str:
+    from .ingest import file_hash
 
-    return sha256_file(path)
+    return file_hash(path)
 
 
 # --- the runner -------------------------------------------------------------------------------
@@ -422,7 +548,8 @@ def needed_stages(outputs: Sequence[str], *, scenes: bool) -> list[Stage]:
 
 def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *,
                  store: str | os.PathLike[str] | None = None, out_dir: str | os.PathLike[str] = ".",
-                 scheduler: Any = None, log: Callable[[str], None] | None = None) -> PipelineRun:
+                 scheduler: Any = None, log: Callable[[str], None] | None = None,
+                 quiet: bool = True) -> PipelineRun:
     """Run the stages ``pipeline`` needs for its outputs, skipping those up to date.
 
     Parameters
@@ -440,7 +567,10 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
     scheduler : str or distributed.Client, optional
         Run per-run detection on this Dask cluster (default: serially here).
     log : callable, optional
-        Called with one line per stage run or skipped.
+        Called with one line when a stage starts (``"<stage>: running"``), ends
+        (``"<stage>: done"``) or is skipped (``"<stage>: up to date"``).
+    quiet : bool
+        No progress bars (they are drawn on a terminal only, in any case).
 
     Returns
     -------
@@ -449,7 +579,8 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
     Raises
     ------
     ParameterError
-        If there are no inputs, an input is missing, or ``out_dir`` does not exist.
+        If there are no inputs, an input is missing, ``out_dir`` does not exist, the
+        scheduler cannot be reached or one of its workers runs other rattle_lab code.
     RattleLabError
         Whatever a stage raises (the store is left as the last completed stage wrote it).
     """
@@ -476,7 +607,7 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
         raw_for[item] = out / f"{stem}.h5"
         sim_keys[item] = _digest({"stage": "simulate", "v": version, "params": p["simulate"],
                                   "scene": hashlib.sha256(_scene_bytes(item)).hexdigest()})
-    ingest_inputs = [sim_keys[i] if i in sim_keys else _sha256_file(Path(i)) for i in items]
+    ingest_inputs = [sim_keys[i] if i in sim_keys else _file_hash(Path(i)) for i in items]
     keys["ingest"] = _digest({"stage": "ingest", "v": version, "params": p["ingest"],
                               "inputs": sorted(ingest_inputs)})
     detect_params = {**p["detect"], **{k: p["fit"][k] for k in _DETECT_FIT_KEYS}}
@@ -499,6 +630,7 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
             run.cached.append(stage)
             say(f"{stage}: up to date")
             return True
+        say(f"{stage}: running")
         return False
 
     def done(stage: str, key: str, extra: Mapping[str, str] | None = None) -> None:
@@ -517,18 +649,19 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
             for item in scenes:
                 raw = raw_for[item]
                 ck = f"simulate:{raw.name}"
-                ok = raw.is_file() and cache.get(f"{ck}:sha256") == _sha256_file(raw)
+                ok = raw.is_file() and cache.get(f"{ck}:hash") == _file_hash(raw)
                 if fresh(ck, sim_keys[item], ok):
                     continue
-                write_synthetic(item, raw, seed=p["simulate"]["seed"])
+                write_synthetic(item, raw, seed=p["simulate"]["seed"], quiet=quiet)
                 run.executed.append("simulate")
                 say(f"simulate: {item} -> {raw}")
-                cache.update({ck: sim_keys[item], f"{ck}:sha256": _sha256_file(raw)})
+                cache.update({ck: sim_keys[item], f"{ck}:hash": _file_hash(raw)})
             continue
         key = keys[stage]
         run.keys[stage] = key
         if stage == "ingest":
-            if fresh("ingest", key, store_path.is_file()):
+            if fresh("ingest", key, cache.get("ingest:records") == _output_digest(store_path,
+                                                                                 "ingest")):
                 continue
             from .ingest import ingest
 
@@ -540,18 +673,20 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
                 # make (no cached ingest key) is only ever appended to.
                 with atomic_path(store_path) as tmp:
                     tmp.unlink()
-                    ingest(files, tmp, allow_flagged=p["ingest"]["allow_flagged"], quiet=True)
+                    ingest(files, tmp, allow_flagged=p["ingest"]["allow_flagged"], quiet=quiet)
                 kept = {k: v for k, v in cache.items() if k.startswith("simulate:")}
                 cache.clear()
                 cache.update(kept)
             else:
-                ingest(files, store_path, allow_flagged=p["ingest"]["allow_flagged"], quiet=True)
+                ingest(files, store_path, allow_flagged=p["ingest"]["allow_flagged"],
+                       quiet=quiet)
             # the simulate keys are recorded now that the store exists
-            done("ingest", key, {k: v for k, v in cache.items() if k.startswith("simulate:")})
+            done("ingest", key, {**{k: v for k, v in cache.items() if k.startswith("simulate:")},
+                                 "ingest:records": _output_digest(store_path, "ingest")})
         elif stage == "detect":
             if fresh("detect", key, _has(store_path, f"{CACHE_GROUP}/detect")):
                 continue
-            runs = _detect_all(store_path, p["detect"], {**p["fit"]}, scheduler)
+            runs = _detect_all(store_path, p["detect"], {**p["fit"]}, scheduler, quiet)
             _write_detections(store_path, runs)
             done("detect", key)
         elif stage == "thresholds":
@@ -569,7 +704,8 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
                 _put(cache_group, "thresholds", curve)
             done("thresholds", key)
         elif stage == "fit":
-            if fresh("fit", key, _has(store_path, "results")):
+            if fresh("fit", key, bool(cache.get("fit:results"))
+                     and cache.get("fit:results") == _output_digest(store_path, "fit")):
                 continue
             if runs is None:
                 runs = list(read_detections(store_path))
@@ -577,19 +713,20 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
                 with h5py.File(store_path, "r") as fh:
                     curve = _get(fh[f"{CACHE_GROUP}/thresholds"])
             _fit_and_write(store_path, runs, curve, pipeline)
-            done("fit", key)
+            done("fit", key, {"fit:results": _output_digest(store_path, "fit")})
         elif stage == "report":
-            ok = report_path.is_file() and cache.get("report:sha256") == _sha256_file(report_path)
+            ok = report_path.is_file() and cache.get("report:hash") == _file_hash(report_path)
             if fresh("report", key, ok):
                 continue
             from .report import write_report
 
-            write_report(store_path, report_path, model=p["report"]["model"])
-            done("report", key, {"report:sha256": _sha256_file(report_path)})
+            write_report(store_path, report_path, model=p["report"]["model"], quiet=quiet)
+            done("report", key, {"report:hash": _file_hash(report_path)})
     for name in pipeline.outputs:
         run.outputs[name] = report_path if name == "report" else store_path
     return run
 
 
 __all__ = ["Pipeline", "PipelineRun", "STAGES", "DEPENDS", "OUTPUTS", "load_pipeline_file",
-           "parse_pipeline", "run_pipeline", "needed_stages", "read_detections", "detect_run"]
+           "parse_pipeline", "run_pipeline", "needed_stages", "read_detections", "detect_run",
+           "code_fingerprint"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -81,7 +82,51 @@ def test_model_run_bad_input_exits_2_with_one_line(tmp_path, args, message):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_demo_runs(tmp_path):
-    out = run("demo", "--out", str(tmp_path / "demo"), "--quiet")
-    last = out.stdout.strip().splitlines()[-1]
-    assert Path(last.split()[-1]).exists()
+def _demo_checks(text: str, out_dir: Path) -> None:
+    import pypdf
+
+    lines = [line.strip() for line in text.replace("\r", "\n").splitlines() if line.strip()]
+    assert lines[-1] == f"report: {(out_dir / 'report.pdf').resolve()}"
+    assert len(pypdf.PdfReader(out_dir / "report.pdf").pages) == 8
+    head = next(i for i, line in enumerate(lines) if line.startswith("quantity"))
+    assert lines[head].split()[1:5] == ["fitted", "std.", "error", "rig"]
+    rows = {line.split()[0]: line.split() for line in lines[head + 1:head + 7]}
+    assert set(rows) == {"gap", "f_s", "zeta", "e", "SPL"}
+    assert rows["f_s"][3] == "96" and rows["f_s"][-1] == "Hz"  # the rig's truth, 96 Hz
+    assert abs(float(rows["f_s"][1]) - 96.0) < 0.1
+
+
+def test_demo_piped_prints_the_table_and_the_pdf_path_last(tmp_path):
+    out = run("demo", "--out", str(tmp_path / "demo"))
+    _demo_checks(out.stdout, tmp_path / "demo")
+    assert "[4/4] report" in out.stderr
+    assert "%|" not in out.stderr  # no progress bars when not on a terminal
+
+
+def test_demo_on_a_terminal_shows_progress_bars(tmp_path):
+    import fcntl
+    import os
+    import pty
+    import struct
+    import termios
+
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 120, 0, 0))
+    proc = subprocess.Popen([_exe(), "demo", "--out", str(tmp_path / "demo")], stdin=slave,
+                            stdout=slave, stderr=slave, close_fds=True)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            data = os.read(master, 1 << 16)
+        except OSError:  # EIO: the demo exited and closed the terminal
+            break
+        if not data:
+            break
+        chunks.append(data)
+    os.close(master)
+    text = b"".join(chunks).decode("utf-8", "replace")
+    assert proc.wait(timeout=300) == 0, text[-2000:]
+    for bar in ("simulate:", "raw.h5:", "detect:", "model sweeps:"):  # tqdm: "desc:  40%|"
+        assert re.search(re.escape(bar) + r" +\d+%\|", text), bar
+    _demo_checks(text, tmp_path / "demo")

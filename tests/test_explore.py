@@ -154,6 +154,15 @@ def test_check_buttons_toggle_the_parts() -> None:
     assert all(ex.lines[(q, "transient")].get_visible() for q in ("x", "v", "a"))
     ex.toggle("transient", False)
     assert ex.checks.get_status()[2] is False
+    # every part line shows the histories' arrays (x parts are checked against the simulator
+    # in _assert_shows; the parts add up to the total in the closed-form test below)
+    h = ex.histories
+    for q in ("x", "v", "a"):
+        for part in ("forced", "transient"):
+            line = ex.lines[(q, part)]
+            np.testing.assert_array_equal(line.get_xdata(), h.t)
+            np.testing.assert_array_equal(line.get_ydata(), getattr(h, f"{q}_{part}"))
+    np.testing.assert_array_equal(ex.lines[("a", "excitation")].get_ydata(), h.excitation)
     with pytest.raises(ParameterError, match="`part` must be one of"):
         ex.toggle("velocity")  # type: ignore[arg-type]
 
@@ -230,7 +239,7 @@ def test_constructor_validates(kw: dict[str, object], match: str) -> None:
 
 # --------------------------------------------------------------------------- sweeps
 @pytest.mark.parametrize(("index", "param", "lo", "hi", "n"), [
-    (0, "omega", 0.2, 3.0, 17), (2, "e", 0.0, 1.0, 9)])
+    (0, "omega", 0.2, 3.0, 17), (1, "F", 0.0, 1.0, 9), (2, "e", 0.0, 1.0, 9)])
 def test_sweep_button(index: int, param: str, lo: float, hi: float, n: int) -> None:
     ex = _explorer(sweep_points=n)
     start = ex.histories.result.state

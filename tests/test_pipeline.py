@@ -14,11 +14,15 @@ from typing import Any
 import numpy as np
 import pytest
 
+import pypdf
+
+import rattle_lab.pipeline as pipeline_module
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.fit import fit_store
-from rattle_lab.pipeline import (Pipeline, load_pipeline_file, needed_stages, parse_pipeline,
-                                 read_detections, run_pipeline)
+from rattle_lab.pipeline import (Pipeline, code_fingerprint, load_pipeline_file, needed_stages,
+                                 parse_pipeline, read_detections, run_pipeline)
 from rattle_lab.results import read_results
+from record_factory import run_cli
 
 PIPELINES = Path(__file__).resolve().parents[1] / "pipelines"
 
@@ -102,6 +106,49 @@ def test_cache_and_exact_reruns(synthetic_campaign_record: Path, tmp_path: Path)
     assert rep2.executed == ["report"]
 
 
+def test_report_parameter_reruns_only_the_report_and_outside_fits_are_noticed(
+        synthetic_campaign_record: Path, tmp_path: Path) -> None:
+    rec, store = [synthetic_campaign_record], tmp_path / "s.h5"
+    no_model = _pipe(["report"], report={"model": False})
+    first = run_pipeline(no_model, rec, store=store, out_dir=tmp_path)
+    assert first.executed == ["ingest", "detect", "thresholds", "fit", "report"]
+    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 6
+    # [report] model = true: the report only (one more page pair: the model predictions)
+    with_model = run_pipeline(_pipe(["report"]), rec, store=store, out_dir=tmp_path)
+    assert with_model.executed == ["report"]
+    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 8
+    # `rattle-lab fit` run on the store by hand replaces /results: the fit stage is stale
+    fit_store(store, fit={"outlier_k": 3.0})
+    after = run_pipeline(_pipe(["results"]), rec, store=store, out_dir=tmp_path)
+    assert after.executed == ["fit"] and after.cached == ["ingest", "detect", "thresholds"]
+    assert read_results(store).provenance["via"] == "rattle_lab.pipeline"
+
+
+def test_shipped_pipelines_run(synthetic_campaign_record: Path, tmp_path: Path) -> None:
+    rec = [synthetic_campaign_record]
+    thr = run_pipeline(load_pipeline_file(PIPELINES / "threshold_campaign.toml"), rec,
+                       out_dir=tmp_path)
+    assert thr.executed == ["ingest", "detect", "thresholds", "fit"]  # no report asked for
+    assert thr.outputs == {"results": tmp_path / "threshold_campaign.h5"}
+    fits = read_results(thr.store).summary["fits"]
+    assert abs(fits["grazing"]["f_s_hz"]["value"] - 96.0) < 0.1  # the scene's truth: 96 Hz
+    spl = run_pipeline(load_pipeline_file(PIPELINES / "spl_study.toml"), rec, out_dir=tmp_path)
+    assert spl.executed == ["ingest", "detect", "thresholds", "fit", "report"]
+    assert read_results(spl.store).summary["fits"]["spl_law_first"]["linear"]["r2"] > 0.9
+    text = "".join(pg.extract_text() for pg in pypdf.PdfReader(spl.outputs["report"]).pages)
+    assert "SPL first peak: slope" in text and "not requested (model=False)" in text
+    full_pipe = load_pipeline_file(PIPELINES / "full_campaign.toml")
+    full = run_pipeline(full_pipe, ["default"], out_dir=tmp_path)
+    assert full.executed == ["simulate", "ingest", "detect", "thresholds", "fit", "report"]
+    assert set(full.outputs) == {"store", "results", "report"}
+    reader = pypdf.PdfReader(full.outputs["report"])
+    assert len(reader.pages) == 8 and "model onset" in reader.pages[-1].extract_text()
+    again = run_pipeline(full_pipe, ["default"], out_dir=tmp_path)
+    assert again.executed == []
+    assert again.cached == ["simulate:default.h5", "ingest", "detect", "thresholds", "fit",
+                            "report"]
+
+
 def test_scene_input_is_simulated_once(tmp_path: Path) -> None:
     pipe = _pipe(["store"])
     first = run_pipeline(pipe, ["default"], out_dir=tmp_path)
@@ -136,21 +183,79 @@ def _as_plain(obj: Any) -> Any:
     return obj
 
 
-def test_dask_local_cluster_equals_serial(synthetic_campaign_record: Path, tmp_path: Path
-                                         ) -> None:
+@pytest.fixture(scope="module")
+def cluster() -> Any:
+    """A real ``dask.distributed`` LocalCluster of two worker processes, and a client."""
     distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as local, \
+            distributed.Client(local) as client:
+        yield client
+
+
+def test_dask_local_cluster_equals_serial(synthetic_campaign_record: Path, tmp_path: Path,
+                                          cluster: Any) -> None:
     pipe = _pipe(["detections"])
     serial = run_pipeline(pipe, [synthetic_campaign_record], store=tmp_path / "serial.h5",
                           out_dir=tmp_path)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
-        par = run_pipeline(pipe, [synthetic_campaign_record], store=tmp_path / "dask.h5",
-                           out_dir=tmp_path, scheduler=client.scheduler.address)
+    par = run_pipeline(pipe, [synthetic_campaign_record], store=tmp_path / "dask.h5",
+                       out_dir=tmp_path, scheduler=cluster.scheduler.address)
     assert serial.executed == par.executed == ["ingest", "detect"]
     a, b = read_detections(tmp_path / "serial.h5"), read_detections(tmp_path / "dask.h5")
     assert len(a) == 10
     assert _diff(_as_plain(a), _as_plain(b)) == []
+    # the workers ran the code this process runs (each task checks)
+    assert set(cluster.run(code_fingerprint).values()) == {code_fingerprint()}
+
+
+def test_cli_scheduler_option(synthetic_campaign_record: Path, tmp_path: Path,
+                              cluster: Any) -> None:
+    pipe = tmp_path / "detect_only.toml"
+    pipe.write_text('[pipeline]\nname = "det"\noutputs = ["detections"]\n')
+    proc = run_cli("run", str(pipe), str(synthetic_campaign_record), "--out", str(tmp_path),
+                   "--scheduler", cluster.scheduler.address)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == f"detections\t{tmp_path / 'det.h5'}\n"
+    assert "detect: done" in proc.stderr
+    assert len(read_detections(tmp_path / "det.h5")) == 10
+
+
+def _set_fingerprint(value: str) -> str:
+    """Run on a worker: pretend it runs other code; return the fingerprint it had."""
+    old = pipeline_module._FINGERPRINT
+    pipeline_module._FINGERPRINT = value
+    return old
+
+
+def test_workers_with_other_code_are_refused(synthetic_campaign_record: Path, tmp_path: Path,
+                                             cluster: Any) -> None:
+    # e.g. another rattle_lab installed on the cluster, or sources edited after this process
+    # imported them: the results would mix code versions, so the stage fails instead
+    old = cluster.run(_set_fingerprint, "0.0.0+0000000000000000")
+    try:
+        with pytest.raises(ParameterError, match=r"a worker runs other rattle_lab code "
+                                                 r"\(0\.0\.0\+0+\) than the caller"):
+            run_pipeline(_pipe(["detections"]), [synthetic_campaign_record],
+                         store=tmp_path / "s.h5", out_dir=tmp_path,
+                         scheduler=cluster.scheduler.address)
+    finally:
+        for address, value in old.items():
+            cluster.run(_set_fingerprint, value, workers=[address])
+    assert set(cluster.run(code_fingerprint).values()) == {code_fingerprint()}
+
+
+def test_unreachable_scheduler_is_a_parameter_error(synthetic_campaign_record: Path,
+                                                    tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    pytest.importorskip("distributed")
+    monkeypatch.setattr(pipeline_module, "CONNECT_TIMEOUT_S", 1)
+    with pytest.raises(ParameterError, match=r"`scheduler` 'tcp://127\.0\.0\.1:9': cannot "
+                                             r"connect"):
+        run_pipeline(_pipe(["detections"]), [synthetic_campaign_record],
+                     store=tmp_path / "s.h5", out_dir=tmp_path, scheduler="tcp://127.0.0.1:9")
+    with pytest.raises(ParameterError, match="`scheduler` must be an address"):
+        run_pipeline(_pipe(["detections"]), [synthetic_campaign_record],
+                     store=tmp_path / "s.h5", out_dir=tmp_path, scheduler=" ")
 
 
 def _diff(a: Any, b: Any, path: str = "") -> list[str]:

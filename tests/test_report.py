@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
+from types import SimpleNamespace
 
 import h5py
 import numpy as np
@@ -17,8 +18,9 @@ from rattle_lab.exceptions import OutputError, ParameterError, RattleLabError
 from rattle_lab.fit import fit_store
 from rattle_lab.ingest import ingest
 from rattle_lab.records._errors import StoreError
-from rattle_lab.report import ReportResult, write_report
-from rattle_lab.report._pages import grazing_band_ms2
+from rattle_lab.report import ReportResult, build_pages, gather, write_report
+from rattle_lab.report._pages import (TEXT_WIDTH, band_quantile, grazing_band_ms2,
+                                      parameter_lines, summary_lines)
 
 
 @pytest.fixture(scope="module")
@@ -57,11 +59,43 @@ def test_full_report_structure(full_report: tuple[ReportResult, Path]) -> None:
     for i, text in enumerate(texts, start=1):
         assert f"Page {i} of {n}" in text
     summary = texts[0]
-    for key in ("gap =", "zeta (damping ratio) =", "f_s (modal frequency) =",
-                "e (velocity ratios) =", "SPL law (first peak)", "Pa/(m/s)", "mm", "Hz",
-                "Data-quality flags", "none", "Provenance", "sha256", "rattle_lab 0."):
+    for key in ("gap h", "zeta (damping ratio)", "f_s (modal frequency)", "participation Q1/Q2",
+                "e (velocity ratios)", "e (disappearance thresholds)", "95 % CI",
+                "SPL first peak: slope", "Pa/(m/s)", "dB re 20 uPa at 1 m/s", "mm", "Hz",
+                "Data-quality flags", "none", "Provenance", "xxh3_128:", "rattle_lab 0.",
+                "[fit] conf_interval = True"):
         assert key in summary, key
     assert "missing:" not in summary
+
+
+def test_summary_values_come_from_results(stores: dict[str, Path]) -> None:
+    data = gather(stores["fitted"])
+    g = data.results.summary["fits"]["grazing"]
+    table = "\n".join(parameter_lines(data))
+    gap_mm = g["gap_m"]["value"] * 1e3
+    lo, hi = (1e3 * x for x in g["gap_m"]["ci"])
+    assert f"{gap_mm:.5g}" in table and f"[{lo:.4g}, {hi:.4g}]" in table
+    e = data.results.summary["fits"]["restitution_ratio"]
+    assert f"{e['value']:.5g}" in table and f"from {e['n']} impacts" in table
+    # every line fits the page (the text is monospaced, TEXT_WIDTH characters wide)
+    assert max(len(line) for line in summary_lines(data, "0")) <= TEXT_WIDTH
+
+
+def test_parameter_table_flags_unidentified_and_missing_fits() -> None:
+    results = SimpleNamespace(summary={"fits": {
+        "restitution_ratio": {"value": 0.6, "stderr": 0.01, "n": 11},
+        "restitution_down": {"value": 0.999, "stderr": 1.7, "n": 2}},
+        "not_fitted": {"grazing": "needs >= 4 upward thresholds, had 2",
+                       "spl_law_first": "no microphone"}})
+    data = SimpleNamespace(results=results, missing={})
+    text = "\n".join(parameter_lines(data))  # type: ignore[arg-type]
+    assert "not fitted: needs >= 4 upward thresholds, had 2" in text
+    assert "not fitted: no microphone" in text
+    assert "NOT IDENTIFIED" in text.split("e (disappearance thresholds)")[1]
+    assert "NOT IDENTIFIED" not in text.split("e (disappearance thresholds)")[0]
+    # Student t with n - 1 = 10 degrees of freedom: t(0.975, 10) = 2.228139
+    half = 2.2281388519649385 * 0.01
+    assert f"[{0.6 - half:.4g}, {0.6 + half:.4g}]" in text
 
 
 def test_every_figure_page_has_labelled_axes_and_drawings(full_report: tuple[ReportResult, Path]
@@ -84,6 +118,26 @@ def test_every_figure_page_has_labelled_axes_and_drawings(full_report: tuple[Rep
     for page in reader.pages[1:]:  # vector drawings: path operators in the content stream
         content = page.get_contents().get_data()
         assert b" l\n" in content or b" l " in content or b" re" in content
+
+
+def test_no_text_overlaps_the_page_footer(stores: dict[str, Path]) -> None:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    pages, sections = build_pages(gather(stores["fitted"]), model=False)
+    assert sections[0] == "summary" and len(pages) == 6
+    for name, fig in pages:
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        renderer = canvas.get_renderer()
+        footer = fig.texts[-1]
+        assert footer.get_text().startswith("Page ")
+        box = footer.get_window_extent(renderer)
+        for ax in fig.axes:
+            if ax.get_visible() and ax.axison:  # the rig tables' axes are switched off
+                assert not ax.get_tightbbox(renderer).overlaps(box), name
+        for text in fig.texts[:-1]:
+            assert not text.get_window_extent(renderer).overlaps(box), (name, text.get_text())
+            assert text.get_window_extent(renderer).x1 <= fig.bbox.x1, (name, text.get_text())
 
 
 def test_same_store_gives_identical_bytes(stores: dict[str, Path], full_report, tmp_path: Path
@@ -131,6 +185,17 @@ def test_grazing_band_against_closed_form() -> None:
     f = np.array([90.0, 96.0, 100.0])
     y, half = grazing_band_ms2(f, g)
     np.testing.assert_allclose(half, 1.96 * 1e-4 * y / 1e-3, rtol=1e-6)
+
+
+def test_band_uses_student_t_with_the_fit_degrees_of_freedom() -> None:
+    g = {"residuals_ms2": [0.1, -0.2, 0.0, 0.3, 0.1], "outliers_hz": [97.0],
+         "correlation": {"names": ["gap_m", "f_s_hz"], "matrix": [[1, 0], [0, 1]]}}
+    q, dof = band_quantile(g)
+    assert dof == 2 and np.isclose(q, 4.302652729749464)  # t(0.975, 2), scipy reference
+    g["correlation"]["names"] += ["zeta"]
+    assert band_quantile(g)[1] == 1
+    g["correlation"]["names"] += ["participation"]  # 4 points (5 less an outlier), 4 parameters
+    assert band_quantile(g)[1] == 0 and np.isnan(band_quantile(g)[0])
 
 
 def test_errors(stores: dict[str, Path], tmp_path: Path) -> None:

@@ -23,7 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="dask.distributed scheduler address for per-run detection "
                              "(default: serial, in this process)")
-    parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress lines or bars on stderr")
     parser.set_defaults(func=_run)
 
 
@@ -35,7 +36,8 @@ def _run(args: argparse.Namespace) -> int:
             print(f"rattle-lab: {line}", file=sys.stderr)
 
     result = run_pipeline(load_pipeline_file(args.pipeline), args.inputs, store=args.store,
-                          out_dir=args.out, scheduler=args.scheduler, log=say)
+                          out_dir=args.out, scheduler=args.scheduler, log=say,
+                          quiet=args.quiet)
     for name, path in result.outputs.items():
         print(f"{name}\t{path}")
     return 0

@@ -5,10 +5,11 @@ from ._grazing import GrazingFit, fit_grazing, grazing_threshold_ms2
 from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_down,
                            restitution_from_ratios, saddle_node_threshold_ms2)
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
-from ._store import analyse_run, fit_store, load_pipeline
+from ._store import analyse_run, fit_store, json_ready, load_pipeline, summarise_fits
 
 __all__ = [
-    "DbLaw", "GrazingFit", "analyse_run", "fit_store", "load_pipeline", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
+    "DbLaw", "GrazingFit", "analyse_run", "fit_store", "json_ready", "load_pipeline",
+    "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down", "grazing_threshold_ms2",
     "restitution_from_ratios", "saddle_node_threshold_ms2",
 ]

@@ -166,11 +166,34 @@ def _f(x: Any) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def _clean(obj: Any) -> Any:
+def json_ready(obj: Any) -> Any:
+    """A copy of ``obj`` that :func:`json.dumps` writes as strict JSON.
+
+    Dicts and lists/tuples are walked recursively (tuples become lists); NumPy
+    scalars become Python ``int``, ``float`` or ``bool``; non-finite floats
+    (NaN, +-Inf) become ``None``.  Everything else is returned unchanged.
+    This is how :func:`fit_store` cleans the summary and provenance it writes.
+
+    Parameters
+    ----------
+    obj : Any
+        A nest of dicts, lists, tuples and scalars (e.g. from :func:`summarise_fits`).
+
+    Returns
+    -------
+    Any
+        The cleaned copy; ``obj`` is not modified.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> json_ready({"a": (np.float64(1.5), float("nan")), "n": np.int64(3), "ok": np.bool_(True)})
+    {'a': [1.5, None], 'n': 3, 'ok': True}
+    """
     if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
+        return {k: json_ready(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
+        return [json_ready(v) for v in obj]
     if isinstance(obj, (float, np.floating)):
         return _f(obj)
     if isinstance(obj, np.integer):
@@ -213,11 +236,11 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
         finally:
             record.close()
     curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
-    summary = _summarise(runs, curve, fit)
+    summary = summarise_fits(runs, curve, fit)
     provenance = {"function": "rattle_lab.fit.fit_store", "rattle_lab_version": __version__,
                   "python": sys.version.split()[0], "parameters": {"detect": detect, "fit": fit},
                   "inputs": inputs}
-    result = StoreFit(tuple(runs), curve, _clean(summary), _clean(provenance))
+    result = StoreFit(tuple(runs), curve, json_ready(summary), json_ready(provenance))
     if write:
         write_results(store, result)
     return result
@@ -227,7 +250,43 @@ def _est(value: float, stderr: float, unit: str, **extra: Any) -> dict[str, Any]
     return {"value": value, "stderr": stderr, "unit": unit, **extra}
 
 
-def _summarise(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) -> dict[str, Any]:
+def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) -> dict[str, Any]:
+    """Fit the store-level models to per-run detections; the summary ``/results`` stores.
+
+    From the per-run results of :func:`analyse_run` and the threshold table of
+    :func:`rattle_lab.thresholds.tabulate_thresholds`: the eq. (3.4) grazing fit
+    (gap, f_s, zeta; needs >= 4 upward thresholds), the coefficient of restitution
+    from velocity ratios and from the disappearance thresholds, and the SPL laws
+    (first peak, maximum peak, RMS per impact) against impact velocity.  A fit that
+    cannot be made is named in ``"not_fitted"`` with the reason; nothing raises for it.
+
+    Parameters
+    ----------
+    runs : list of RunResult
+        Per-run detection results (any order; skipped runs are counted and listed).
+    curve : ThresholdCurve
+        Onset/disappearance thresholds against frequency.
+    fit : mapping
+        Fit parameters: every key of ``FIT_KEYS`` (``participation``,
+        ``vary_participation``, ``outlier_k``, ``conf_interval``, ...).
+
+    Returns
+    -------
+    dict
+        ``n_runs``, ``n_ok``, ``skipped`` (input_key, run_id, reason), ``runs`` (one
+        row per analysed run: protocol, freq_hz, n_impacts, pattern, delays in s, SPL
+        in dB, threshold in m/s^2), ``thresholds`` (freq_hz, up_ms2, down_ms2,
+        hysteresis_ms2), ``fits`` (``grazing``: per parameter value, stderr, unit,
+        95 % ci, vary, plus correlation; ``restitution_ratio``, ``restitution_down``:
+        value, stderr, unit, n; ``spl_law_first|max|rms``: linear and dB laws) and
+        ``not_fitted`` (fit name -> reason).  May hold NumPy scalars and NaN: pass it
+        through :func:`json_ready` before writing JSON.
+
+    Raises
+    ------
+    KeyError
+        If ``fit`` lacks a key of ``FIT_KEYS`` the fits need.
+    """
     ok = [r for r in runs if r.status == "ok"]
     summary: dict[str, Any] = {
         "n_runs": len(runs), "n_ok": len(ok),
@@ -303,4 +362,4 @@ def _summarise(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) -> dic
     return summary
 
 
-__all__ = ["analyse_run", "fit_store", "load_pipeline"]
+__all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "summarise_fits"]

@@ -7,7 +7,7 @@ calibration table, the thresholds with the eq. (3.4) fit (thesis Fig. 6-2,
 the SPL law (Fig. 6-7) and model predictions at the fitted parameters.
 """
 
-from ._build import SECTIONS, ReportResult, write_report
+from ._build import SECTIONS, ReportResult, build_pages, write_report
 from ._data import ReportData, gather
 
-__all__ = ["write_report", "ReportResult", "ReportData", "gather", "SECTIONS"]
+__all__ = ["write_report", "build_pages", "ReportResult", "ReportData", "gather", "SECTIONS"]

@@ -50,7 +50,7 @@ class ReportResult:
 
 
 def write_report(store: str | os.PathLike[str], output: str | os.PathLike[str], *,
-                 model: bool = True) -> ReportResult:
+                 model: bool = True, quiet: bool = True) -> ReportResult:
     """Write the multi-page PDF report of an ingest store (after ``rattle-lab fit``).
 
     Each section is drawn only if its data exist; otherwise the summary page
@@ -66,6 +66,8 @@ def write_report(store: str | os.PathLike[str], output: str | os.PathLike[str], 
     model : bool
         Include the model predictions (bifurcation sets and sweeps at the fitted
         parameters; a few seconds).
+    quiet : bool
+        No progress bar (one is drawn on a terminal for the model sweeps otherwise).
 
     Returns
     -------
@@ -87,33 +89,11 @@ def write_report(store: str | os.PathLike[str], output: str | os.PathLike[str], 
     if output.suffix.lower() != ".pdf":
         raise ParameterError(f"`output` must end in .pdf, was {str(output)!r}")
     data = gather(store)
-    sections: list[str] = []
-    pages: list[tuple[str, Figure]] = []
-    for name, build in SECTIONS:
-        if name == "model predictions" and not model:
-            data.missing[name] = "not requested (model=False)"
-            continue
-        try:
-            figs = build(data)
-        except _pages.Missing as why:
-            data.missing[name] = str(why)
-            continue
-        sections.append(name)
-        pages.extend((name, fig) for fig in figs)
-    lines = _pages.summary_lines(data, __version__)
-    lines.append("")
-    lines.append("Sections")
-    lines.extend(f"  included: {name}" for name in sections)
-    lines.extend(f"  missing: {name}: {why}" for name, why in data.missing.items())
-    summary = _pages.text_page("rattle_lab report: fitted gap, zeta, f_s, e and SPL law", lines)
-    all_pages = [("summary", summary), *pages]
+    all_pages, sections = build_pages(data, model=model, quiet=quiet)
     n = len(all_pages)
-    for i, (name, fig) in enumerate(all_pages, start=1):
-        fig.text(0.5, 0.008, f"Page {i} of {n}  -  {name}  -  {data.store.name}", ha="center",
-                 va="bottom", fontsize=7, color="0.3")
     # Fixed metadata (no dates) and fixed hash salt: identical bytes for the same store.
     metadata = {"Title": f"rattle_lab report: {data.store.name}", "Creator": "rattle_lab",
-                "Subject": "sections: " + ", ".join(["summary", *sections]),
+                "Subject": "sections: " + ", ".join(sections),
                 "CreationDate": None, "ModDate": None}
     with matplotlib.rc_context({"pdf.fonttype": 42, "svg.hashsalt": "rattle_lab"}):
         with atomic_path(output) as tmp:
@@ -121,4 +101,56 @@ def write_report(store: str | os.PathLike[str], output: str | os.PathLike[str], 
                 for _, fig in all_pages:
                     pdf.savefig(fig)
             umask_mode(tmp)
-    return ReportResult(output, n, ("summary", *sections), dict(data.missing))
+    return ReportResult(output, n, sections, dict(data.missing))
+
+
+def build_pages(data: ReportData, *, model: bool = True, quiet: bool = True
+                ) -> tuple[list[tuple[str, Figure]], tuple[str, ...]]:
+    """Every page of the report, in order and numbered, and the sections present.
+
+    Sections whose data are missing are left out and recorded in
+    ``data.missing`` (which the summary page lists).
+
+    Parameters
+    ----------
+    data : ReportData
+        From :func:`gather`.
+    model : bool
+        Include the model predictions.
+    quiet : bool
+        No progress bar.
+
+    Returns
+    -------
+    pages : list of (str, Figure)
+        Section name and figure of each page; each page carries its footer
+        ("Page i of n - section - store").
+    sections : tuple of str
+        The sections present, ``"summary"`` first.
+    """
+    sections: list[str] = []
+    pages: list[tuple[str, Figure]] = []
+    for name, build in SECTIONS:
+        if name == "model predictions" and not model:
+            data.missing[name] = "not requested (model=False)"
+            continue
+        try:
+            figs = (_pages.model_pages(data, quiet=quiet) if build is _pages.model_pages
+                    else build(data))
+        except _pages.Missing as why:
+            data.missing[name] = " ".join(str(why).split())
+            continue
+        sections.append(name)
+        pages.extend((name, fig) for fig in figs)
+    lines = _pages.summary_lines(data, __version__)
+    lines += ["", "Sections"]
+    lines += [f"  included: {name}" for name in sections]
+    for name, why in data.missing.items():
+        lines += _pages.wrapped(f"  missing: {name}: {why}")
+    summary = _pages.text_pages("rattle_lab report: fitted gap, zeta, f_s, e and SPL law", lines)
+    all_pages = [*(("summary", fig) for fig in summary), *pages]
+    n = len(all_pages)
+    for i, (name, fig) in enumerate(all_pages, start=1):
+        fig.text(0.5, 0.008, f"Page {i} of {n}  -  {name}  -  {data.store.name}", ha="center",
+                 va="bottom", fontsize=7, color="0.3")
+    return all_pages, ("summary", *sections)

@@ -26,6 +26,13 @@ class Missing(Exception):
     """A section cannot be drawn; the message says why (shown on the summary page)."""
 
 
+def landscape_figure() -> Figure:
+    """An A4 landscape figure, constrained layout, with the bottom 2.5 % kept for the footer."""
+    fig = Figure(figsize=LANDSCAPE_IN, layout="constrained")
+    fig.get_layout_engine().set(rect=(0.0, 0.025, 1.0, 0.975))  # type: ignore[union-attr]
+    return fig
+
+
 def _fmt(x: Any, digits: str = ".4g") -> str:
     if x is None:
         return "-"
@@ -60,13 +67,57 @@ def _pval(g: Mapping[str, Any], name: str, default: float = float("nan")) -> flo
 
 # --- summary -------------------------------------------------------------------------------
 
-def summary_lines(data: ReportData, version: str) -> list[str]:
-    """Text lines of the summary page (fitted values, flags, provenance)."""
-    lines = [f"store: {data.store.name}", ""]
+#: Characters per line of the monospaced text pages (7.5 pt DejaVu Sans Mono on A4 portrait).
+TEXT_WIDTH = 112
+_COLS = (("quantity", 34), ("value", 11), ("std. error", 11), ("95 % CI", 25), ("unit", 0))
+
+
+def _t_ci(value: Any, stderr: Any, dof: int) -> tuple[float | None, float | None]:
+    """Student-t 95 % interval ``value +/- t(0.975, dof) stderr`` (None where undefined)."""
+    from scipy import stats
+
+    try:
+        v, e = float(value), float(stderr)
+    except (TypeError, ValueError):
+        return None, None
+    if dof < 1 or not (math.isfinite(v) and math.isfinite(e)):
+        return None, None
+    half = float(stats.t.ppf(0.975, dof)) * e
+    return v - half, v + half
+
+
+def _row(quantity: str, value: Any = None, stderr: Any = None,
+         ci: tuple[Any, Any] | None = None, unit: str = "", note: str = "",
+         scale: float = 1.0) -> list[str]:
+    """One aligned row of the parameter table (and its note, wrapped, below it)."""
+    def sc(x: Any) -> Any:
+        return None if x is None else float(x) * scale
+
+    ci_txt = "-" if ci is None or None in ci else f"[{_fmt(sc(ci[0]))}, {_fmt(sc(ci[1]))}]"
+    err_txt = stderr if isinstance(stderr, str) else _fmt(sc(stderr))
+    cells = (quantity, _fmt(sc(value), ".5g"), err_txt, ci_txt, unit)
+    line = "  " + " ".join(c.ljust(w) if w else c for c, (_, w) in zip(cells, _COLS))
+    out = [line.rstrip()]
+    if note:
+        out.extend(textwrap.wrap(note, TEXT_WIDTH, initial_indent="      ",
+                                 subsequent_indent="      "))
+    return out
+
+
+def _not_fitted(data: ReportData, key: str) -> str:
+    if data.results is None:
+        return data.missing.get("results", "no results")
+    return " ".join(str(data.results.summary.get("not_fitted", {}).get(key, "not fitted"))
+                    .split())
+
+
+def parameter_lines(data: ReportData) -> list[str]:
+    """The table of fitted parameters: value, standard error, 95 % interval, unit."""
+    header = "  " + " ".join(n.ljust(w) if w else n for n, w in _COLS)
+    lines = [header, "  " + "-" * (len(header) - 2)]
     fits = _fits(data)
-    lines.append("Fitted parameters (value +/- standard error [95 % confidence interval], unit)")
     g = _grazing(data)
-    names = {"gap_m": ("gap", 1e3, "mm"), "f_s_hz": ("f_s (modal frequency)", 1.0, "Hz"),
+    names = {"gap_m": ("gap h", 1e3, "mm"), "f_s_hz": ("f_s (modal frequency)", 1.0, "Hz"),
              "zeta": ("zeta (damping ratio)", 1.0, "1"),
              "participation": ("participation Q1/Q2", 1.0, "1")}
     if g is not None:
@@ -74,42 +125,76 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
             p = g.get(key)
             if not isinstance(p, Mapping):
                 continue
-            ci = p.get("ci") or [None, None]
-            ci_txt = (f" [{_fmt(ci[0] * scale if ci[0] is not None else None)}, "
-                      f"{_fmt(ci[1] * scale if ci[1] is not None else None)}]")
-            fixed = "" if p.get("vary", True) else " (fixed)"
-            val = None if p.get("value") is None else p["value"] * scale
-            err = None if p.get("stderr") is None else p["stderr"] * scale
-            lines.append(f"  {label} = {_fmt(val)} +/- {_fmt(err)}{ci_txt} {unit}{fixed}")
-        for note in g.get("unidentifiable", []) or []:
-            lines.append(f"  note: {note}")
+            if not p.get("vary", True):
+                lines += _row(label, p.get("value"), "fixed", None, unit, scale=scale)
+                continue
+            ci = tuple(p.get("ci") or (None, None))
+            lines += _row(label, p.get("value"), p.get("stderr"), ci, unit,  # type: ignore[arg-type]
+                          scale=scale)
+        notes = [str(n) for n in g.get("unidentifiable", []) or []]
+        if g.get("outliers_hz"):
+            notes.append("thresholds left out as outliers at " + ", ".join(
+                f"{_fmt(f)} Hz" for f in g["outliers_hz"]))
+        for note in notes:
+            lines += textwrap.wrap("note: " + note, TEXT_WIDTH, initial_indent="      ",
+                                   subsequent_indent="      ")
     else:
-        lines.append("  gap, f_s, zeta: not fitted ("
-                     + str(data.results.summary.get("not_fitted", {}).get("grazing", "no results")
-                           if data.results is not None else "no results") + ")")
-    for key, label in (("restitution_ratio", "e (velocity ratios)"),
-                       ("restitution_down", "e (disappearance thresholds)")):
+        lines += _row("gap h, f_s, zeta", note="not fitted: " + _not_fitted(data, "grazing"))
+    for key, label, what in (("restitution_ratio", "e (velocity ratios)", "impacts"),
+                             ("restitution_down", "e (disappearance thresholds)", "thresholds")):
         p = fits.get(key)
-        if isinstance(p, Mapping):
-            lines.append(f"  {label} = {_fmt(p.get('value'))} +/- {_fmt(p.get('stderr'))} 1")
-        else:
-            why = (data.results.summary.get("not_fitted", {}).get(key, "not fitted")
-                   if data.results is not None else "no results")
-            lines.append(f"  {label}: not fitted ({why})")
-    for name in ("first", "max", "rms"):
+        if not isinstance(p, Mapping):
+            lines += _row(label, note="not fitted: " + _not_fitted(data, key))
+            continue
+        n = int(p.get("n") or 0)
+        note = f"from {n} {what}"
+        if key == "restitution_ratio" and p.get("median") is not None:
+            note += f"; median {_fmt(p.get('median'))}, scatter (std) {_fmt(p.get('std'))}"
+        err = p.get("stderr")
+        if err is not None and p.get("value") is not None and float(err) > abs(float(p["value"])):
+            note += "; NOT IDENTIFIED: the standard error exceeds the value"
+        lines += _row(label, p.get("value"), err, _t_ci(p.get("value"), err, n - 1), "1", note)
+    for name, label in (("first", "first peak"), ("max", "maximum peak"),
+                        ("rms", "RMS per impact")):
         law = fits.get(f"spl_law_{name}")
         if not isinstance(law, Mapping):
+            lines += _row(f"SPL law, {label}",
+                          note="not fitted: " + _not_fitted(data, f"spl_law_{name}"))
             continue
-        lin, db = law.get("linear", {}), law.get("db", {})
-        sci = lin.get("slope_ci") or [None, None]
-        cci = db.get("c_ci") or [None, None]
-        label = {"first": "first peak", "max": "maximum peak", "rms": "RMS per impact"}[name]
-        lines.append(f"  SPL law ({label}): p = {_fmt(lin.get('slope'))} [{_fmt(sci[0])}, "
-                     f"{_fmt(sci[1])}] Pa/(m/s) * v + {_fmt(lin.get('intercept'))} Pa, "
-                     f"r2 = {_fmt(lin.get('r2'), '.3f')}; L = 20 log10(v) + "
-                     f"{_fmt(db.get('c_db'))} [{_fmt(cci[0])}, {_fmt(cci[1])}] dB re 20 uPa")
-    lines.append("")
-    lines.append("Data-quality flags (catalogue)")
+        lin, db = dict(law.get("linear", {})), dict(law.get("db", {}))
+        lines += _row(f"SPL {label}: slope", lin.get("slope"), None,
+                      tuple(lin.get("slope_ci") or (None, None)), "Pa/(m/s)",  # type: ignore[arg-type]
+                      f"p = slope * |v_in| + intercept, r2 = {_fmt(lin.get('r2'), '.3f')}, "
+                      f"{lin.get('n', '?')} impacts")
+        lines += _row(f"SPL {label}: intercept", lin.get("intercept"), None,
+                      tuple(lin.get("intercept_ci") or (None, None)), "Pa")  # type: ignore[arg-type]
+        lines += _row(f"SPL {label}: C", db.get("c_db"), None,
+                      tuple(db.get("c_ci") or (None, None)), "dB re 20 uPa at 1 m/s",  # type: ignore[arg-type]
+                      f"L = 20 log10(|v_in| / (1 m/s)) + C; free-slope check k = "
+                      f"{_fmt(db.get('k_db_per_decade'), '.3g')} dB/decade (20 for a linear law)")
+    return lines
+
+
+def wrapped(line: str) -> list[str]:
+    """``line`` wrapped to :data:`TEXT_WIDTH` characters, continuation lines indented."""
+    if len(line) <= TEXT_WIDTH:
+        return [line]
+    indent = " " * (len(line) - len(line.lstrip()) + 4)
+    return textwrap.wrap(line, TEXT_WIDTH, subsequent_indent=indent, break_long_words=True)
+
+
+def summary_lines(data: ReportData, version: str) -> list[str]:
+    """Text lines of the summary page (fitted values, flags, provenance), <= TEXT_WIDTH wide."""
+    lines = [f"store: {data.store.name}"]
+    if data.results is not None:
+        summ = data.results.summary
+        n_imp = sum(int(r.get("n_impacts", 0) or 0) for r in summ.get("runs", []))
+        lines.append(f"runs: {summ.get('n_runs', '?')} ({summ.get('n_ok', '?')} analysed, "
+                     f"{len(summ.get('skipped', []))} skipped), {n_imp} impacts detected")
+    lines += ["", "Fitted parameters (95 % CI: profile likelihood, 2 sigma, for the eq. (3.4) fit; "
+              "Student t for e; OLS t for the SPL laws)"]
+    lines += parameter_lines(data)
+    lines += ["", "Data-quality flags (catalogue)"]
     cat = data.catalogue
     flagged = cat[cat["flags"].astype(str) != ""]
     if len(flagged) == 0:
@@ -118,81 +203,157 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
         lines.append(f"  {row['input_key']}/{row['run_id']}/{row['channel']}: {row['flags']}")
     if len(flagged) > 12:
         lines.append(f"  ... and {len(flagged) - 12} more flagged channels")
-    lines.append("")
-    lines.append("Provenance")
-    lines.append(f"  report: rattle_lab {version}")
+    skipped = data.results.summary.get("skipped", []) if data.results is not None else []
+    for item in skipped[:6]:
+        lines.append(f"  run skipped by the fit: {item.get('input_key')}/{item.get('run_id')}: "
+                     f"{item.get('reason')}")
+    lines += ["", "Provenance", f"  report: rattle_lab {version} (rattle_lab.report.write_report)"]
     if data.results is not None:
         prov = data.results.provenance
-        lines.append(f"  results: {prov.get('function', '?')}, rattle_lab "
+        via = f" via {prov['via']} ({prov.get('pipeline', '')})" if prov.get("via") else ""
+        lines.append(f"  results: {prov.get('function', '?')}{via}, rattle_lab "
                      f"{prov.get('rattle_lab_version', data.results.rattle_lab_version)}, "
                      f"written {data.results.created_iso}")
+        params = prov.get("parameters") or {}
+        for table in ("detect", "fit"):
+            if isinstance(params.get(table), Mapping):
+                text = ", ".join(f"{k} = {v}" for k, v in sorted(params[table].items()))
+                lines.append(f"  [{table}] {text or '(defaults)'}")
     versions = sorted({str(e.get("rattle_lab_version", "?")) for e in data.provenance_log})
     lines.append(f"  ingest: {len(data.provenance_log)} logged call(s), rattle_lab "
                  f"{', '.join(versions) or '?'}")
     inputs = cat.drop_duplicates("input_key")
+    hash_col = "file_hash" if "file_hash" in cat.columns else "file_sha256"
     for _, row in inputs.head(10).iterrows():
-        lines.append(f"  input {row['input_key']}: {row['campaign_id']} ({row['source']}), "
-                     f"sha256 {str(row['file_sha256'])[:32]}...")
+        lines.append(f"  input {row['input_key']}: {row['file']} ({row['campaign_id']}, "
+                     f"{row['source']}), {row[hash_col]}")
     if len(inputs) > 10:
         lines.append(f"  ... and {len(inputs) - 10} more inputs")
-    return lines
+    return [w for line in lines for w in wrapped(line)]
+
+
+def text_pages(title: str, lines: list[str]) -> list[Figure]:
+    """Pages of monospaced text (continued on further pages when long)."""
+    per_page = 52
+    chunks = [lines[i:i + per_page] for i in range(0, max(len(lines), 1), per_page)] or [[]]
+    figs = []
+    for k, chunk in enumerate(chunks):
+        fig = Figure(figsize=PAGE_SIZE_IN)
+        fig.text(0.06, 0.96, title + (" (continued)" if k else ""), fontsize=14,
+                 weight="bold", va="top")
+        y = 0.92
+        for line in chunk:
+            fig.text(0.06, y, line, fontsize=7.5, family="monospace", va="top")
+            y -= 0.0165
+        figs.append(fig)
+    return figs
 
 
 def text_page(title: str, lines: list[str]) -> Figure:
-    """A page of monospaced text."""
-    fig = Figure(figsize=PAGE_SIZE_IN)
-    fig.text(0.06, 0.96, title, fontsize=15, weight="bold", va="top")
-    y = 0.92
-    for line in lines:
-        fig.text(0.06, y, line, fontsize=7.5, family="monospace", va="top")
-        y -= 0.0165
-        if y < 0.05:
-            fig.text(0.06, y, "... (truncated)", fontsize=7.5, family="monospace", va="top")
-            break
-    return fig
+    """A page of monospaced text (the first page of :func:`text_pages`)."""
+    return text_pages(title, lines)[0]
 
 
 # --- rig and calibration ---------------------------------------------------------------------
+
+_RIG_UNITS = {"plate_length_m": "m", "plate_width_m": "m", "plate_thickness_m": "m",
+              "striker_x_m": "m", "striker_y_m": "m", "gap_m": "m", "mic_distance_m": "m"}
+
+
+def _table(ax: Any, rows: list[list[str]], cols: list[str], fontsize: float) -> None:
+    table = ax.table(cellText=rows, colLabels=cols, loc="upper left", cellLoc="left",
+                     colLoc="left")
+    table.auto_set_font_size(False)
+    table.set_fontsize(fontsize)
+    table.auto_set_column_width(list(range(len(cols))))
+    table.scale(1.0, 1.35)
+    for (r, _), cell in table.get_celld().items():
+        if r == 0:
+            cell.set_text_props(weight="bold")
+            cell.set_facecolor("0.92")
+
 
 def rig_page(data: ReportData) -> list[Figure]:
     """Rig facts and the calibration table of the channels."""
     if not data.records:
         raise Missing("no readable record in the store")
     fig = Figure(figsize=LANDSCAPE_IN)
-    fig.text(0.04, 0.96, "Rig and calibration", fontsize=15, weight="bold", va="top")
-    rig_units = {"plate_length_m": "m", "plate_width_m": "m", "plate_thickness_m": "m",
-                 "striker_x_m": "m", "striker_y_m": "m", "gap_m": "m", "mic_distance_m": "m"}
-    y = 0.91
-    for rec in data.records[:3]:
-        facts = ", ".join(f"{k} = {_fmt(v) if isinstance(v, float) else (v or '-')}"
-                          f"{' ' + rig_units[k] if k in rig_units and v is not None else ''}"
-                          for k, v in rec.rig.items())
-        text = textwrap.fill(f"{rec.input_key} ({rec.campaign_id}, {rec.source}): {facts}", 200)
-        fig.text(0.04, y, text, fontsize=7, va="top")
-        y -= 0.025 * (text.count("\n") + 1) + 0.01
+    fig.text(0.03, 0.96, "Rig and calibration", fontsize=15, weight="bold", va="top")
+    recs = data.records[:3]
+    fact_rows = []
+    for key in recs[0].rig:
+        label = key[:-2] + " (m)" if key in _RIG_UNITS else key
+        vals = [(_fmt(r.rig.get(key)) if isinstance(r.rig.get(key), float)
+                 else str(r.rig.get(key) or "-")) for r in recs]
+        fact_rows.append([label.replace("_", " "), *vals])
+    ax_rig = fig.add_axes((0.03, 0.62, 0.94, 0.3))
+    ax_rig.axis("off")
+    _table(ax_rig, fact_rows, ["rig", *[f"{r.input_key} ({r.campaign_id}, {r.source})"
+                                        for r in recs]], 7.5)
+    if len(data.records) > 3:
+        fig.text(0.03, 0.6, f"... and {len(data.records) - 3} more records (not shown)",
+                 fontsize=7)
     cols = ["input", "channel", "quantity", "SI unit", "source unit", "scale to SI",
-            "sensitivity", "rate (Hz)", "sensor", "serial", "calibrated", "range (SI)",
+            "sensitivity", "rate (Hz)", "sensor", "serial", "calibrated", "range (SI unit)",
             "position (m)"]
-    rows = [[c.input_key[-8:], c.name, c.quantity, c.units, c.source_units, _fmt(c.scale_to_si),
-             c.sensitivity or "-", _fmt(c.sample_rate_hz, '.6g'), c.sensor_model or "-",
-             c.sensor_serial or "-", c.calibration_date or "-", c.range_si or "-",
-             c.position_m or "-"] for rec in data.records for c in rec.channels][:30]
-    ax = fig.add_axes((0.02, 0.05, 0.96, y - 0.08))
+    rows = [[c.input_key[-8:], c.name, c.quantity, c.units, c.source_units or "-",
+             _fmt(c.scale_to_si), c.sensitivity or "-", _fmt(c.sample_rate_hz, '.6g'),
+             c.sensor_model or "-", c.sensor_serial or "-", c.calibration_date or "-",
+             c.range_si or "-", c.position_m or "-"]
+            for rec in data.records for c in rec.channels]
+    n_rows = len(rows)
+    rows = rows[:24]
+    fig.text(0.03, 0.575, "Channels and calibration", fontsize=11, weight="bold", va="top")
+    ax = fig.add_axes((0.03, 0.06, 0.94, 0.49))
     ax.axis("off")
-    table = ax.table(cellText=rows, colLabels=cols, loc="upper center", cellLoc="left")
-    table.auto_set_font_size(False)
-    table.set_fontsize(6.5)
-    table.scale(1.0, 1.3)
+    _table(ax, rows, cols, 7.0)
+    if n_rows > len(rows):
+        fig.text(0.03, 0.045, f"... and {n_rows - len(rows)} more channels (not shown)",
+                 fontsize=7)
     return [fig]
 
 
 # --- thresholds (Fig. 6-2, 6-3) ------------------------------------------------------------
 
-def grazing_band_ms2(freq_hz: np.ndarray, g: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    """Eq. (3.4) at the fitted parameters and its 95 % band (delta method), m/s^2.
+def band_quantile(g: Mapping[str, Any]) -> tuple[float, int | None]:
+    """The 97.5 % quantile for the 95 % band of the eq. (3.4) fit, and its degrees of freedom.
 
-    The covariance is ``stderr_i stderr_j corr_ij`` of the varied parameters
-    (as stored by the fit); the gradient is by central differences.
+    Student t with ``n - p`` degrees of freedom (``n`` thresholds fitted, the
+    outliers left out; ``p`` varied parameters), as the profile intervals of the
+    fit are; 1.96 (normal, ``None``) when the fit does not say how many points it used.
+    ``nan`` when ``n <= p``: an exactly determined fit has no band.
+    """
+    from scipy import stats
+
+    resid = g.get("residuals_ms2")
+    varied = list((g.get("correlation") or {}).get("names") or [])
+    if resid is None:
+        return 1.96, None
+    n = sum(1 for r in resid if r is not None and math.isfinite(float(r)))
+    n -= len(g.get("outliers_hz") or [])
+    dof = n - len(varied)
+    return (float(stats.t.ppf(0.975, dof)) if dof >= 1 else float("nan")), dof
+
+
+def grazing_band_ms2(freq_hz: np.ndarray, g: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. (3.4) at the fitted parameters and the half-width of its 95 % band, m/s^2.
+
+    Delta method: the covariance is ``stderr_i stderr_j corr_ij`` of the varied
+    parameters (as stored by the fit), the gradient is by central differences,
+    and the quantile is :func:`band_quantile` (Student t with the fit's degrees
+    of freedom).
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        Excitation frequencies, Hz.
+    g : mapping
+        The ``grazing`` entry of the fit summary.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        The threshold and the half-width of the band, m/s^2 (NaN without a covariance).
     """
     from ..linear import threshold_accel_ms2
 
@@ -219,7 +380,7 @@ def grazing_band_ms2(freq_hz: np.ndarray, g: Mapping[str, Any]) -> tuple[np.ndar
         lo[n] -= h
         jac[i] = (model(hi) - model(lo)) / (2 * h)
     var = np.einsum("ik,ij,jk->k", jac, cov, jac)
-    return y, 1.96 * np.sqrt(np.maximum(var, 0.0))
+    return y, band_quantile(g)[0] * np.sqrt(np.maximum(var, 0.0))
 
 
 def threshold_page(data: ReportData) -> list[Figure]:
@@ -233,7 +394,7 @@ def threshold_page(data: ReportData) -> list[Figure]:
     if f.size == 0 or not (np.isfinite(up).any() or np.isfinite(down).any()):
         raise Missing("no ramp thresholds in /results/thresholds (needs amplitude_ramp_up/down "
                       "runs with a base accelerometer)")
-    fig = Figure(figsize=LANDSCAPE_IN, layout="constrained")
+    fig = landscape_figure()
     ax, ax_h = fig.subplots(1, 2, width_ratios=(2, 1))
     g = _grazing(data)
     if g is not None:
@@ -245,8 +406,15 @@ def threshold_page(data: ReportData) -> list[Figure]:
                 label=f"eq. (3.4) fit: gap {1e3 * _pval(g, 'gap_m'):.3g} mm, f_s "
                       f"{_pval(g, 'f_s_hz'):.4g} Hz, zeta {_pval(g, 'zeta'):.3g}")
         if np.isfinite(half).any():
+            _, dof = band_quantile(g)
+            how = f"Student t, {dof} dof" if dof is not None else "normal"
             ax.fill_between(grid, y - half, y + half, color="0.6", alpha=0.35,
-                            label="95 % confidence band (delta method)")
+                            label=f"95 % confidence band (delta method, {how})")
+        out = np.asarray(g.get("outliers_hz") or [], dtype=float)
+        if out.size:
+            sel = np.isin(f, out)
+            ax.plot(f[sel], up[sel], "o", ms=11, mfc="none", color="k",
+                    label="left out of the fit (outlier)")
     ok = np.isfinite(up) & np.isfinite(down)
     if ok.any():
         ax.fill_between(f[ok], down[ok], up[ok], color="tab:orange", alpha=0.25,
@@ -256,7 +424,7 @@ def threshold_page(data: ReportData) -> list[Figure]:
     ax.set_xlabel("excitation frequency (Hz)")
     ax.set_ylabel("base acceleration amplitude at threshold (m/s^2)")
     ax.set_title("Impact thresholds (thesis Fig. 6-2, 6-3 a)")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=8, loc="upper center")
     ax.grid(alpha=0.3)
     ax_h.bar(f, up - down, width=0.6 * (np.min(np.diff(f)) if f.size > 1 else 1.0),
              color="tab:orange")
@@ -311,22 +479,33 @@ def pattern_page(data: ReportData) -> list[Figure]:
             continue
         lvl_end = info.get("level_end")
         levels = np.linspace(float(lvl), float(lvl if lvl_end is None else lvl_end), counts.size)
-        shift = {"amplitude_ramp_up": -0.12, "amplitude_ramp_down": 0.12}.get(
-            str(r.get("protocol", "")), 0.0)
+        protocol = str(r.get("protocol", ""))
+        shift = {"amplitude_ramp_up": -0.12, "amplitude_ramp_down": 0.12}.get(protocol, 0.0)
         units.add(info.get("level_units") or "?")
-        pts.extend((f + shift, lv, int(c)) for lv, c in zip(levels, counts))
+        dwell = float(lvl_end is None or lvl_end == lvl)
+        pts.extend((f + shift, lv, int(c), dwell) for lv, c in zip(levels, counts))
     if not pts:
         raise Missing("no analysed run with an excitation frequency and level")
-    arr = np.array(pts, dtype=float)
-    fig = Figure(figsize=LANDSCAPE_IN, layout="constrained")
+    arr = np.array(pts, dtype=float).reshape(-1, 4)
+    fig = landscape_figure()
     ax = fig.add_subplot()
     classes = ((0, "no impact", "0.8"), (1, "1 impact per cycle", "tab:blue"),
                (2, "2 impacts per cycle", "tab:orange"), (3, ">= 3 impacts per cycle", "tab:red"))
     for n, label, color in classes:
         sel = arr[:, 2] == n if n < 3 else arr[:, 2] >= 3
-        if sel.any():
-            ax.scatter(arr[sel, 0], arr[sel, 1], s=6, color=color, label=label)
-    ax.set_xlabel("excitation frequency (Hz) (ramp up left, ramp down right of each frequency)")
+        ramp, dwell = sel & (arr[:, 3] == 0), sel & (arr[:, 3] == 1)
+        if ramp.any():
+            ax.scatter(arr[ramp, 0], arr[ramp, 1], s=6, color=color, label=label)
+        if dwell.any():  # one marker per dwell: the share of its cycles in this class
+            for fx, lv in sorted({(a, b) for a, b in arr[dwell, :2]}):
+                share = float(np.mean(arr[(arr[:, 0] == fx) & (arr[:, 1] == lv)][:, 2]
+                                      .clip(max=3) == n))
+                ax.scatter([fx], [lv], s=40 + 120 * share, marker="D", color=color,
+                           edgecolor="k", linewidth=0.6, zorder=3)
+    if (arr[:, 3] == 1).any():
+        ax.scatter([], [], s=60, marker="D", color="w", edgecolor="k",
+                   label="sine dwell (size: share of its cycles)")
+    ax.set_xlabel("excitation frequency (Hz); ramps: up left, down right of each frequency")
     ax.set_ylabel(f"nominal base-acceleration amplitude ({', '.join(sorted(units))})")
     ax.set_title("Impact patterns per forcing cycle (thesis Fig. 6-5)")
     ax.legend(fontsize=8)
@@ -350,7 +529,7 @@ def waveform_page(data: ReportData, *, n_examples: int = 2, n_cycles: int = 5) -
     chosen = candidates[:n_examples]
     if not chosen:
         raise Missing("no analysed run with impacts")
-    fig = Figure(figsize=LANDSCAPE_IN, layout="constrained")
+    fig = landscape_figure()
     axes = fig.subplots(3, len(chosen), squeeze=False, sharex="col")
     for col, ((key, run_id), r) in enumerate(chosen):
         f = float(r["freq_hz"])
@@ -386,15 +565,19 @@ def waveform_page(data: ReportData, *, n_examples: int = 2, n_cycles: int = 5) -
                             color="tab:red", label="detected impact")
                     ax.legend(fontsize=7, loc="upper right")
                 elif quantity == "plate_acceleration" and win.any():
-                    for ti in t_imp[win]:
-                        ax.axvline(ti, color="tab:red", lw=0.6, alpha=0.6)
+                    for i, ti in enumerate(t_imp[win]):
+                        ax.axvline(ti, color="tab:red", lw=0.6, alpha=0.6,
+                                   label="detected impact" if i == 0 else None)
+                    ax.legend(fontsize=7, loc="upper right")
                 elif quantity == "sound_pressure" and "t_first_s" in r:
-                    for tk, pk, mk, lab in (("t_first_s", "p_first_pa", "o", "first peak"),
-                                            ("t_max_s", "p_max_pa", "x", "maximum peak")):
+                    # marked on the recorded trace at the detected times (the peak heights
+                    # in /results are of the pressure less the forced-mode part)
+                    for tk, mk, color, lab in (("t_first_s", "o", "tab:blue", "first peak"),
+                                               ("t_max_s", "x", "tab:orange", "maximum peak")):
                         tt = np.asarray(r[tk], dtype=float)
-                        pp = np.asarray(r[pk], dtype=float)
                         sel = np.isfinite(tt) & (tt >= t[0]) & (tt <= t[-1]) if t.size else tt < 0
-                        ax.plot(tt[sel], pp[sel], mk, mfc="none", label=lab)
+                        ax.plot(tt[sel], np.interp(tt[sel], t, x), mk, ms=7, mew=1.3,
+                                mfc="none", color=color, label=lab)
                     ax.legend(fontsize=7, loc="upper right")
         axes[0, col].set_title(f"{run_id} ({r.get('protocol', '')}, {f:g} Hz, pattern "
                                f"{r.get('pattern') or '-'})", fontsize=9)
@@ -427,21 +610,23 @@ def spl_page(data: ReportData) -> list[Figure]:
             if key in r and np.asarray(r[key]).shape == v.shape:
                 v_all[n].append(v)
                 p_all[n].append(np.abs(np.asarray(r[key], dtype=float)))
-    fig = Figure(figsize=LANDSCAPE_IN, layout="constrained")
+    fig = landscape_figure()
     ax = fig.add_subplot()
     colors = {"first": "tab:blue", "max": "tab:red", "rms": "tab:green"}
-    for n, law in laws.items():
+    names = {"first": "first peak", "max": "maximum peak", "rms": "RMS per impact"}
+    for n in ("rms", "max", "first"):  # the first-peak law (the thesis's) drawn on top
+        law = laws[n]
         if not isinstance(law, Mapping) or not v_all[n]:
             continue
         v, p = np.concatenate(v_all[n]), np.concatenate(p_all[n])
         ok = np.isfinite(v) & np.isfinite(p) & (v > 0) & (p > 0)
         v, p = v[ok], p[ok]
-        ax.plot(v, p, ".", ms=2.5, alpha=0.5, color=colors[n], label=f"{n}, measured")
+        ax.plot(v, p, ".", ms=2.5, alpha=0.5, color=colors[n], label=f"{names[n]}, measured")
         lin = law.get("linear", {})
         slope, icpt = float(lin.get("slope", np.nan)), float(lin.get("intercept", np.nan))
         grid = np.linspace(0.0, float(v.max()) * 1.05 if v.size else 1.0, 100)
         ax.plot(grid, slope * grid + icpt, color=colors[n], lw=1.3,
-                label=f"{n}: p = {slope:.3g} Pa/(m/s) v + {icpt:.3g} Pa (r2 "
+                label=f"{names[n]}: p = {slope:.3g} Pa/(m/s) |v_in| + {icpt:.3g} Pa (r2 "
                       f"{float(lin.get('r2', np.nan)):.3f})")
         if v.size > 2:  # 95 % band of the mean (OLS), for the plot only
             resid = p - (slope * v + icpt)
@@ -456,7 +641,8 @@ def spl_page(data: ReportData) -> list[Figure]:
     ax.set_ylabel("sound pressure (Pa)")
     ax.set_title("Sound pressure against impact velocity, fitted laws with 95 % bands "
                  "(thesis Fig. 6-7)")
-    ax.legend(fontsize=7)
+    handles, labels = ax.get_legend_handles_labels()
+    ax.legend(handles[::-1], labels[::-1], fontsize=8, loc="upper left")
     ax.grid(alpha=0.3)
     return [fig]
 
@@ -472,8 +658,17 @@ def _nondim(g: Mapping[str, Any], f_hz: np.ndarray, a_ms2: np.ndarray) -> tuple[
     return f_hz / f_s, q * a_ms2 / (w_s**2 * gap)
 
 
-def model_pages(data: ReportData, *, n_sweep: int = 24, max_freqs: int = 6) -> list[Figure]:
-    """Bifurcation sets and F sweeps of the SDF model at the fitted parameters (coarse grids)."""
+def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
+                quiet: bool = True) -> list[Figure]:
+    """Bifurcation sets and F sweeps of the SDF model at the fitted parameters (coarse grids).
+
+    Page 1: the 1/1 and 1/2 existence and stability regions (:func:`bifurcation_sets`)
+    in the (omega, F) plane with the measured thresholds converted by eq. (2.28),
+    (2.31).  Page 2: at each measured frequency (up to ``max_freqs``), a slow F
+    sweep up and back down (:func:`sweep_up_down`, ``n_sweep`` amplitudes, 60
+    forcing periods each): the model's onset and disappearance against the measured
+    ones, each with the sweep step as its resolution.  ``quiet``: no progress bar.
+    """
     from ..analysis import bifurcation_sets, sweep_up_down
     from ..sdf import SDFParams
 
@@ -488,7 +683,9 @@ def model_pages(data: ReportData, *, n_sweep: int = 24, max_freqs: int = 6) -> l
     if not isinstance(e_fit, Mapping) or e_fit.get("value") is None:
         raise Missing("needs a fitted coefficient of restitution e")
     zeta = abs(_pval(g, "zeta"))
-    e = min(max(float(e_fit["value"]), 0.0), 1.0)
+    e = float(e_fit["value"])
+    if not 0.0 <= e <= 1.0:
+        raise Missing(f"fitted e = {e:.4g} is outside [0, 1]")
     if not (math.isfinite(zeta) and zeta > 0 and math.isfinite(_pval(g, "gap_m"))):
         raise Missing(f"fitted zeta {zeta} or gap unusable for the model")
     th = data.results.thresholds
@@ -498,14 +695,17 @@ def model_pages(data: ReportData, *, n_sweep: int = 24, max_freqs: int = 6) -> l
     w_up, F_up = _nondim(g, f, up)
     w_dn, F_dn = _nondim(g, f, down)
     finite_w = w_up[np.isfinite(w_up)]
-    w_lo = float(min(0.8, finite_w.min() - 0.05)) if finite_w.size else 0.8
+    w_lo = float(finite_w.min() - 0.05) if finite_w.size else 0.8
     w_hi = float(max(1.2, finite_w.max() + 0.05)) if finite_w.size else 1.2
     F_all = np.concatenate([F_up[np.isfinite(F_up)], F_dn[np.isfinite(F_dn)]])
-    F_hi = float(max(2.0 * F_all.max(), 4 * zeta)) if F_all.size else 0.2
+    F_hi = float(max(1.6 * F_all.max(), 4 * zeta)) if F_all.size else 0.2
     sets = bifurcation_sets((1, 2), omega_range=(max(w_lo, 0.05), w_hi), F_range=(0.0, F_hi),
                             zeta=zeta, e=e, n_omega=61, n_F=41, n_v=31)
-    fig = Figure(figsize=LANDSCAPE_IN, layout="constrained")
+    from matplotlib.patches import Patch
+
+    fig = landscape_figure()
     ax = fig.add_subplot()
+    handles: list[Any] = []
     for k, (n, color) in enumerate(zip(sets.ns, ("tab:blue", "tab:orange"))):
         if sets.exists[k].any():
             ax.contourf(sets.omega, sets.F, sets.exists[k].astype(float), levels=[0.5, 1.5],
@@ -517,46 +717,56 @@ def model_pages(data: ReportData, *, n_sweep: int = 24, max_freqs: int = 6) -> l
             if c.kind != "grazing":
                 ax.plot(c.omega, c.F, color=color, lw=1.0,
                         ls={"saddle-node": "--", "period-doubling": ":"}.get(c.kind, "-."))
-        ax.plot([], [], color=color, lw=6, alpha=0.4, label=f"1/{n} stable (light: exists)")
-    ax.plot(sets.grazing.omega, sets.grazing.F, color="k", lw=1.4, label="grazing, eq. (3.4)")
-    ax.plot(w_up, F_up, "^", color="tab:red", label="measured onset")
-    ax.plot(w_dn, F_dn, "v", color="tab:blue", label="measured disappearance")
+        handles += [Patch(color=color, alpha=0.15, label=f"1/{n} orbit exists"),
+                    Patch(color=color, alpha=0.55, label=f"1/{n} orbit exists and is stable")]
+    (graze,) = ax.plot(sets.grazing.omega, sets.grazing.F, color="k", lw=1.4,
+                       label="grazing, eq. (3.4)")
+    (on,) = ax.plot(w_up, F_up, "^", color="tab:red", ms=7, label="measured onset")
+    (off,) = ax.plot(w_dn, F_dn, "v", color="tab:blue", ms=7, label="measured disappearance")
     ax.set_xlim(sets.omega[0], sets.omega[-1])
     ax.set_ylim(sets.F[0], sets.F[-1])
     ax.set_xlabel("forcing frequency omega = f / f_s (nondimensional)")
     ax.set_ylabel("forcing amplitude F = Q A / (omega_s^2 h) (nondimensional)")
-    ax.set_title(f"Model bifurcation sets at the fitted zeta = {zeta:.3g}, e = {e:.3g}, with\n"
-                 "the measured operating points (dashed: saddle-node, dotted: period-doubling)")
-    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title(f"Model bifurcation sets at the fitted zeta = {zeta:.3g}, e = {e:.3g}, with the "
+                 "measured thresholds\n(boundaries: dashed saddle-node, dotted period-doubling)")
+    ax.legend(handles=[*handles, graze, on, off], fontsize=8, loc="upper left")
+    ax.grid(alpha=0.3)
     figs = [fig]
     # F sweeps up and down at each measured frequency: model onset/disappearance
     sel = np.flatnonzero(np.isfinite(w_up) | np.isfinite(w_dn))[:max_freqs]
     if sel.size:
+        from .._progress import progress
+
         grid = np.linspace(F_hi / n_sweep, F_hi, n_sweep)
-        on, off = np.full(sel.size, np.nan), np.full(sel.size, np.nan)
-        for i, j in enumerate(sel):
+        step = float(grid[1] - grid[0]) if grid.size > 1 else float(grid[0])
+        on_F, off_F = np.full(sel.size, np.nan), np.full(sel.size, np.nan)
+        for i, j in enumerate(progress(sel, total=sel.size, desc="model sweeps", quiet=quiet,
+                                       unit="freq")):
             s_up, s_dn = sweep_up_down("F", grid, base=SDFParams(F=grid[0], omega=float(
                 f[j] / _pval(g, "f_s_hz")), zeta=zeta, e=e), cycles=60, discard=40, n_max=6,
-                lyapunov="none")
+                lyapunov="none", quiet=True)
             hit_up = [p.value for p in s_up.points if p.impact_velocities.size]
             hit_dn = [p.value for p in s_dn.points if p.impact_velocities.size]
-            on[i] = min(hit_up) if hit_up else np.nan
-            off[i] = min(hit_dn) if hit_dn else np.nan
+            # the threshold lies within one step below the first amplitude with impacts
+            on_F[i] = min(hit_up) - step / 2 if hit_up else np.nan
+            off_F[i] = min(hit_dn) - step / 2 if hit_dn else np.nan
         w_s = 2 * np.pi * _pval(g, "f_s_hz")
         scale = w_s**2 * _pval(g, "gap_m") / _pval(g, "participation", 1.0)
-        fig2 = Figure(figsize=LANDSCAPE_IN, layout="constrained")
+        fig2 = landscape_figure()
         ax2 = fig2.add_subplot()
-        ax2.plot(f[sel], on * scale, "s-", color="tab:red", mfc="none",
-                 label="model onset (F sweep up)")
-        ax2.plot(f[sel], off * scale, "s--", color="tab:blue", mfc="none",
-                 label="model disappearance (F sweep down)")
-        ax2.plot(f, up, "^", color="tab:red", label="measured onset")
-        ax2.plot(f, down, "v", color="tab:blue", label="measured disappearance")
+        half = step / 2 * scale
+        ax2.errorbar(f[sel] - 0.04, on_F * scale, yerr=half, fmt="s-", color="tab:red",
+                     mfc="none", capsize=3, label="model onset (F sweep up)")
+        ax2.errorbar(f[sel] + 0.04, off_F * scale, yerr=half, fmt="s--", color="tab:blue",
+                     mfc="none", capsize=3, label="model disappearance (F sweep back down)")
+        ax2.plot(f, up, "^", color="tab:red", ms=8, label="measured onset")
+        ax2.plot(f, down, "v", color="tab:blue", ms=8, label="measured disappearance")
         ax2.set_xlabel("excitation frequency (Hz)")
         ax2.set_ylabel("base acceleration amplitude at threshold (m/s^2)")
-        ax2.set_title(f"Model sweeps ({n_sweep} amplitudes up to {F_hi * scale:.3g} m/s^2, "
-                      "60 cycles each) against the measured thresholds")
-        ax2.legend(fontsize=8)
+        ax2.set_title(f"Model at the fitted parameters against the measured thresholds: F "
+                      f"swept over {n_sweep} amplitudes up to {F_hi * scale:.3g} m/s^2\n(60 "
+                      f"forcing periods each; bars: the sweep step, {2 * half:.3g} m/s^2)")
+        ax2.legend(fontsize=8, loc="upper left")
         ax2.grid(alpha=0.3)
         figs.append(fig2)
     return figs
