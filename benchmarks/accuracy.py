@@ -9,9 +9,14 @@
    thresholds (relative and in ramp steps: the level change over one simulated piece),
    the grazing fit (gap, zeta, f_s) of the measured upward thresholds with the rig's
    participation passed in (as the pipeline's ``[fit] participation``: the fit alone only
-   knows ``gap / participation``), ``e`` from velocity ratios and from the downward
-   thresholds, and the SPL-law slope (first sound peak against detected ``v_in``).  The
-   ``truth_*`` rows fit the rig's own thresholds: the floor of the method (ramp lag, 4
+   knows ``gap / participation``), the ramp-model damping (``zeta_ramp``: the upward
+   ramps replayed through the exact simulator, which removes the ramp lag the grazing
+   fit reads as damping), ``e`` from velocity ratios and from the downward thresholds
+   (``e_down``: the ramp model, with the rig's level hold ``piece_periods`` passed as
+   ``level_hold_periods``, and its standard error; ``e_down_qs``: the quasi-static
+   saddle-node, eq. 3.11, which the ramp lag biases towards 1), and the SPL-law slope
+   (first sound peak against detected ``v_in``).  The ``truth_*`` rows fit the rig's
+   own thresholds with eq. (3.4): the floor of the quasi-static method (ramp lag, few
    frequencies), not of the detection.
 2. The detector's own generator (``rattle_lab.detect._synthetic``): hand-built signals
    around chosen impacts, relative noise ``noise_rel``.
@@ -34,7 +39,7 @@ import numpy as np
 from rattle_lab.detect import ImpactParams, cross_correlation_delay, detect_impacts, sound_peaks
 from rattle_lab.detect._synthetic import synthetic_campaign
 from rattle_lab.fit import (analyse_run, fit_grazing, fit_linear_law, fit_restitution_down,
-                            restitution_from_ratios)
+                            fit_zeta_ramp, restitution_from_ratios)
 from rattle_lab.rig import load_scene, synthesize
 from rattle_lab.thresholds import tabulate_thresholds
 
@@ -120,7 +125,7 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
                 thr_rel.append(abs(meas / ref[i[0]] - 1))
                 thr_steps.append(abs(meas - ref[i[0]]) / steps[(f, is_up)])
     q = truth.participation
-    out: dict[str, float | str] = {"scene": f"{name}@{noise_x:g}x"}
+    out: dict[str, float | str] = {"scene": f"{name.removesuffix('.toml')}@{noise_x:g}x"}
     precision = tp / (tp + fp) if tp + fp else 1.0
     recall = tp / (tp + fn) if tp + fn else 1.0
     out.update(precision=precision, recall=recall,
@@ -150,17 +155,39 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
                    truth_zeta_err_rel=abs(gt["zeta"].value / truth.zeta - 1))
     except Exception:
         out.update(truth_gap_err_rel=nan, truth_f_s_err_rel=nan, truth_zeta_err_rel=nan)
+    ths = [r.threshold for r in runs if r.threshold is not None]
+    hold = scene.simulation.piece_periods
     t0 = time.perf_counter()
-    e_down = nan
-    if p is not None and np.isfinite(curve.down_ms2).any():
+    zeta, zeta_se = nan, 0.0
+    if p is not None:
         try:
-            e_down = fit_restitution_down(curve.freq_hz, curve.down_ms2, gap_m=p["gap_m"].value,
-                                          f_s_hz=p["f_s_hz"].value, zeta=p["zeta"].value,
-                                          participation=q).e.value
+            zf = fit_zeta_ramp(ths, gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value,
+                               zeta0=p["zeta"].value, participation=q, level_hold_periods=hold)
+            zeta, zeta_se = zf.zeta.value, zf.zeta.stderr
+        except Exception as exc:   # report, do not crash the table
+            out["zeta_ramp_error"] = str(exc)
+    out["zeta_ramp_err_rel"] = abs(zeta / truth.zeta - 1)
+    times["zeta_ramp_fit_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    e_down = e_down_se = e_qs = nan
+    if p is not None and np.isfinite(zeta):
+        modal = dict(gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value, participation=q)
+        try:
+            e = fit_restitution_down(ths, zeta=zeta, zeta_stderr=zeta_se,
+                                     level_hold_periods=hold, **modal).e
+            e_down, e_down_se = e.value, e.stderr
+        except Exception as exc:
+            out["e_down_error"] = str(exc)
+    times["restitution_fit_s"] = time.perf_counter() - t0
+    if p is not None:
+        try:
+            e_qs = fit_restitution_down(ths, zeta=p["zeta"].value, method="quasi-static",
+                                        gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value,
+                                        participation=q).e.value
         except Exception:
             pass
-    out["e_down_err"] = abs(e_down - truth.e)
-    times["restitution_fit_s"] = time.perf_counter() - t0
+    out.update(e_down_err=abs(e_down - truth.e), e_down_stderr=e_down_se,
+               e_down_qs_err=abs(e_qs - truth.e))
     t0 = time.perf_counter()
     slope_true = float(truth.extra.get("acoustic_pa_per_m_s", nan))
     try:
@@ -208,9 +235,11 @@ def run_scene(noise_rel: float, quick: bool, seed: int = 0) -> dict[str, float]:
     t0 = time.perf_counter()
     e_ratio = restitution_from_ratios(np.concatenate([r.impacts.e for r in runs if r.impacts is not None]))
     p = g.params
-    e_down = fit_restitution_down(curve.freq_hz, curve.down_ms2, gap_m=p["gap_m"].value,
-                                  f_s_hz=p["f_s_hz"].value, zeta=p["zeta"].value,
-                                  participation=truth.participation)
+    # the generator places its disappearances at the saddle-node itself (no ramp lag)
+    e_down = fit_restitution_down([r.threshold for r in runs if r.threshold is not None],
+                                  gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value,
+                                  zeta=p["zeta"].value, participation=truth.participation,
+                                  method="quasi-static")
     times["restitution_fit_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     law = fit_linear_law(v_true_all, p_max_all)
@@ -286,10 +315,11 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="fewer noise levels (< 60 s)")
     ap.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     args = ap.parse_args()
-    rig_cases = ([("default", 0.0), ("default", 1.0), ("default", 10.0), ("noisy_lab.toml", 1.0)]
+    rig_cases = ([("default", 0.0), ("default", 1.0), ("default", 10.0), ("noisy_lab.toml", 1.0),
+                  ("thesis_cfcf_1p3mm.toml", 1.0)]
                  if args.quick else
                  [("default", 0.0), ("default", 1.0), ("default", 3.0), ("default", 10.0),
-                  ("noisy_lab.toml", 1.0)])
+                  ("noisy_lab.toml", 1.0), ("thesis_cfcf_1p3mm.toml", 1.0)])
     rig_rows = [run_rig(name, x) for name, x in rig_cases]
     print("rig: rattle_lab.rig scenes vs /truth; grazing fit with the rig's participation "
           "(truth) passed in, as [fit] participation; noise x = scale on every sensor's noise_rms")

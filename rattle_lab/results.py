@@ -13,10 +13,14 @@ renamed over the store; an error leaves the previous store intact)::
                                        channels_used (JSON), n_impacts, pattern, pattern_n,
                                        acoustic_delay_s, expected_delay_s, spl_rms_db,
                                        spl_rms_a_db, threshold_direction, threshold_accel_ms2,
-                                       threshold_t_s (NaN / "" where not applicable)
+                                       threshold_t_s, threshold_censored (0/1), the measured
+                                       ramp threshold_ramp_start_ms2, threshold_ramp_end_ms2,
+                                       threshold_ramp_duration_s, threshold_ramp_rms_ms2
+                                       (NaN / "" where not applicable)
         datasets (status "ok"): t_s, onset_s, v_in_m_s, v_out_m_s, e, strength (impacts);
                                 t_first_s, p_first_pa, t_max_s, p_max_pa, p_rms_pa,
-                                delay_first_s, delay_max_s (sound peaks, with a microphone);
+                                delay_first_s, delay_max_s, spl_first_db, spl_max_db (sound
+                                peaks and their levels in dB re 20 uPa, with a microphone);
                                 cycle_counts (impacts per forcing cycle)
     /results/thresholds         datasets freq_hz, up_ms2, down_ms2, hysteresis_ms2
 
@@ -47,7 +51,7 @@ RESULTS_VERSION = 1
 
 _IMPACT_FIELDS = ("t_s", "onset_s", "v_in_m_s", "v_out_m_s", "e", "strength")
 _PEAK_FIELDS = ("t_first_s", "p_first_pa", "t_max_s", "p_max_pa", "p_rms_pa", "delay_first_s",
-                "delay_max_s")
+                "delay_max_s", "spl_first_db", "spl_max_db")
 
 
 @dataclass(frozen=True)
@@ -182,7 +186,12 @@ def _write(fh: h5py.File, fit: StoreFit) -> None:
             "spl_rms_a_db": r.spl_rms_a_db,
             "threshold_direction": thr.direction if thr else "",
             "threshold_accel_ms2": thr.accel_ms2 if thr else np.nan,
-            "threshold_t_s": thr.t_s if thr else np.nan}.items()})
+            "threshold_t_s": thr.t_s if thr else np.nan,
+            "threshold_censored": int(thr.censored) if thr else 0,
+            "threshold_ramp_start_ms2": thr.ramp_start_ms2 if thr else np.nan,
+            "threshold_ramp_end_ms2": thr.ramp_end_ms2 if thr else np.nan,
+            "threshold_ramp_duration_s": thr.ramp_duration_s if thr else np.nan,
+            "threshold_ramp_rms_ms2": thr.ramp_rms_ms2 if thr else np.nan}.items()})
         if r.impacts is not None:
             for name in _IMPACT_FIELDS:
                 g.create_dataset(name, data=np.asarray(getattr(r.impacts, name), dtype=np.float64))

@@ -6,7 +6,15 @@ base acceleration is demodulated at the run's excitation frequency (lock-in:
 zero-phase Butterworth low-pass.  On an upward ramp the threshold is the
 amplitude at the first impact of the first sustained group (``n_confirm``
 further impacts, each within ``max_gap_cycles`` forcing periods of the last);
-on a downward ramp, at the last impact of the last sustained group.
+on a downward ramp, at the last impact of the last sustained group.  A threshold whose
+impact lies within ``edge_cycles`` forcing periods of the record's start (up) or end (down)
+is *censored*: impact was already there when the record began, or still there when it
+ended, so the level where it appears or disappears was not seen (NaN, ``censored=True``).
+
+The ramp itself is measured too: a straight line fitted to the envelope gives the levels at
+the record's start and end and the RMS deviation from the line (fan beats, noise, a ramp
+that is not straight).  The ramp-model fits of :mod:`rattle_lab.fit` replay that measured
+ramp through the exact simulator.
 
 Below resonance the impacting near grazing is intermittent: an impact takes energy out
 of the mode, which regrows over a few time constants ``1 / (zeta omega_s)`` (~20 forcing
@@ -119,7 +127,18 @@ class Threshold:
         Base-acceleration amplitude at the fundamental at that instant, m/s^2
         (NaN when impact never appeared / never stopped in the run).
     t_s : float
-        Time of the threshold impact, s.
+        Time of the threshold impact, s (NaN when censored or not seen).
+    ramp_start_ms2, ramp_end_ms2 : float
+        The measured ramp: a least-squares line through the base-acceleration envelope,
+        evaluated at the record's start and end, m/s^2 (NaN when not measured).
+    ramp_duration_s : float
+        Record length ``n_samples / fs_hz`` over which the line runs, s.
+    ramp_rms_ms2 : float
+        RMS deviation of the envelope from that line, m/s^2 (away from the filter's edges).
+    censored : bool
+        True when the threshold impact lies within ``edge_cycles`` forcing periods of the
+        record's start (up) or end (down): the level where impact appears or disappears
+        lies outside the ramp, and ``accel_ms2`` is NaN.
     """
 
     run_id: str
@@ -127,22 +146,108 @@ class Threshold:
     direction: Direction
     accel_ms2: float
     t_s: float
+    ramp_start_ms2: float = float("nan")
+    ramp_end_ms2: float = float("nan")
+    ramp_duration_s: float = float("nan")
+    ramp_rms_ms2: float = float("nan")
+    censored: bool = False
+
+    @property
+    def ramp_rate_ms2_s(self) -> float:
+        """Slope of the measured ramp, m/s^3: ``(ramp_end - ramp_start) / ramp_duration_s``."""
+        return (self.ramp_end_ms2 - self.ramp_start_ms2) / self.ramp_duration_s
+
+
+def ramp_line(envelope_ms2: object, fs_hz: float, *, edge_s: float = 0.0
+              ) -> tuple[float, float, float, float]:
+    """Straight line through a ramp's envelope: ``(start, end, duration_s, rms)``.
+
+    The line is fitted (least squares) to the samples at least ``edge_s`` from either end
+    (all of them when the record is shorter than ``4 edge_s``), away from the lock-in
+    filter's edge transients; ``start`` and ``end`` are its values at the first sample and
+    at ``n / fs_hz`` (the end of the record), units of the envelope; ``rms`` is the RMS
+    deviation of those samples from it.
+
+    Raises
+    ------
+    ParameterError
+        With fewer than 2 samples or ``fs_hz <= 0``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> start, end, dur, rms = ramp_line(16.0 - 4.0 * np.arange(3000) / 1000.0, 1000.0)
+    >>> bool(np.allclose([start, end, dur], [16.0, 4.0, 3.0]) and rms < 1e-9)
+    True
+    """
+    env = np.asarray(envelope_ms2, dtype=float).ravel()
+    if not (np.isfinite(fs_hz) and fs_hz > 0):
+        raise ParameterError(f"`fs_hz` must be > 0, was {fs_hz}")
+    if env.size < 2:
+        raise ParameterError(f"`envelope_ms2` needs >= 2 samples, had {env.size}")
+    t = np.arange(env.size) / fs_hz
+    duration = env.size / fs_hz
+    n_edge = round(edge_s * fs_hz)
+    core = slice(n_edge, env.size - n_edge) if env.size > 4 * n_edge else slice(None)
+    slope, intercept = np.polyfit(t[core], env[core], 1)
+    rms = float(np.sqrt(np.mean((env[core] - (intercept + slope * t[core])) ** 2)))
+    return float(intercept), float(intercept + slope * duration), float(duration), rms
 
 
 def ramp_threshold(run_id: str, base_accel_ms2: object, fs_hz: float, freq_hz: float,
                    impact_t_s: object, direction: Direction, *, start_time_s: float = 0.0,
                    n_confirm: int = 3, max_gap_cycles: float = 100.0,
-                   lowpass_hz: float | None = None) -> Threshold:
-    """Threshold of one ramp run from its base acceleration and detected impacts
-    (``n_confirm``, ``max_gap_cycles``: see :func:`sustained_impact_time`)."""
+                   lowpass_hz: float | None = None, edge_cycles: float = 2.0) -> Threshold:
+    """Threshold of one ramp run from its base acceleration and detected impacts.
+
+    Parameters
+    ----------
+    run_id : str
+        Name carried into the result.
+    base_accel_ms2 : array
+        Base acceleration, m/s^2, sampled at ``fs_hz`` from ``start_time_s``.
+    fs_hz, freq_hz : float
+        Sample rate and excitation frequency, Hz.
+    impact_t_s : array
+        Detected impact times, s (same clock as ``start_time_s``).
+    direction : {"up", "down"}
+        Ramp direction.
+    n_confirm, max_gap_cycles
+        The sustained-group criterion of :func:`sustained_impact_time`.
+    lowpass_hz : float, optional
+        Lock-in low-pass (:func:`fundamental_amplitude`).
+    edge_cycles : float
+        A threshold impact within this many forcing periods of the record's start (up) or
+        end (down) is censored (NaN, ``censored=True``).
+
+    Returns
+    -------
+    Threshold
+        With the measured ramp (:func:`ramp_line` of the envelope) whenever impacts were
+        found.
+
+    Raises
+    ------
+    ParameterError
+        For an invalid signal, rate, frequency or direction.
+    """
     t_thr = sustained_impact_time(impact_t_s, freq_hz, direction, n_confirm=n_confirm,
                                   max_gap_cycles=max_gap_cycles)
     if not np.isfinite(t_thr):
         return Threshold(run_id, float(freq_hz), direction, float("nan"), float("nan"))
     amp = fundamental_amplitude(base_accel_ms2, fs_hz, freq_hz, lowpass_hz=lowpass_hz)
+    cutoff = freq_hz / 20.0 if lowpass_hz is None else lowpass_hz
+    start, end, duration, rms = ramp_line(amp, fs_hz, edge_s=1.0 / cutoff)
+    ramp = dict(ramp_start_ms2=start, ramp_end_ms2=end, ramp_duration_s=duration,
+                ramp_rms_ms2=rms)
+    cycles_from_edge = ((t_thr - start_time_s) if direction == "up"
+                        else (start_time_s + duration - t_thr)) * freq_hz
+    if cycles_from_edge < edge_cycles:
+        return Threshold(run_id, float(freq_hz), direction, float("nan"), float("nan"),
+                         censored=True, **ramp)
     x = (t_thr - start_time_s) * fs_hz
     value = float(np.interp(x, np.arange(amp.size), amp))
-    return Threshold(run_id, float(freq_hz), direction, value, t_thr)
+    return Threshold(run_id, float(freq_hz), direction, value, t_thr, **ramp)
 
 
 @dataclass(frozen=True)

@@ -280,10 +280,20 @@ def test_impact_patterns(times, expected):
     assert r.counts.size == 50
 
 
-@pytest.mark.parametrize("args, match", [
-    ((0.0, 0.0, 1.0), r"`freq_hz` must be > 0, was 0.0"),
-    ((10.0, 1.0, 1.0), r"`t_stop_s` must be > `t_start_s` \(1.0\), was 1.0"),
+@pytest.mark.parametrize("args, kwargs, match", [
+    ((0.0, 0.0, 1.0), {}, r"`freq_hz` must be > 0, was 0.0"),
+    ((10.0, 1.0, 1.0), {}, r"`t_stop_s` must be > `t_start_s` \(1.0\), was 1.0"),
+    ((10.0, 0.0, 1.0), {"tolerance": 0.5}, r"`tolerance` must be in \(0.5, 1\], was 0.5"),
+    ((10.0, 0.0, 1.0), {"settle_cycles": -1}, r"`settle_cycles` must be an integer >= 0, was -1"),
+    ((10.0, 0.0, 1.0), {"settle_cycles": 1.5}, r"`settle_cycles` must be an integer >= 0, was 1.5"),
 ])
-def test_impact_pattern_errors(args, match):
+def test_impact_pattern_errors(args, kwargs, match):
     with pytest.raises(ParameterError, match=match):
-        impact_pattern([], *args)
+        impact_pattern([], *args, **kwargs)
+
+
+def test_impact_pattern_settle_cycles_skip_the_transient():
+    t = np.r_[0.001, 0.002, 0.003, (np.arange(2, 50) + 0.3) / 100.0]   # chatter, then 1/1
+    assert impact_pattern(t, 100.0, 0.0, 0.5).pattern == "1/1"          # 48 of 50 cycles
+    r = impact_pattern(t, 100.0, 0.0, 0.5, settle_cycles=2, tolerance=1.0)
+    assert (r.pattern, r.counts.size) == ("1/1", 48)

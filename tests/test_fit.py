@@ -1,6 +1,7 @@
-"""Fits: grazing curve (eq. 3.4, thesis Fig. 6-2), restitution, SPL law (Fig. 6-7).
+"""Fits: grazing curve (eq. 3.4, thesis Fig. 6-2), restitution, ramp damping, SPL law (Fig. 6-7).
 
-Parameter recovery from synthetic thresholds generated with known truth.
+Parameter recovery from synthetic thresholds generated with known truth: eq. (3.4) and
+(3.11) for the quasi-static fits, the synthetic rig's ramp simulation for the ramp model.
 """
 
 from __future__ import annotations
@@ -8,11 +9,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rattle_lab.exceptions import ParameterError
+from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.fit import (fit_db_law, fit_grazing, fit_linear_law, fit_restitution_down,
-                            grazing_threshold_ms2, restitution_from_ratios,
+                            fit_zeta_ramp, grazing_threshold_ms2, restitution_from_ratios,
                             saddle_node_threshold_ms2)
+from rattle_lab.fit._restitution import profile_interval, profile_parabola
 from rattle_lab.linear import threshold_accel_ms2
+from rattle_lab.rig._motion import Modal, simulate_run
+from rattle_lab.rig._scene import RunSpec
+from rattle_lab.thresholds import Threshold, sustained_impact_time
 
 # Thesis Fig. 6-2: fitted gap 0.35 mm, 2 zeta = 0.017; f_s near the 94-98 Hz resonance.
 GAP_MM, ZETA, F_S_HZ, Q = 0.35, 0.017 / 2, 96.0, 1.2
@@ -100,21 +105,160 @@ def test_restitution_from_ratios():
     assert empty.n == 0 and np.isnan(empty.mean)
 
 
-def test_restitution_from_downward_thresholds():
+def _down(freq_hz: float, accel_ms2: float, **ramp: float) -> Threshold:
+    return Threshold(f"down_{freq_hz:g}", freq_hz, "down", accel_ms2, 1.0, **ramp)
+
+
+def test_restitution_quasi_static_from_saddle_node():
     f = np.linspace(100.0, 125.0, 6)
     down = saddle_node_threshold_ms2(f, 0.75, GAP_MM * 1e-3, F_S_HZ, ZETA, Q)
     # the saddle-node lies far below the grazing curve above resonance (hysteresis, Fig. 6-5)
     assert np.all(down < grazing_threshold_ms2(f, GAP_MM, F_S_HZ, ZETA, Q))
     noisy = down * (1 + 0.01 * np.random.default_rng(1).standard_normal(f.size))
-    fit = fit_restitution_down(f, noisy, gap_m=GAP_MM * 1e-3, f_s_hz=F_S_HZ, zeta=ZETA,
-                               participation=Q)
+    ths = [_down(fi, ai) for fi, ai in zip(f, noisy)] + [_down(90.0, 1.0)]   # 90 Hz: not used
+    fit = fit_restitution_down(ths, gap_m=GAP_MM * 1e-3, f_s_hz=F_S_HZ, zeta=ZETA,
+                               participation=Q, method="quasi-static")
+    assert fit.method == "quasi-static" and fit.run_ids == tuple(t.run_id for t in ths[:6])
     assert fit.e.value == pytest.approx(0.75, abs=0.02)
     assert fit.e.ci_low < 0.75 < fit.e.ci_high or abs(fit.e.value - 0.75) < 3 * fit.e.stderr
+    assert fit.notes == () and fit.e_grid.size == 0
+    np.testing.assert_allclose(fit.residuals_ms2, fit.model_ms2 - noisy, rtol=1e-12)
+
+
+# The plate of the scenes (thesis ch. 6): 96 Hz, 2 zeta = 0.017, 1.3 mm, Ritz participation.
+PLATE = dict(gap_m=1.3e-3, f_s_hz=96.0, participation=1.2442)
+
+
+def _rig_threshold(e: float, freq_hz: float, start: float, end: float, duration_s: float,
+                   direction: str, zeta: float = ZETA) -> Threshold:
+    """A threshold 'measured' on the synthetic rig's simulation of a continuous ramp: the
+    ramp level at the rig's own sustained impact (its code path: its piecing and start)."""
+    modal = Modal(f_s_hz=96.0, zeta=zeta, participation=1.2442, gap_m=1.3e-3, e=e)
+    run = RunSpec(f"{direction}_{freq_hz:g}", f"amplitude_ramp_{direction}", freq_hz, start,
+                  duration_s, level_end_m_s2=end)
+    motion = simulate_run(modal, run, piece_periods=1, settle_time_constants=8.0,
+                          sample_rate_hz=None)
+    t = sustained_impact_time(motion.impact_t_s, freq_hz, direction)
+    return Threshold(run.run_id, freq_hz, direction, start + (end - start) * t / duration_s, t,
+                     ramp_start_ms2=start, ramp_end_ms2=end, ramp_duration_s=duration_s,
+                     ramp_rms_ms2=0.0)
+
+
+@pytest.mark.parametrize("e_true", [0.4, 0.8])
+def test_restitution_ramp_recovers_e_on_fast_ramps(e_true):
+    """The thesis scene's 6 s downward ramps at 98 and 100 Hz, from the rig's simulation.
+
+    Tolerance 0.03: one threshold is a single forcing phase, known to a cycle's level
+    change (sigma = step / sqrt 12 = 0.023 m/s^2 at 100 Hz) against dA/de ~ -2 m/s^2 (0.01
+    in e), and the 98 Hz point is four times less sensitive."""
+    ths = [_rig_threshold(e_true, 98.0, 26.0, 2.0, 6.0, "down"),
+           _rig_threshold(e_true, 100.0, 50.0, 3.0, 6.0, "down"),
+           _rig_threshold(e_true, 96.0, 10.0, 2.0, 6.0, "down")]      # at resonance: not used
+    fit = fit_restitution_down(ths, zeta=ZETA, e_bounds=(0.2, 0.95), e_step=0.05, **PLATE)
+    assert fit.method == "ramp" and fit.run_ids == ("down_98", "down_100")
+    assert fit.e.value == pytest.approx(e_true, abs=0.03)
+    assert fit.e.ci_low < e_true < fit.e.ci_high
+    assert 0 < fit.e.stderr < 0.05 and fit.stderr_from_zeta == 0.0 and fit.notes == ()
+    assert fit.chi2_scale >= 1.0 and fit.e_grid.size == fit.chi2.size > 16   # refined
+    np.testing.assert_allclose(fit.residuals_ms2, fit.model_ms2 - fit.accel_ms2)
+    assert np.all(np.abs(fit.residuals_ms2) < 3 * np.sqrt(fit.chi2_scale) * fit.sigma_ms2)
+    # the quasi-static fold on the same thresholds: the ramp lag reads as a larger e
+    qs = fit_restitution_down(ths, zeta=ZETA, method="quasi-static", **PLATE)
+    assert qs.e.value - e_true > 0.15
+    assert any("use method='ramp'" in note for note in qs.notes)
+
+
+def test_restitution_ramp_propagates_the_damping_uncertainty():
+    ths = [_rig_threshold(0.6, 100.0, 50.0, 3.0, 6.0, "down")]
+    kw = dict(zeta=ZETA, e_bounds=(0.4, 0.8), e_step=0.05, **PLATE)
+    plain = fit_restitution_down(ths, **kw)
+    wide = fit_restitution_down(ths, zeta_stderr=0.03 * ZETA, **kw)
+    # 3 % in zeta moves the 100 Hz threshold by ~0.2 m/s^2, i.e. ~0.1 in e
+    assert 0.05 < wide.stderr_from_zeta < 0.2
+    assert wide.e.stderr == pytest.approx(np.hypot(plain.e.stderr, wide.stderr_from_zeta))
+    assert wide.e.ci_high - wide.e.ci_low > plain.e.ci_high - plain.e.ci_low
+
+
+def test_restitution_ramp_reports_e_not_identified():
+    """At 97 Hz on a 3 s ramp the disappearance does not depend on e: the profile is flat."""
+    ths = [_rig_threshold(0.6, 97.0, 16.0, 2.0, 3.0, "down")]
+    fit = fit_restitution_down(ths, zeta=ZETA, e_step=0.1, **PLATE)
+    assert any(note.startswith("e not identified") for note in fit.notes)
+    assert np.isnan(fit.e.ci_low) or np.isnan(fit.e.ci_high)
+
+
+def test_zeta_ramp_removes_the_ramp_lag():
+    """Onsets of the default scene's 3 s ramps from the rig's simulation: eq. (3.4) reads
+    their lag as 7 % more damping; the ramp model recovers zeta to 0.5 % (the onsets are
+    known to step / sqrt 12 = 0.007-0.011 m/s^2 against dA/dzeta ~ 700 m/s^2 at 96 Hz)."""
+    ups = [_rig_threshold(0.6, f, a0, a1, 3.0, "up")
+           for f, a0, a1 in ((95.0, 5.0, 16.0), (96.0, 3.0, 10.0), (97.0, 5.0, 16.0))]
+    fit = fit_zeta_ramp(ups + [_down(100.0, 7.0)], zeta0=0.0091, **PLATE)
+    assert fit.run_ids == ("up_95", "up_96", "up_97")
+    assert fit.zeta.value == pytest.approx(ZETA, rel=0.005)
+    assert abs(fit.zeta.value - ZETA) < 3 * np.sqrt(fit.chi2_scale) * fit.zeta.stderr + 1e-6
+    assert fit.zeta.ci_low < fit.zeta.value < fit.zeta.ci_high and fit.notes == ()
+    assert np.all(np.abs(fit.residuals_ms2) < 3 * fit.sigma_ms2)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"method": "exact"}, r"`method` must be one of \('ramp', 'quasi-static'\), was 'exact'"),
+    ({"gap_m": -1.0}, r"`gap_m` must be finite and > 0, was -1.0"),
+    ({"zeta_stderr": -0.1}, r"`zeta_stderr` must be finite and >= 0, was -0.1"),
+    ({"e_bounds": (0.9, 0.1)}, r"`e_bounds` must satisfy 0 <= low < high <= 1, was \(0.9, 0.1\)"),
+    ({"e_step": 0.0}, r"`e_step` must be in \(0, 0.9\], was 0.0"),
+])
+def test_restitution_down_errors(kwargs, match):
+    args = {**PLATE, "zeta": ZETA, **kwargs}
+    ths = [_down(100.0, 7.0, ramp_start_ms2=50.0, ramp_end_ms2=3.0, ramp_duration_s=6.0)]
+    with pytest.raises(ParameterError, match=match):
+        fit_restitution_down(ths, **args)
 
 
 def test_restitution_down_needs_points_above_resonance():
-    with pytest.raises(ParameterError, match=r"no finite downward threshold above f_s = 96 Hz"):
-        fit_restitution_down([80.0, 90.0], [1.0, 1.0], gap_m=1e-3, f_s_hz=96.0, zeta=0.01)
+    with pytest.raises(ParameterError, match=r"no finite downward threshold above the half-power "
+                                             r"frequency f_s \(1 \+ zeta\) = 96.96 Hz"):
+        fit_restitution_down([_down(80.0, 1.0), _down(96.5, 1.0), _down(110.0, float("nan"))],
+                             gap_m=1e-3, f_s_hz=96.0, zeta=0.01)
+
+
+def test_restitution_down_needs_the_measured_ramp():
+    with pytest.raises(ParameterError, match=r"run 'down_100': no measured ramp to replay"):
+        fit_restitution_down([_down(100.0, 7.0)], zeta=ZETA, **PLATE)
+
+
+def test_restitution_down_without_any_disappearance_fails():
+    # the ramp ends at 20 m/s^2, above the fold: no e sees impact stop within the record
+    ths = [_down(100.0, 21.0, ramp_start_ms2=50.0, ramp_end_ms2=20.0, ramp_duration_s=2.0)]
+    with pytest.raises(ConvergenceError, match=r"no e in the grid reproduces every downward"):
+        fit_restitution_down(ths, zeta=ZETA, e_step=0.3, **PLATE)
+
+
+@pytest.mark.parametrize("args, kwargs, exc, match", [
+    ([], {}, ParameterError, r"no finite upward threshold to fit zeta to"),
+    ([Threshold("u", 96.0, "up", 7.0, 1.0)], {}, ParameterError, r"run 'u': no measured ramp"),
+    ([], {"zeta0": 0.0}, ParameterError, r"`zeta0` must be finite and > 0, was 0.0"),
+    ([], {"zeta_bounds_rel": (0.5, 0.9)}, ParameterError,
+     r"`zeta_bounds_rel` must satisfy 0 < low < 1 < high, was \(0.5, 0.9\)"),
+    # a ramp that never reaches grazing (6.5 m/s^2 at 96 Hz): no replay sees an onset
+    ([Threshold("u", 96.0, "up", 2.5, 1.0, ramp_start_ms2=1.0, ramp_end_ms2=3.0,
+                ramp_duration_s=1.0)], {}, ConvergenceError, r"no replay sees an onset at zeta"),
+])
+def test_zeta_ramp_errors(args, kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        fit_zeta_ramp(args, **{**PLATE, "zeta0": ZETA, **kwargs})
+
+
+def test_profile_helpers():
+    x = np.linspace(0.0, 1.0, 11)
+    assert np.isnan(profile_interval(x, np.full(11, np.inf), 1.0)).all()
+    # an infinite neighbour bounds the interval at that grid point
+    c2 = np.r_[np.inf, np.zeros(9), np.inf]
+    assert profile_interval(x, c2, 1.0) == pytest.approx((0.0, 1.0))
+    # too few points within the cut: the parabola through the minimum and its neighbours
+    v, a = profile_parabola(x, 100.0 * (x - 0.52) ** 2, 0.5)
+    assert v == pytest.approx(0.52) and a == pytest.approx(100.0)
+    assert np.isnan(profile_parabola(x, -(x - 0.5) ** 2, 1.0)).all()     # opens downwards
 
 
 def test_spl_linear_law_and_db_law():
@@ -137,3 +281,13 @@ def test_spl_linear_law_and_db_law():
 def test_spl_law_errors(v, p, match):
     with pytest.raises(ParameterError, match=match):
         fit_linear_law(v, p)
+
+
+@pytest.mark.parametrize("module", ["rattle_lab.fit._ramp_model", "rattle_lab.fit._restitution",
+                                    "rattle_lab.fit._damping", "rattle_lab.thresholds"])
+def test_module_doctests(module):
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(module))
+    assert result.attempted > 0 and result.failed == 0

@@ -8,7 +8,7 @@ import pytest
 from rattle_lab.detect import detect_impacts
 from rattle_lab.detect._synthetic import ramp_impacts, synthetic_signals
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.thresholds import (Threshold, fundamental_amplitude, ramp_threshold,
+from rattle_lab.thresholds import (Threshold, fundamental_amplitude, ramp_line, ramp_threshold,
                                    sustained_impact_time, tabulate_thresholds)
 
 FS_HZ = 12800.0
@@ -77,12 +77,51 @@ def test_ramp_threshold_from_synthetic_ramp(direction):
     # one forcing cycle of the ramp changes A by 3.0/95 = 0.032 m/s^2: the threshold is known
     # to within one cycle (impacts happen once per cycle)
     assert thr.accel_ms2 == pytest.approx(a_thr, abs=3.0 / f_hz)
-    assert thr.direction == direction and thr.run_id == "r1"
+    assert thr.direction == direction and thr.run_id == "r1" and not thr.censored
+    # the measured ramp: the lock-in passes a line; the base noise (0.01 m/s^2 over a
+    # 4.75 Hz band of a 6.4 kHz Nyquist) leaves ~1e-3 m/s^2 about it
+    start, end = (0.5, 3.5) if direction == "up" else (3.5, 0.5)
+    assert (thr.ramp_start_ms2, thr.ramp_end_ms2) == pytest.approx((start, end), abs=5e-3)
+    assert thr.ramp_duration_s == 1.0 and 0 < thr.ramp_rms_ms2 < 5e-3
+    assert thr.ramp_rate_ms2_s == pytest.approx(end - start, abs=1e-2)
+
+
+@pytest.mark.parametrize("direction", ["up", "down"])
+def test_ramp_threshold_censored_at_the_record_edge(direction):
+    """Impact from the first cycle of an upward ramp (or to the last of a downward one):
+    the onset (disappearance) lies outside the ramp and is not reported."""
+    f_hz, n = 95.0, int(1.0 * FS_HZ)
+    t = np.arange(n) / FS_HZ
+    amp = 2.0 + 1.0 * t if direction == "up" else 3.0 - 1.0 * t      # above 1.5 throughout
+    ti, vin = ramp_impacts(f_hz, amp, FS_HZ, 1.5, direction)
+    s = synthetic_signals(FS_HZ, n, f_hz, ti, vin, 0.8, base_amp_ms2=amp, noise_v_m_s=2e-4,
+                          noise_base_ms2=0.01, rng=np.random.default_rng(2))
+    log = detect_impacts(FS_HZ, velocity_m_s=s["velocity"])
+    thr = ramp_threshold("c", s["base_acc"], FS_HZ, f_hz, log.t_s, direction)
+    assert thr.censored and np.isnan(thr.accel_ms2) and np.isnan(thr.t_s)
+    assert thr.ramp_duration_s == 1.0 and np.isfinite(thr.ramp_start_ms2)
+    # with no margin at the edge, the same impacts give a threshold
+    kept = ramp_threshold("c", s["base_acc"], FS_HZ, f_hz, log.t_s, direction, edge_cycles=0.0)
+    assert not kept.censored and np.isfinite(kept.accel_ms2)
+
+
+def test_ramp_line_exact_and_errors():
+    env = 16.0 - 4.0 * np.arange(3000) / 1000.0
+    env[:50] += 1.0                                   # an edge transient: left out of the rms
+    start, end, dur, rms = ramp_line(env, 1000.0, edge_s=0.1)
+    assert dur == 3.0 and rms < 1e-12
+    assert (start, end) == pytest.approx((16.0, 4.0), abs=1e-9)
+    assert ramp_line(env, 1000.0)[3] > 0.1               # without the edge margin it counts
+    with pytest.raises(ParameterError, match=r"`fs_hz` must be > 0, was -1.0"):
+        ramp_line(env, -1.0)
+    with pytest.raises(ParameterError, match=r"`envelope_ms2` needs >= 2 samples, had 1"):
+        ramp_line([1.0], 1000.0)
 
 
 def test_ramp_threshold_without_impacts_is_nan():
     thr = ramp_threshold("r", np.zeros(1000), 1000.0, 50.0, [], "up")
-    assert np.isnan(thr.accel_ms2) and np.isnan(thr.t_s)
+    assert np.isnan(thr.accel_ms2) and np.isnan(thr.t_s) and not thr.censored
+    assert np.isnan(thr.ramp_start_ms2) and np.isnan(thr.ramp_rate_ms2_s)
 
 
 def test_tabulate_hysteresis():

@@ -37,7 +37,15 @@ def impact_pattern(impact_t_s: object, freq_hz: float, t_start_s: float, t_stop_
     """Classify a run by its impacts per forcing cycle.
 
     ``tolerance`` is the fraction of cycles (or of impact intervals) that must
-    follow the pattern; the rest are allowed to deviate (noise, a missed impact).
+    follow the pattern; the rest are allowed to deviate (noise, a missed impact).  It
+    must exceed 1/2, so that a run cannot be "1/1" and "several per cycle" at once.
+    ``settle_cycles`` whole cycles at the start are left out (transients).
+
+    Raises
+    ------
+    ParameterError
+        For ``freq_hz <= 0``, an empty time span, ``tolerance`` outside (0.5, 1] or a
+        negative or fractional ``settle_cycles``.
 
     Examples
     --------
@@ -51,6 +59,11 @@ def impact_pattern(impact_t_s: object, freq_hz: float, t_start_s: float, t_stop_
         raise ParameterError(f"`freq_hz` must be > 0, was {freq_hz}")
     if not t_stop_s > t_start_s:
         raise ParameterError(f"`t_stop_s` must be > `t_start_s` ({t_start_s}), was {t_stop_s}")
+    if not 0.5 < tolerance <= 1.0:
+        raise ParameterError(f"`tolerance` must be in (0.5, 1], was {tolerance}")
+    if int(settle_cycles) != settle_cycles or settle_cycles < 0:
+        raise ParameterError(f"`settle_cycles` must be an integer >= 0, was {settle_cycles}")
+    settle_cycles = int(settle_cycles)
     t = np.sort(np.atleast_1d(np.asarray(impact_t_s, dtype=float)))
     period = 1.0 / freq_hz
     n_cycles = int(np.floor((t_stop_s - t_start_s) / period + 1e-9))

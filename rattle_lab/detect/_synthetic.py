@@ -153,7 +153,9 @@ def synthetic_campaign(*, fs_hz: float = 12800.0, duration_s: float = 1.0,
     """A rattle record of ramp runs whose thresholds follow eq. (3.4) and the saddle-node.
 
     Each ramp spans 0.6 to 1.4 times its threshold over ``duration_s``; impacts
-    happen once per cycle while the ramp is above the threshold.  Noise: Gaussian,
+    happen once per cycle while the ramp is above the threshold.  The thresholds are the
+    *quasi-static* ones, with no ramp lag (not what a plate does on a ramp this fast: use
+    :mod:`rattle_lab.rig` for that), so fit them with ``method="quasi-static"``.  Noise: Gaussian,
     ``noise_rel`` times 0.02 m/s on the velocity, 10 m/s^2 on the plate
     acceleration, 0.005 Pa on the pressure, ``noise_rel`` of the threshold on the base.
     With ``extra_runs``: a dwell without impacts (``dwell_quiet``) and a run with no

@@ -1,7 +1,14 @@
-"""Fits of measured thresholds and events: grazing curve, restitution, SPL law (lmfit/scipy)."""
+"""Fits of measured thresholds and events: grazing curve, restitution, SPL law (lmfit/scipy).
+
+Ramp thresholds are modelled either quasi-statically (eq. 3.4 grazing, eq. 3.11
+saddle-node) or by replaying the measured ramp through the exact simulator
+(:func:`model_threshold`; :func:`fit_zeta_ramp`, ``fit_restitution_down(method="ramp")``).
+"""
 
 from ._common import ParamEstimate
+from ._damping import RampDampingFit, fit_zeta_ramp
 from ._grazing import GrazingFit, fit_grazing, grazing_threshold_ms2
+from ._ramp_model import ModelThreshold, RampSpec, model_threshold
 from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_down,
                            restitution_from_ratios, saddle_node_threshold_ms2)
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
@@ -12,4 +19,5 @@ __all__ = [
     "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down", "grazing_threshold_ms2",
     "restitution_from_ratios", "saddle_node_threshold_ms2",
+    "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
 ]

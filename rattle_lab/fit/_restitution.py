@@ -1,24 +1,47 @@
 """Coefficient of restitution: from per-impact velocity ratios, and from downward thresholds.
 
-Above resonance the stable 1/1 orbit is lost at its saddle-node (eq. 3.11), so
-the disappearance threshold on a downward ramp is, dimensionally::
+Above resonance the stable 1/1 orbit is lost at its saddle-node (eq. 3.11), below the
+grazing level (eq. 3.4): that hysteresis is why the disappearance threshold of a
+downward ramp carries ``e`` and the onset does not.  Two models of that threshold:
 
-    A_down(f) = h omega_s^2 F_sn(f / f_s, zeta, e) / q
+``method="ramp"`` (default)
+    The measured ramp replayed through the exact simulator at candidate ``e``
+    (:func:`rattle_lab.fit._ramp_model.model_threshold`), the threshold read off as
+    :mod:`rattle_lab.thresholds` reads it off the data.  Valid at any ramp rate.
+``method="quasi-static"``
+    The fold itself, dimensionally ``A_down(f) = h omega_s^2 F_sn(f / f_s, zeta, e) / q``
+    with ``F_sn`` from :func:`rattle_lab.analysis.saddle_node_forcing`.  Valid only when
+    the ramp passes the fold slowly: the plate lags a ramp by about ``|dA/dt|`` times its
+    time constant ``1 / (zeta omega_s)``, and a fold is left with the delay of a slow
+    passage, whose level lag grows like ``|dA/dt|^(2/3)``.  For the thesis plate
+    (``1 / (zeta omega_s) = 0.2 s``) at 98 Hz and ``e = 0.3`` the lag is 0.04 m/s^2 at
+    0.05 m/s^2/s (a 30 s pass over 1.5 m/s^2) and 0.54 m/s^2 on the default scene's
+    3 s ramps (8 m/s^2/s), more than the whole change of ``A_down`` between ``e = 0.3``
+    and ``e = 0.9`` (0.48 m/s^2): with seconds-long ramps it fits ``e`` near 1.
 
-with ``F_sn`` from :func:`rattle_lab.analysis.saddle_node_forcing`; ``e`` is
-fitted with ``h, f_s, zeta, q`` held at the grazing-fit values.
+Only thresholds above the upper half-power frequency ``f_s (1 + zeta)`` are used:
+there the 1/1 orbit folds well below grazing; at and below resonance impacting stops
+by irregular, intermittent grazing whose level scatters by several cycles of the ramp.
+In both methods ``h, f_s, q`` (and ``zeta``) are held; the downward thresholds near
+resonance depend on ``zeta`` more than on ``e`` (7 % in zeta moves them by 0.5 m/s^2 on
+the thesis plate), so give the ramp-model damping of :func:`fit_zeta_ramp` and its
+standard error: it is propagated into the uncertainty of ``e``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import lmfit
 import numpy as np
 
 from ..analysis import saddle_node_forcing
 from ..exceptions import ConvergenceError, ParameterError
+from ..thresholds import Threshold
 from ._common import ParamEstimate
+from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
 
 
 @dataclass(frozen=True)
@@ -62,10 +85,24 @@ def restitution_from_ratios(e_values: object) -> RestitutionStats:
 
 def saddle_node_threshold_ms2(freq_hz: np.ndarray, e: float, gap_m: float, f_s_hz: float,
                               zeta: float, participation: float) -> np.ndarray:
-    """Disappearance threshold at the 1/1 saddle-node (eq. 3.11), dimensional, m/s^2."""
+    """Quasi-static disappearance threshold: the 1/1 saddle-node (eq. 3.11), dimensional, m/s^2.
+
+    ``A = h omega_s^2 F_sn(f / f_s, zeta, e) / q`` (eq. 2.27, 2.31 for the scaling).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = saddle_node_threshold_ms2(np.array([100.0]), 0.6, 1.3e-3, 96.0, 0.0085, 1.2442)
+    >>> bool(np.isclose(a[0], 7.636, atol=1e-3))
+    True
+    """
     with np.errstate(invalid="ignore"):
         F_sn, _ = saddle_node_forcing(1, np.asarray(freq_hz, dtype=float) / f_s_hz, zeta, e)
     return gap_m * (2 * np.pi * f_s_hz) ** 2 * F_sn / participation
+
+
+Method = Literal["ramp", "quasi-static"]
+METHODS: tuple[str, ...] = ("ramp", "quasi-static")
 
 
 @dataclass(frozen=True)
@@ -75,15 +112,55 @@ class RestitutionFit:
     Attributes
     ----------
     e : ParamEstimate
-        Fitted coefficient of restitution.
-    freq_hz, accel_ms2, residuals_ms2 : ndarray
-        Points used (above ``f_s``, on a physical fold) and model minus data, m/s^2.
+        Fitted coefficient of restitution (``method="ramp"``: the vertex of a parabola
+        ``chi2 ~ a (e - value)^2 + c`` fitted to the profile within ``4 s2`` of its
+        minimum, ``s2 = chi2_scale``).  ``stderr``: ``sqrt(s2 / a)`` (or, without a
+        parabola, half the width of the set where ``chi2 <= min + s2``), combined in
+        quadrature with ``stderr_from_zeta``; ``ci_low``, ``ci_high``: the outer edges of
+        the set where ``chi2 <= min + 4 s2`` (2 sigma, 95.4 %), widened likewise; NaN
+        where the profile does not rise that far inside ``e_bounds`` (see ``notes``).
+        For ``method="quasi-static"``: lmfit's standard error and ``value +- 2 stderr``.
+    method : {"ramp", "quasi-static"}
+        The threshold model (module docstring).
+    run_ids : tuple of str
+        Runs used, in the order of the arrays below.
+    freq_hz, accel_ms2 : ndarray
+        Their frequencies (Hz) and measured thresholds (m/s^2).
+    sigma_ms2 : ndarray
+        Standard deviation of each measured threshold, m/s^2
+        (:func:`~rattle_lab.fit._ramp_model.threshold_sigma_ms2`; NaN for quasi-static,
+        which weights by ``1 / accel_ms2``).
+    model_ms2, residuals_ms2 : ndarray
+        Model at the fitted ``e`` and model minus data, m/s^2.
+    e_grid, chi2 : ndarray
+        The profile: ``chi2(e) = sum(((model(e) - accel) / sigma)^2)`` on the grid
+        (``method="ramp"``; empty otherwise).
+    chi2_scale : float
+        ``s2 = max(1, min(chi2) / (n - 1))`` (1 with one point): the residual scatter
+        beyond the stated ``sigma_ms2`` widens the intervals (Birge ratio).
+    zeta : float
+        Damping ratio used.
+    stderr_from_zeta : float
+        Part of ``e.stderr`` that comes from the standard error of ``zeta`` (linear
+        propagation: ``|de/dzeta| stderr_zeta``), nondimensional.
+    notes : tuple of str
+        What the data could not determine, and warnings (e.g. ramp lag for quasi-static).
     """
 
     e: ParamEstimate
+    method: str
+    run_ids: tuple[str, ...]
     freq_hz: np.ndarray
     accel_ms2: np.ndarray
+    sigma_ms2: np.ndarray
+    model_ms2: np.ndarray
     residuals_ms2: np.ndarray
+    e_grid: np.ndarray
+    chi2: np.ndarray
+    chi2_scale: float
+    zeta: float
+    stderr_from_zeta: float
+    notes: tuple[str, ...]
 
     @property
     def params(self) -> dict[str, ParamEstimate]:
@@ -91,23 +168,93 @@ class RestitutionFit:
         return {"e": self.e}
 
 
-def fit_restitution_down(freq_hz: object, down_ms2: object, *, gap_m: float, f_s_hz: float,
-                         zeta: float, participation: float = 1.0, e0: float = 0.7) -> RestitutionFit:
-    """Fit ``e`` to disappearance thresholds above resonance (``freq_hz > f_s_hz``).
+def _down_points(thresholds: Sequence[Threshold], f_s_hz: float, zeta: float
+                 ) -> list[Threshold]:
+    """Finite downward thresholds above the upper half-power frequency ``f_s (1 + zeta)``."""
+    f_min = f_s_hz * (1.0 + zeta)
+    use = [t for t in thresholds if isinstance(t, Threshold) and t.direction == "down"
+           and np.isfinite(t.freq_hz) and np.isfinite(t.accel_ms2) and t.accel_ms2 > 0
+           and t.freq_hz > f_min]
+    if not use:
+        raise ParameterError(f"no finite downward threshold above the half-power frequency "
+                             f"f_s (1 + zeta) = {f_min:.6g} Hz to fit e to")
+    return use
 
-    Raises
-    ------
-    ParameterError
-        With no usable point above resonance.
-    ConvergenceError
-        If the fit fails.
+
+def _check_model(gap_m: float, f_s_hz: float, zeta: float, participation: float) -> None:
+    for name, value in (("gap_m", gap_m), ("f_s_hz", f_s_hz), ("zeta", zeta),
+                        ("participation", participation)):
+        if not (np.isfinite(value) and value > 0):
+            raise ParameterError(f"`{name}` must be finite and > 0, was {value}")
+
+
+def profile_interval(grid: np.ndarray, chi2: np.ndarray, cut: float) -> tuple[float, float]:
+    """Outermost extent of ``{x : chi2(x) <= cut}`` on a grid, edges interpolated linearly.
+
+    NaN on a side where the set reaches the end of the grid (the profile does not rise
+    to ``cut`` there: the bound is not determined).  Non-finite ``chi2`` counts as above.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = np.linspace(0.0, 1.0, 11)
+    >>> lo, hi = profile_interval(x, (x - 0.5) ** 2 / 0.01, 1.0)
+    >>> bool(np.allclose([lo, hi], [0.4, 0.6]))
+    True
+    >>> profile_interval(x, x / 0.1, 1.0)[0]
+    nan
     """
-    f = np.asarray(freq_hz, dtype=float)
-    a = np.asarray(down_ms2, dtype=float)
-    use = np.isfinite(f) & np.isfinite(a) & (f > f_s_hz) & (a > 0)
-    if use.sum() < 1:
-        raise ParameterError(f"no finite downward threshold above f_s = {f_s_hz:.6g} Hz to fit e to")
-    fu, au = f[use], a[use]
+    c = np.where(np.isfinite(chi2), chi2, np.inf)
+    inside = np.flatnonzero(c <= cut)
+    if inside.size == 0:
+        return float("nan"), float("nan")
+    i, j = int(inside[0]), int(inside[-1])
+
+    def cross(a: int, b: int) -> float:   # a inside, b outside
+        if not np.isfinite(c[b]):
+            return float(grid[b])
+        return float(grid[a] + (grid[b] - grid[a]) * (cut - c[a]) / (c[b] - c[a]))
+
+    lo = cross(i, i - 1) if i > 0 else float("nan")
+    hi = cross(j, j + 1) if j < grid.size - 1 else float("nan")
+    return lo, hi
+
+
+def profile_parabola(grid: np.ndarray, chi2: np.ndarray, cut: float) -> tuple[float, float]:
+    """``(vertex, a)`` of ``chi2 ~ a (x - vertex)^2 + c`` fitted to the points below ``cut``.
+
+    The profile of a threshold replayed at one impact per cycle is a fine staircase; the
+    least-squares parabola through its points within ``cut`` smooths it (through the
+    minimum and its two neighbours when fewer than 3 points are within ``cut``).  NaN
+    when the parabola opens downwards or its vertex lies outside the points used.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = np.linspace(0.0, 1.0, 21)
+    >>> v, a = profile_parabola(x, 5.0 + 400.0 * (x - 0.42) ** 2, 30.0)
+    >>> bool(np.isclose(v, 0.42) and np.isclose(a, 400.0))
+    True
+    """
+    sel = np.isfinite(chi2) & (chi2 <= cut)
+    if sel.sum() < 3:
+        k = int(np.argmin(np.where(np.isfinite(chi2), chi2, np.inf)))
+        sel = np.zeros(grid.size, dtype=bool)
+        sel[max(k - 1, 0):k + 2] = True
+        sel &= np.isfinite(chi2)
+    if sel.sum() >= 3:
+        a, b, _ = np.polyfit(grid[sel], chi2[sel], 2)
+        if a > 0:
+            x = -b / (2 * a)
+            if grid[sel].min() <= x <= grid[sel].max():
+                return float(x), float(a)
+    return float("nan"), float("nan")
+
+
+def _quasi_static(points: list[Threshold], *, gap_m: float, f_s_hz: float, zeta: float,
+                  participation: float, e0: float) -> RestitutionFit:
+    fu = np.array([t.freq_hz for t in points])
+    au = np.array([t.accel_ms2 for t in points])
     model = lmfit.Model(saddle_node_threshold_ms2, independent_vars=["freq_hz"])
     pars = model.make_params(e=dict(value=e0, min=1e-3, max=0.999),
                              gap_m=dict(value=gap_m, vary=False), f_s_hz=dict(value=f_s_hz, vary=False),
@@ -118,6 +265,172 @@ def fit_restitution_down(freq_hz: object, down_ms2: object, *, gap_m: float, f_s
         raise ConvergenceError(f"the restitution fit did not converge: {res.message}")
     p = res.params["e"]
     std = float(p.stderr) if p.stderr is not None else np.nan
-    est = ParamEstimate("e", float(p.value), std, float(p.value) - 2 * std, float(p.value) + 2 * std,
-                        True)
-    return RestitutionFit(est, fu, au, res.eval(freq_hz=fu) - au)
+    est = ParamEstimate("e", float(p.value), std, float(p.value) - 2 * std,
+                        float(p.value) + 2 * std, True)
+    notes = []
+    tau_s = 1.0 / (zeta * 2 * np.pi * f_s_hz)
+    for t in points:
+        if np.isfinite(t.ramp_duration_s):
+            lag = abs(t.ramp_rate_ms2_s) * tau_s
+            if lag > 0.01 * t.accel_ms2:
+                notes.append(f"{t.run_id}: the ramp moves {lag:.3g} m/s^2 per modal time constant "
+                             f"({100 * lag / t.accel_ms2:.2g} % of the threshold): the quasi-static "
+                             f"fold lags; use method='ramp'")
+    model_ms2 = res.eval(freq_hz=fu)
+    empty = np.zeros(0)
+    return RestitutionFit(est, "quasi-static", tuple(t.run_id for t in points), fu, au,
+                          np.full(fu.size, np.nan), model_ms2, model_ms2 - au, empty, empty,
+                          float("nan"), float(zeta), 0.0, tuple(notes))
+
+
+def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_hz: float,
+                         zeta: float, participation: float = 1.0, method: Method = "ramp",
+                         zeta_stderr: float = 0.0, e_bounds: tuple[float, float] = (0.05, 0.95),
+                         e_step: float = 0.025, n_phases: int = 4, n_confirm: int = 3,
+                         max_gap_cycles: float = 100.0, edge_cycles: float = 2.0,
+                         level_hold_periods: int = 1, e0: float = 0.7) -> RestitutionFit:
+    """Fit ``e`` to the disappearance thresholds of downward ramps above resonance.
+
+    Parameters
+    ----------
+    thresholds : sequence of Threshold
+        Measured thresholds (:func:`rattle_lab.thresholds.ramp_threshold`); the finite
+        downward ones above ``f_s (1 + zeta)`` are used, others ignored.  The ramp method
+        needs their measured ramp (``ramp_start_ms2`` ...).
+    gap_m, f_s_hz, zeta, participation : float
+        Modal model (m, Hz, nondimensional, ``Q1/Q2``), e.g. from :func:`fit_grazing` and
+        :func:`fit_zeta_ramp`; held fixed.
+    method : {"ramp", "quasi-static"}
+        Threshold model (module docstring).
+    zeta_stderr : float
+        Standard error of ``zeta``, propagated into that of ``e`` (ramp method).
+    e_bounds, e_step : float
+        Grid of the profile ``chi2(e)`` (ramp method), nondimensional.
+    n_phases, n_confirm, max_gap_cycles, edge_cycles, level_hold_periods
+        Replays per threshold, the threshold criterion used on the data and how the drive
+        steps its level (:func:`rattle_lab.fit._ramp_model.model_threshold`).
+    e0 : float
+        Start value of the quasi-static fit.
+
+    Returns
+    -------
+    RestitutionFit
+
+    Notes
+    -----
+    Ramp method: for every ``e`` on the grid each threshold is replayed and
+    ``chi2(e) = sum(((A_model(e) - A) / sigma)^2)`` formed with the measurement's own
+    standard deviation ``sigma`` (quantisation over one cycle's level change, envelope
+    scatter).  A grid rather than a local optimiser: ``A_model(e)`` is a fine staircase
+    (one impact per cycle), can be flat (no information), and the profile shows it.  The
+    grid is refined (11 more points) across the 2-sigma region when it holds fewer than 7
+    grid points.  The estimate and its standard error come from the parabola through the
+    profile points within ``4 s2`` of its minimum (:func:`profile_parabola`: the curvature
+    smooths the staircase, where the width of a ``+1`` cut would follow its notches); the 2-sigma
+    interval is where ``chi2 <= min + 4 s2``, as for a one-parameter likelihood ratio with
+    the variance scaled by ``s2 = max(1, min chi2 / (n - 1))``.  The part from ``zeta`` is
+    ``|de/dzeta| zeta_stderr`` with ``de/dzeta = -sum(g h / sigma^2) / sum(g^2 / sigma^2)``,
+    ``g = dA/de`` (slope of the model over the grid near the estimate) and ``h = dA/dzeta``
+    (central difference at ``zeta +- max(zeta_stderr, 0.01 zeta)``).
+
+    Raises
+    ------
+    ParameterError
+        With no usable threshold, a threshold without its measured ramp (ramp method),
+        an unknown method or a parameter out of range.
+    ConvergenceError
+        If the quasi-static fit fails, or no ``e`` on the grid reproduces every threshold.
+
+    Examples
+    --------
+    >>> from rattle_lab.thresholds import Threshold
+    >>> down = Threshold("down_100", 100.0, "down", 6.90, 5.5, ramp_start_ms2=50.0,
+    ...                  ramp_end_ms2=3.0, ramp_duration_s=6.0, ramp_rms_ms2=0.005)
+    >>> fit = fit_restitution_down([down], gap_m=1.3e-3, f_s_hz=96.0, zeta=0.0085,
+    ...                            participation=1.2442, e_bounds=(0.4, 0.8), e_step=0.05)
+    >>> bool(abs(fit.e.value - 0.6) < 0.05), fit.method
+    (True, 'ramp')
+    """
+    if method not in METHODS:
+        raise ParameterError(f"`method` must be one of {METHODS}, was {method!r}")
+    _check_model(gap_m, f_s_hz, zeta, participation)
+    if not (np.isfinite(zeta_stderr) and zeta_stderr >= 0):
+        raise ParameterError(f"`zeta_stderr` must be finite and >= 0, was {zeta_stderr}")
+    points = _down_points(thresholds, f_s_hz, zeta)
+    if method == "quasi-static":
+        return _quasi_static(points, gap_m=gap_m, f_s_hz=f_s_hz, zeta=zeta,
+                             participation=participation, e0=e0)
+    lo_e, hi_e = e_bounds
+    if not (0.0 <= lo_e < hi_e <= 1.0):
+        raise ParameterError(f"`e_bounds` must satisfy 0 <= low < high <= 1, was {e_bounds}")
+    if not (np.isfinite(e_step) and 0 < e_step <= hi_e - lo_e):
+        raise ParameterError(f"`e_step` must be in (0, {hi_e - lo_e:g}], was {e_step}")
+    ramps = [RampSpec.from_threshold(t) for t in points]
+    acc = np.array([t.accel_ms2 for t in points])
+    sigma = np.array([threshold_sigma_ms2(r, t.ramp_rms_ms2, level_hold_periods)
+                      for r, t in zip(ramps, points)])
+    common = dict(gap_m=gap_m, f_s_hz=f_s_hz, participation=participation, n_phases=n_phases,
+                  n_confirm=n_confirm, max_gap_cycles=max_gap_cycles, edge_cycles=edge_cycles,
+                  level_hold_periods=level_hold_periods)
+
+    def model(e: float, z: float = zeta) -> np.ndarray:
+        return np.array([model_threshold(r, e=e, zeta=z, anchor_ms2=a, **common).mean_ms2
+                         for r, a in zip(ramps, acc)])
+
+    def profile(es: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        tab = np.array([model(e) for e in es])                   # (n_grid, n_points)
+        with np.errstate(invalid="ignore"):
+            c2 = np.sum(((tab - acc) / sigma) ** 2, axis=1)
+        return tab, np.where(np.isfinite(c2), c2, np.inf)
+
+    n = acc.size
+    grid = np.linspace(lo_e, hi_e, round((hi_e - lo_e) / e_step) + 1)
+    table, chi2 = profile(grid)
+    if not np.isfinite(chi2).any():
+        raise ConvergenceError("no e in the grid reproduces every downward threshold "
+                               "(the replays saw no disappearance)")
+    for refine in (True, False):
+        chi2_min = float(np.min(chi2))
+        s2 = max(1.0, chi2_min / (n - 1)) if n > 1 else 1.0
+        lo2, hi2 = profile_interval(grid, chi2, chi2_min + 4 * s2)
+        inside = int(np.sum(chi2 <= chi2_min + 4 * s2))
+        if not (refine and np.isfinite(lo2) and np.isfinite(hi2) and inside < 7):
+            break
+        # a sharp minimum: 11 more points across the 2-sigma region and a step beyond it
+        fine = np.linspace(max(lo_e, lo2 - e_step), min(hi_e, hi2 + e_step), 11)
+        fine = fine[~np.isin(fine, grid)]
+        tab_f, chi2_f = profile(fine)
+        order = np.argsort(np.r_[grid, fine])
+        grid, chi2 = np.r_[grid, fine][order], np.r_[chi2, chi2_f][order]
+        table = np.vstack([table, tab_f])[order]
+    value, curvature = profile_parabola(grid, chi2, chi2_min + 4 * s2)
+    if np.isfinite(value):
+        stat = float(np.sqrt(s2 / curvature))
+    else:
+        value = float(grid[int(np.argmin(chi2))])
+        lo1, hi1 = profile_interval(grid, chi2, chi2_min + s2)
+        stat = (hi1 - lo1) / 2.0
+    notes: list[str] = []
+    if not (np.isfinite(lo2) and np.isfinite(hi2)):
+        notes.append(f"e not identified: the profile chi2(e) stays within its 2-sigma level up "
+                     f"to the end of e_bounds = {e_bounds} (thresholds insensitive to e)")
+    from_zeta = 0.0
+    if zeta_stderr > 0 and np.isfinite(stat):
+        near = np.abs(grid - value) <= max(0.1, 2 * stat)
+        ok_rows = near & np.all(np.isfinite(table), axis=1)
+        if ok_rows.sum() >= 2:
+            g = np.array([np.polyfit(grid[ok_rows], table[ok_rows, i], 1)[0] for i in range(n)])
+            dz = max(zeta_stderr, 0.01 * zeta)
+            h = (model(value, zeta + dz) - model(value, zeta - dz)) / (2 * dz)
+            w = 1.0 / sigma**2
+            denom = float(np.sum(w * g * g))
+            if denom > 0 and np.all(np.isfinite(h)):
+                from_zeta = abs(float(np.sum(w * g * h)) / denom) * zeta_stderr
+    stderr = float(np.hypot(stat, from_zeta))
+    ci_low = value - float(np.hypot(value - lo2, 2 * from_zeta))
+    ci_high = value + float(np.hypot(hi2 - value, 2 * from_zeta))
+    best = model(value)
+    est = ParamEstimate("e", value, stderr, ci_low, ci_high, True)
+    return RestitutionFit(est, "ramp", tuple(t.run_id for t in points),
+                          np.array([t.freq_hz for t in points]), acc, sigma, best, best - acc,
+                          grid, chi2, s2, float(zeta), from_zeta, tuple(notes))

@@ -29,14 +29,16 @@ from ..detect import (ImpactParams, cross_correlation_delay, detect_impacts, imp
 from ..exceptions import ParameterError, RattleLabError
 from ..ingest import open_stored_record, read_catalogue
 from ..results import RunResult, StoreFit, write_results
-from ..thresholds import ramp_threshold, tabulate_thresholds
-from ._grazing import fit_grazing
-from ._restitution import fit_restitution_down, restitution_from_ratios
+from ..thresholds import Threshold, ramp_threshold, tabulate_thresholds
+from ._grazing import GrazingFit, fit_grazing
+from ._damping import fit_zeta_ramp
+from ._restitution import METHODS, fit_restitution_down, restitution_from_ratios
 from ._spl_law import fit_db_law, fit_linear_law, law_dict
 
 SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01}
 FIT_KEYS = {"participation": 1.0, "vary_participation": False, "outlier_k": 5.0,
-            "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3}
+            "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3,
+            "restitution_method": "ramp", "level_hold_periods": 1}
 _QUANTITIES = ("plate_velocity", "plate_acceleration", "sound_pressure", "base_acceleration")
 
 
@@ -46,13 +48,18 @@ def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, An
     ``[detect]`` takes the fields of :class:`~rattle_lab.detect.ImpactParams` and
     ``window_s``, ``first_fraction``, ``max_lag_s``; ``[fit]`` takes
     ``participation``, ``vary_participation``, ``outlier_k``, ``conf_interval``,
-    ``speed_of_sound_m_s``, ``n_confirm``.  Other tables are ignored (they
-    belong to other stages); unknown keys in these two are errors.
+    ``speed_of_sound_m_s``, ``n_confirm``, ``restitution_method`` (``"ramp"``, the
+    default, or ``"quasi-static"``: see :func:`~rattle_lab.fit.fit_restitution_down`),
+    ``level_hold_periods`` (forcing periods the drive holds each level of a ramp: 1 for
+    a continuous ramp, the default; the synthetic rig holds ``piece_periods``).
+    Other tables are ignored (they belong to other stages); unknown keys in these two
+    are errors.
 
     Raises
     ------
     ParameterError
-        For an unreadable file or an unknown key.
+        For an unreadable file, an unknown key, an unknown ``restitution_method`` or a
+        ``level_hold_periods`` that is not an integer >= 1.
     """
     out: dict[str, dict[str, Any]] = {"detect": {}, "fit": {}}
     if path is None:
@@ -72,7 +79,18 @@ def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, An
             raise ParameterError(f"{path}: [{table}]: unknown key {unknown[0]!r} "
                                  f"(known: {', '.join(sorted(allowed[table]))})")
         out[table] = dict(values)
+    _check_fit_values(out["fit"], f"{path}: [fit]: ")
     return out
+
+
+def _check_fit_values(fit: Mapping[str, Any], where: str = "") -> None:
+    method = fit.get("restitution_method", FIT_KEYS["restitution_method"])
+    if method not in METHODS:
+        raise ParameterError(f"{where}`restitution_method` must be one of {METHODS}, "
+                             f"was {method!r}")
+    hold = fit.get("level_hold_periods", FIT_KEYS["level_hold_periods"])
+    if isinstance(hold, bool) or not isinstance(hold, (int, np.integer)) or hold < 1:
+        raise ParameterError(f"{where}`level_hold_periods` must be an integer >= 1, was {hold!r}")
 
 
 def _fs_of(run: Any, ch: Any) -> float:
@@ -219,6 +237,7 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     unknown = sorted(set(fit) - set(FIT_KEYS))
     if unknown:
         raise ParameterError(f"unknown fit parameter {unknown[0]!r}")
+    _check_fit_values(fit)
     store = Path(store)
     catalogue = read_catalogue(store, level="runs")
     keys = list(dict.fromkeys(catalogue["input_key"]))
@@ -250,6 +269,75 @@ def _est(value: float, stderr: float, unit: str, **extra: Any) -> dict[str, Any]
     return {"value": value, "stderr": stderr, "unit": unit, **extra}
 
 
+def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
+                             fit: Mapping[str, Any], *, e_guess: float = 0.6
+                             ) -> tuple[dict[str, Any], dict[str, str]]:
+    """Summary entries of ``e`` from the downward thresholds (and of the ramp-model damping).
+
+    With ``fit["restitution_method"] == "ramp"`` (default), ``zeta`` is first refitted to
+    the upward thresholds with the ramp model (:func:`~rattle_lab.fit.fit_zeta_ramp`,
+    entry ``damping_ramp``; the grazing fit's ``zeta`` carries the ramp lag), then ``e``
+    is fitted with it and its standard error propagated
+    (:func:`~rattle_lab.fit.fit_restitution_down`).  With ``"quasi-static"``, ``e`` is
+    fitted to the saddle-node with the grazing fit's ``zeta``.
+
+    Parameters
+    ----------
+    thresholds : list of Threshold
+        Every measured ramp threshold (up and down).
+    grazing : GrazingFit
+        Supplies ``gap_m``, ``f_s_hz``, ``participation`` (and ``zeta`` as a start).
+    fit : mapping
+        Fit parameters (``FIT_KEYS``).
+    e_guess : float
+        ``e`` for the confirming impacts of the upward replays (the velocity-ratio mean).
+
+    Returns
+    -------
+    fits : dict
+        ``restitution_down``: value, stderr, unit, ci (2 sigma), method, n, run_ids,
+        zeta_used, stderr_from_zeta, residuals_ms2, notes; with the ramp method also
+        ``damping_ramp``: value, stderr, unit, ci, method, n, residuals_ms2, notes.
+    not_fitted : dict
+        Entry name -> reason, for what could not be fitted.
+    """
+    method = fit.get("restitution_method", FIT_KEYS["restitution_method"])
+    n_confirm = int(fit.get("n_confirm", FIT_KEYS["n_confirm"]))
+    hold = int(fit.get("level_hold_periods", FIT_KEYS["level_hold_periods"]))
+    p = grazing.params
+    modal = dict(gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value,
+                 participation=p["participation"].value)
+    fits: dict[str, Any] = {}
+    missing: dict[str, str] = {}
+    zeta, zeta_se, zeta_note = p["zeta"].value, p["zeta"].stderr, ""
+    if method == "ramp":
+        try:
+            zf = fit_zeta_ramp(thresholds, zeta0=zeta, e=e_guess, n_confirm=n_confirm,
+                               level_hold_periods=hold, **modal)
+            z = zf.zeta
+            fits["damping_ramp"] = _est(z.value, z.stderr, "1", ci=[z.ci_low, z.ci_high],
+                                        method="ramp replay of the upward thresholds",
+                                        n=len(zf.run_ids), residuals_ms2=zf.residuals_ms2.tolist(),
+                                        notes=list(zf.notes))
+            zeta, zeta_se = z.value, z.stderr
+        except RattleLabError as exc:
+            missing["damping_ramp"] = str(exc)
+            zeta_note = f"zeta from the grazing fit (ramp-model damping not fitted: {exc})"
+    try:
+        rf = fit_restitution_down(thresholds, zeta=zeta, method=method, n_confirm=n_confirm,
+                                  zeta_stderr=zeta_se if np.isfinite(zeta_se) else 0.0,
+                                  level_hold_periods=hold, **modal)
+        e = rf.e
+        fits["restitution_down"] = _est(
+            e.value, e.stderr, "1", ci=[e.ci_low, e.ci_high], method=rf.method,
+            n=len(rf.run_ids), run_ids=list(rf.run_ids), zeta_used=rf.zeta,
+            stderr_from_zeta=rf.stderr_from_zeta, residuals_ms2=rf.residuals_ms2.tolist(),
+            notes=list(rf.notes) + ([zeta_note] if zeta_note else []))
+    except RattleLabError as exc:
+        missing["restitution_down"] = str(exc)
+    return fits, missing
+
+
 def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) -> dict[str, Any]:
     """Fit the store-level models to per-run detections; the summary ``/results`` stores.
 
@@ -277,8 +365,9 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
         row per analysed run: protocol, freq_hz, n_impacts, pattern, delays in s, SPL
         in dB, threshold in m/s^2), ``thresholds`` (freq_hz, up_ms2, down_ms2,
         hysteresis_ms2), ``fits`` (``grazing``: per parameter value, stderr, unit,
-        95 % ci, vary, plus correlation; ``restitution_ratio``, ``restitution_down``:
-        value, stderr, unit, n; ``spl_law_first|max|rms``: linear and dB laws) and
+        95 % ci, vary, plus correlation; ``restitution_ratio``: value, stderr, unit, n;
+        ``restitution_down`` and ``damping_ramp``: see :func:`restitution_down_summary`;
+        ``spl_law_first|max|rms``: linear and dB laws) and
         ``not_fitted`` (fit name -> reason).  May hold NumPy scalars and NaN: pass it
         through :func:`json_ready` before writing JSON.
 
@@ -335,15 +424,11 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
     else:
         missing["restitution_ratio"] = "no impact with a velocity on both sides"
     if grazing is not None and np.isfinite(curve.down_ms2).any():
-        p = grazing.params
-        try:
-            rf = fit_restitution_down(curve.freq_hz, curve.down_ms2, gap_m=p["gap_m"].value,
-                                      f_s_hz=p["f_s_hz"].value, zeta=p["zeta"].value,
-                                      participation=p["participation"].value)
-            fits["restitution_down"] = _est(rf.e.value, rf.e.stderr, "1",
-                                            n=int(rf.freq_hz.size))
-        except RattleLabError as exc:
-            missing["restitution_down"] = str(exc)
+        fits_down, missing_down = restitution_down_summary(
+            [r.threshold for r in ok if r.threshold is not None], grazing, fit,
+            e_guess=st.mean if st.n else 0.6)
+        fits.update(fits_down)
+        missing.update(missing_down)
     else:
         missing["restitution_down"] = "needs a grazing fit and downward thresholds"
     v = np.concatenate([np.abs(r.impacts.v_in_m_s) for r in ok if r.peaks is not None
@@ -362,4 +447,5 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
     return summary
 
 
-__all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "summarise_fits"]
+__all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "restitution_down_summary",
+           "summarise_fits"]
