@@ -6,7 +6,7 @@ renamed over the store; an error leaves the previous store intact)::
 
     /results                    attrs: results_version (1), created_iso, rattle_lab_version,
                                        provenance (JSON: function, parameters, inputs
-                                       {input_key: ingest_input_sha256}), summary (JSON, as
+                                       {input_key: ingest_input_hash}), summary (JSON, as
                                        printed by ``rattle-lab fit --json``)
     /results/runs/{input_key}/{run_id}
                                 attrs: status ("ok" | "skipped"), reason, protocol, freq_hz,

@@ -245,7 +245,7 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     inputs: dict[str, str] = {}
     with h5py.File(store, "r") as fh:
         for key in keys:
-            inputs[key] = str(fh[f"records/{key}"].attrs.get("ingest_input_sha256", ""))
+            inputs[key] = str(fh[f"records/{key}"].attrs.get("ingest_input_hash", ""))
     for key in keys:
         record = open_stored_record(store, key)
         try:
