@@ -54,6 +54,9 @@ def truth_table(fits: dict[str, Any], truth: Any) -> list[str]:
                                   ("zeta", "zeta", "1", truth.zeta)):
         p = graz.get(key) or {}
         lines.append(_row(name, unit, p.get("value"), p.get("stderr"), true))
+    if isinstance(fits.get("damping_ramp"), dict):  # zeta from replaying the ramps, if fitted
+        p = fits["damping_ramp"]
+        lines.append(_row("zeta (ramp model)", "1", p.get("value"), p.get("stderr"), truth.zeta))
     for key, name in (("restitution_ratio", "e (velocity ratios)"),
                       ("restitution_down", "e (down thresholds)")):
         p = fits.get(key) or {}
@@ -109,17 +112,26 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
     assert truth is not None  # a synthetic record always carries its truth
     if store.exists():
         store.unlink()  # the demo starts from a clean store each time
-    # The engineer knows the plate: its first mode gives the participation factor.
+    # The engineer knows the plate (its first mode gives the participation factor) and the
+    # drive (it holds each ramp level for piece_periods forcing periods).
+    fit = {"participation": float(synthesis.modal.participation),
+           "level_hold_periods": int(scene.simulation.piece_periods)}
     pipeline = parse_pipeline({
-        "pipeline": {"name": Path(REPORT_NAME).stem, "outputs": ["results", "report"]},
-        "fit": {"participation": float(synthesis.modal.participation)},
-        "report": {"model": True}}, "<demo>")
-    steps = {"ingest": f"[2/4] ingest: {raw} -> {store}", "detect": "[3/4] detect impacts and "
-             "sound peaks, per run", "thresholds": "      thresholds", "fit": "      fit: gap, "
-             "f_s, zeta (eq. 3.4), e, SPL law", "report": f"[4/4] report: {out / REPORT_NAME}"}
-    run = run_pipeline(pipeline, [raw], store=store, out_dir=out, quiet=quiet,
-                       log=lambda line: say(steps[line.split(":")[0]])
-                       if line.endswith(": running") and line.split(":")[0] in steps else None)
+        "pipeline": {"name": "demo", "outputs": ["results", "report"]},
+        "fit": fit, "report": {"model": True}}, "<demo>")
+    steps = {"ingest": f"[2/4] ingest: {raw} -> {store}",
+             "detect": "[3/4] detect impacts and sound peaks, per run",
+             "thresholds": "      thresholds",
+             "fit": "      fit: gap, f_s, zeta (eq. 3.4), e, SPL law",
+             "report": f"[4/4] report: {out / REPORT_NAME}"}
+
+    def log(line: str) -> None:  # a heading when a stage starts
+        stage, _, what = line.partition(": ")
+        if what == "running" and stage in steps:
+            say(steps[stage])
+
+    run = run_pipeline(pipeline, [raw], store=store, out_dir=out, report=out / REPORT_NAME,
+                       quiet=quiet, log=log)
     fits = read_results(store).summary.get("fits", {})
     print("\nfitted values against the rig's truth:")
     print("\n".join(truth_table(fits, truth)))

@@ -549,7 +549,8 @@ def needed_stages(outputs: Sequence[str], *, scenes: bool) -> list[Stage]:
 def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *,
                  store: str | os.PathLike[str] | None = None, out_dir: str | os.PathLike[str] = ".",
                  scheduler: Any = None, log: Callable[[str], None] | None = None,
-                 quiet: bool = True) -> PipelineRun:
+                 quiet: bool = True, report: str | os.PathLike[str] | None = None
+                 ) -> PipelineRun:
     """Run the stages ``pipeline`` needs for its outputs, skipping those up to date.
 
     Parameters
@@ -571,6 +572,8 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
         (``"<stage>: done"``) or is skipped (``"<stage>: up to date"``).
     quiet : bool
         No progress bars (they are drawn on a terminal only, in any case).
+    report : path-like, optional
+        The report PDF (default ``out_dir/<pipeline.name>.pdf``).
 
     Returns
     -------
@@ -621,7 +624,7 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
     run = PipelineRun(store_path)
     stages = needed_stages(pipeline.outputs, scenes=bool(scenes))
     cache = _read_cache(store_path)
-    report_path = out / f"{pipeline.name}.pdf"
+    report_path = Path(report) if report is not None else out / f"{pipeline.name}.pdf"
     runs: list[Any] | None = None
     curve: Any = None
 

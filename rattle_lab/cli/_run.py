@@ -1,4 +1,6 @@
-"""``rattle-lab run PIPELINE INPUT...``: a thin layer over :func:`rattle_lab.pipeline.run_pipeline`."""
+"""``rattle-lab run PIPELINE INPUT...``: a thin layer over
+:func:`rattle_lab.pipeline.run_pipeline`.
+"""
 
 from __future__ import annotations
 

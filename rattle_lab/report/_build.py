@@ -144,7 +144,7 @@ def build_pages(data: ReportData, *, model: bool = True, quiet: bool = True
         pages.extend((name, fig) for fig in figs)
     lines = _pages.summary_lines(data, __version__)
     lines += ["", "Sections"]
-    lines += [f"  included: {name}" for name in sections]
+    lines += _pages.wrapped("  included: summary, " + ", ".join(sections))
     for name, why in data.missing.items():
         lines += _pages.wrapped(f"  missing: {name}: {why}")
     summary = _pages.text_pages("rattle_lab report: fitted gap, zeta, f_s, e and SPL law", lines)

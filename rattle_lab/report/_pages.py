@@ -86,6 +86,13 @@ def _t_ci(value: Any, stderr: Any, dof: int) -> tuple[float | None, float | None
     return v - half, v + half
 
 
+def _pair(value: Any) -> tuple[Any, Any] | None:
+    """A stored ``[low, high]`` interval as a pair (None if it is not one)."""
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        return value[0], value[1]
+    return None
+
+
 def _row(quantity: str, value: Any = None, stderr: Any = None,
          ci: tuple[Any, Any] | None = None, unit: str = "", note: str = "",
          scale: float = 1.0) -> list[str]:
@@ -128,8 +135,7 @@ def parameter_lines(data: ReportData) -> list[str]:
             if not p.get("vary", True):
                 lines += _row(label, p.get("value"), "fixed", None, unit, scale=scale)
                 continue
-            ci = tuple(p.get("ci") or (None, None))
-            lines += _row(label, p.get("value"), p.get("stderr"), ci, unit,  # type: ignore[arg-type]
+            lines += _row(label, p.get("value"), p.get("stderr"), _pair(p.get("ci")), unit,
                           scale=scale)
         notes = [str(n) for n in g.get("unidentifiable", []) or []]
         if g.get("outliers_hz"):
@@ -140,20 +146,28 @@ def parameter_lines(data: ReportData) -> list[str]:
                                    subsequent_indent="      ")
     else:
         lines += _row("gap h, f_s, zeta", note="not fitted: " + _not_fitted(data, "grazing"))
-    for key, label, what in (("restitution_ratio", "e (velocity ratios)", "impacts"),
+    not_fitted = data.results.summary.get("not_fitted", {}) if data.results is not None else {}
+    for key, label, what in (("damping_ramp", "zeta (ramp model)", "upward ramps"),
+                             ("restitution_ratio", "e (velocity ratios)", "impacts"),
                              ("restitution_down", "e (disappearance thresholds)", "thresholds")):
         p = fits.get(key)
         if not isinstance(p, Mapping):
-            lines += _row(label, note="not fitted: " + _not_fitted(data, key))
+            if key != "damping_ramp" or key in not_fitted:  # an optional fit: only if tried
+                lines += _row(label, note="not fitted: " + _not_fitted(data, key))
             continue
         n = int(p.get("n") or 0)
-        note = f"from {n} {what}"
+        note = f"from {n} {what}" + (f" ({p['method']})" if p.get("method") else "")
         if key == "restitution_ratio" and p.get("median") is not None:
             note += f"; median {_fmt(p.get('median'))}, scatter (std) {_fmt(p.get('std'))}"
         err = p.get("stderr")
         if err is not None and p.get("value") is not None and float(err) > abs(float(p["value"])):
             note += "; NOT IDENTIFIED: the standard error exceeds the value"
-        lines += _row(label, p.get("value"), err, _t_ci(p.get("value"), err, n - 1), "1", note)
+        for extra in p.get("notes") or []:
+            note += f"; {extra}"
+        ci = _pair(p.get("ci"))
+        if ci is None or None in ci:
+            ci = _t_ci(p.get("value"), err, n - 1)
+        lines += _row(label, p.get("value"), err, ci, "1", note)
     for name, label in (("first", "first peak"), ("max", "maximum peak"),
                         ("rms", "RMS per impact")):
         law = fits.get(f"spl_law_{name}")
@@ -163,13 +177,13 @@ def parameter_lines(data: ReportData) -> list[str]:
             continue
         lin, db = dict(law.get("linear", {})), dict(law.get("db", {}))
         lines += _row(f"SPL {label}: slope", lin.get("slope"), None,
-                      tuple(lin.get("slope_ci") or (None, None)), "Pa/(m/s)",  # type: ignore[arg-type]
+                      _pair(lin.get("slope_ci")), "Pa/(m/s)",
                       f"p = slope * |v_in| + intercept, r2 = {_fmt(lin.get('r2'), '.3f')}, "
                       f"{lin.get('n', '?')} impacts")
         lines += _row(f"SPL {label}: intercept", lin.get("intercept"), None,
-                      tuple(lin.get("intercept_ci") or (None, None)), "Pa")  # type: ignore[arg-type]
+                      _pair(lin.get("intercept_ci")), "Pa")
         lines += _row(f"SPL {label}: C", db.get("c_db"), None,
-                      tuple(db.get("c_ci") or (None, None)), "dB re 20 uPa at 1 m/s",  # type: ignore[arg-type]
+                      _pair(db.get("c_ci")), "dB re 20 uPa at 1 m/s",
                       f"L = 20 log10(|v_in| / (1 m/s)) + C; free-slope check k = "
                       f"{_fmt(db.get('k_db_per_decade'), '.3g')} dB/decade (20 for a linear law)")
     return lines
@@ -191,8 +205,8 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
         n_imp = sum(int(r.get("n_impacts", 0) or 0) for r in summ.get("runs", []))
         lines.append(f"runs: {summ.get('n_runs', '?')} ({summ.get('n_ok', '?')} analysed, "
                      f"{len(summ.get('skipped', []))} skipped), {n_imp} impacts detected")
-    lines += ["", "Fitted parameters (95 % CI: profile likelihood, 2 sigma, for the eq. (3.4) fit; "
-              "Student t for e; OLS t for the SPL laws)"]
+    lines += ["", "Fitted parameters (95 % CI: as the fit gives it, e.g. profile likelihood for "
+              "eq. (3.4); else Student t from the standard error; OLS t for the SPL laws)"]
     lines += parameter_lines(data)
     lines += ["", "Data-quality flags (catalogue)"]
     cat = data.catalogue
@@ -234,17 +248,17 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
 
 def text_pages(title: str, lines: list[str]) -> list[Figure]:
     """Pages of monospaced text (continued on further pages when long)."""
-    per_page = 52
+    per_page = 56
     chunks = [lines[i:i + per_page] for i in range(0, max(len(lines), 1), per_page)] or [[]]
     figs = []
     for k, chunk in enumerate(chunks):
         fig = Figure(figsize=PAGE_SIZE_IN)
         fig.text(0.06, 0.96, title + (" (continued)" if k else ""), fontsize=14,
                  weight="bold", va="top")
-        y = 0.92
+        y = 0.925
         for line in chunk:
             fig.text(0.06, y, line, fontsize=7.5, family="monospace", va="top")
-            y -= 0.0165
+            y -= 0.0155
         figs.append(fig)
     return figs
 
@@ -682,7 +696,11 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     e_fit = fits.get("restitution_ratio")
     if not isinstance(e_fit, Mapping) or e_fit.get("value") is None:
         raise Missing("needs a fitted coefficient of restitution e")
-    zeta = abs(_pval(g, "zeta"))
+    # zeta from replaying the ramps when the fit made it (free of the ramp lag), else eq. (3.4)'s
+    ramp = fits.get("damping_ramp")
+    ramp_zeta = float(ramp["value"]) if isinstance(ramp, Mapping) and ramp.get("value") else None
+    zeta = ramp_zeta if ramp_zeta is not None else abs(_pval(g, "zeta"))
+    zeta_src = "ramp model" if ramp_zeta is not None else "eq. (3.4) fit"
     e = float(e_fit["value"])
     if not 0.0 <= e <= 1.0:
         raise Missing(f"fitted e = {e:.4g} is outside [0, 1]")
@@ -727,8 +745,9 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     ax.set_ylim(sets.F[0], sets.F[-1])
     ax.set_xlabel("forcing frequency omega = f / f_s (nondimensional)")
     ax.set_ylabel("forcing amplitude F = Q A / (omega_s^2 h) (nondimensional)")
-    ax.set_title(f"Model bifurcation sets at the fitted zeta = {zeta:.3g}, e = {e:.3g}, with the "
-                 "measured thresholds\n(boundaries: dashed saddle-node, dotted period-doubling)")
+    ax.set_title(f"Model bifurcation sets at the fitted zeta = {zeta:.3g} ({zeta_src}), "
+                 f"e = {e:.3g}, with the measured thresholds\n(boundaries: dashed saddle-node, "
+                 "dotted period-doubling)")
     ax.legend(handles=[*handles, graze, on, off], fontsize=8, loc="upper left")
     ax.grid(alpha=0.3)
     figs = [fig]
