@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rattle_lab.records._scan import count_equal, flat_runs
+from rattle_lab.records._scan import BLOCK, flat_runs
 
 
 def _runs_brute(x: np.ndarray, min_len: int) -> list[tuple[int, int, float]]:
@@ -52,9 +52,24 @@ def test_chunked_scan_finds_exactly_the_brute_force_runs(values, chunk, min_len,
     assert _runs_chunked(x, min_len, chunk) == _runs_brute(x, min_len)
 
 
-def test_nan_never_forms_a_run_and_count_equal_sees_the_boundary():
+@settings(max_examples=100, deadline=None, derandomize=True)
+@given(n=st.integers(1, 2000), chunk=st.integers(1, 2000), min_len=st.integers(2, 20),
+       runs=st.lists(st.tuples(st.integers(0, 1999), st.integers(1, 300)), max_size=6))
+def test_runs_in_a_live_signal_across_blocks(n, chunk, min_len, runs):
+    # noise (no equal neighbours) with flat runs put in: most blocks are skipped whole
+    x = np.random.default_rng(n).standard_normal(n)
+    for start, length in runs:
+        x[start:start + length] = x[min(start, n - 1)]
+    assert _runs_chunked(x, min_len, chunk) == _runs_brute(x, min_len)
+
+
+def test_nan_never_forms_a_run_and_runs_cross_chunks_and_blocks():
     x = np.array([np.nan, np.nan, np.nan, 1.0, 1.0, 1.0])
     assert _runs_chunked(x, 2, 2) == [(3, 3, 1.0)]
-    assert count_equal(np.array([1.0, 2.0]), np.array([1.0])) == 1  # the pair across chunks
-    assert count_equal(np.array([1.0, 2.0]), np.array([], dtype=float)) == 0
-    assert count_equal(np.array([5, 5, 5], dtype=np.int16), np.array([], dtype=np.int16)) == 2
+    # a run that spans block boundaries inside one chunk and then a chunk boundary
+    y = np.arange(3 * BLOCK, dtype=np.float32)
+    y[BLOCK - 5:2 * BLOCK + 7] = -1.0
+    expected = [(BLOCK - 5, BLOCK + 12, -1.0)]
+    assert _runs_brute(y, 3) == expected
+    for chunk in (y.size, 2 * BLOCK, BLOCK + 3, 7):
+        assert _runs_chunked(y, 3, chunk) == expected

@@ -34,7 +34,7 @@ from typing import Literal
 
 import numpy as np
 
-from ._scan import count_equal, flat_runs
+from ._scan import flat_runs
 from ._errors import (ClippingError, ClippingWarning, DataQualityError, DropoutError,
                       DropoutWarning, EmptyChannelError, EmptyChannelWarning, InfValueError,
                       InfValueWarning, NaNGapError, NaNGapWarning, NonMonotonicTimestampsError,
@@ -207,6 +207,7 @@ class ChannelChecker:
         self._tail = np.empty(0, dtype=dtype.newbyteorder("="))  # last sample seen
         self._open_start = 0  # the run of identical samples that reaches the last sample seen
         self._open_len = 0
+        self._runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # scan output buffers
         self.clip = _Acc()
         self.dropout = _Acc()
         # Without a known range: flat runs at the highest / lowest value seen so far.
@@ -256,19 +257,16 @@ class ChannelChecker:
 
     def _flat_runs(self, x: np.ndarray, start: int) -> None:
         n = int(x.shape[0])
-        if count_equal(x, self._tail) == 0:
-            # No sample equals its neighbour: the open run ends before this chunk.
-            self._close_open()
-            self._open_start, self._open_len = start + n - 1, 1
-        else:
-            cap = n // self._min_len + 2  # each reported run but the first lies inside the chunk
-            starts = np.empty(cap, dtype=np.int64)
-            lens = np.empty(cap, dtype=np.int64)
-            values = np.empty(cap, dtype=np.float64)
-            k, self._open_start, self._open_len = flat_runs(
-                x, self._tail, start, self._open_start, self._open_len, self._min_len,
-                starts, lens, values)
-            self._classify(starts[:k], lens[:k], values[:k])
+        cap = n // self._min_len + 2  # each reported run but the first lies inside the chunk
+        if self._runs is None or self._runs[0].shape[0] < cap:
+            self._runs = (np.empty(cap, dtype=np.int64), np.empty(cap, dtype=np.int64),
+                          np.empty(cap, dtype=np.float64))
+        starts, lens, values = self._runs
+        k, self._open_start, self._open_len = flat_runs(
+            x, self._tail, start, self._open_start, self._open_len, self._min_len,
+            starts, lens, values)
+        if k:
+            self._classify(starts[:k].copy(), lens[:k].copy(), values[:k].copy())
         self._tail = x[-1:].copy()
 
     def _close_open(self) -> None:

@@ -1,17 +1,13 @@
-"""Compiled inner loops of the streaming data-quality checks (numba, GIL released).
+"""Compiled inner loop of the streaming data-quality checks (numba, GIL released).
 
 A long record is checked chunk by chunk.  The check that costs most is the
 search for flat runs (identical consecutive samples: clipping and dropouts).
-It is split in two so that the common case, a live signal, costs one
-vectorised pass:
+:func:`flat_runs` walks the chunk in blocks: a block in which no sample equals
+its neighbour, the common case for a live signal, costs one branch-free count
+that the compiler vectorises; only the other blocks are walked sample by
+sample.  The run that touches the end of a chunk is carried over to the next.
 
-* :func:`count_equal` counts equal neighbours (including the pair across the
-  chunk boundary) without branching, which the compiler vectorises;
-* only when that count is non-zero does :func:`flat_runs` walk the chunk and
-  report the runs that are long enough to matter, carrying the run that
-  touches the end of the chunk over to the next one.
-
-Both compare samples in their stored dtype, as ``numpy.equal`` does: NaN is
+Samples are compared in their stored dtype, as ``numpy.equal`` does: NaN is
 never equal to itself, so NaN samples never form a flat run (they are counted
 by the NaN check instead).
 """
@@ -20,25 +16,6 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-
-
-@numba.njit(cache=True, nogil=True)
-def count_equal(x: np.ndarray, tail: np.ndarray) -> int:
-    """Number of ``i`` with ``x[i] == x[i-1]``, where ``x[-1]`` is ``tail[0]`` if given.
-
-    Parameters
-    ----------
-    x : ndarray
-        The chunk (1-D, any numeric dtype).
-    tail : ndarray
-        The last sample of the previous chunk (length 1), or empty for the first chunk.
-    """
-    n = 0
-    if tail.shape[0] > 0 and x.shape[0] > 0 and x[0] == tail[0]:
-        n += 1
-    for i in range(1, x.shape[0]):
-        n += x[i] == x[i - 1]
-    return n
 
 
 @numba.njit(cache=True, nogil=True)
@@ -138,4 +115,4 @@ def flat_runs(x: np.ndarray, tail: np.ndarray, offset: int, open_start: int, ope
     return k, run_start, run_len
 
 
-__all__ = ["count_equal", "flat_runs"]
+__all__ = ["flat_runs"]
