@@ -72,6 +72,9 @@ def test_cli_fit_table_and_results_in_store(campaign):
     assert proc.returncode == 0 and proc.stderr == ""
     assert "grazing.gap_m" in proc.stdout and "skipped" in proc.stdout
     assert "grazing.participation (fixed)" in proc.stdout
+    # the default restitution method replays the ramps, and the table says so
+    assert "damping_ramp.zeta (ramp replay)" in proc.stdout
+    assert "restitution_down.e (ramp)" in proc.stdout
     res = read_results(store)
     assert res.provenance["function"] == "rattle_lab.fit.fit_store"
     assert len(res.provenance["inputs"]) == 1

@@ -50,17 +50,24 @@ def _num(x: Any, fmt: str = ".6g") -> str:
 
 def as_table(summary: dict[str, Any]) -> str:
     """Human summary: fitted values with units and uncertainties, then runs and skips."""
-    lines = ["quantity                         value          stderr         unit",
-             "-------------------------------  -------------  -------------  ----------------"]
+    lines = ["quantity                          value          stderr         unit",
+             "--------------------------------  -------------  -------------  ----------------"]
     fits = summary["fits"]
     rows: list[tuple[str, Any, Any, str]] = []
     for name, p in fits.get("grazing", {}).items():
         if isinstance(p, dict) and "value" in p:
             rows.append((f"grazing.{name}" + ("" if p["vary"] else " (fixed)"), p["value"],
                          p["stderr"], p["unit"]))
-    for key in ("restitution_ratio", "restitution_down"):
-        if key in fits:
-            rows.append((f"{key}.e", fits[key]["value"], fits[key]["stderr"], "1"))
+    if "damping_ramp" in fits:
+        rows.append(("damping_ramp.zeta (ramp replay)", fits["damping_ramp"]["value"],
+                     fits["damping_ramp"]["stderr"], "1"))
+    if "restitution_ratio" in fits:
+        rows.append(("restitution_ratio.e", fits["restitution_ratio"]["value"],
+                     fits["restitution_ratio"]["stderr"], "1"))
+    if "restitution_down" in fits:
+        down = fits["restitution_down"]
+        rows.append((f"restitution_down.e ({down.get('method', '?')})", down["value"],
+                     down["stderr"], "1"))
     for name in ("first", "max", "rms"):
         law = fits.get(f"spl_law_{name}")
         if law:
@@ -70,9 +77,12 @@ def as_table(summary: dict[str, Any]) -> str:
             rows.append((f"spl_law_{name}.r2", lin["r2"], None, "1"))
             rows.append((f"spl_law_{name}.db_offset", law["db"]["c_db"], None, "dB re 20 uPa @1 m/s"))
     for label, value, err, unit in rows:
-        lines.append(f"{label:<31}  {_num(value):<13}  {_num(err):<13}  {unit}")
+        lines.append(f"{label:<32}  {_num(value):<13}  {_num(err):<13}  {unit}")
     for note in fits.get("grazing", {}).get("unidentifiable", []):
         lines.append(f"note: {note}")
+    for key in ("damping_ramp", "restitution_down"):
+        for note in fits.get(key, {}).get("notes", []):
+            lines.append(f"note: {key}: {note}")
     for key, why in summary["not_fitted"].items():
         lines.append(f"not fitted: {key}: {why}")
     lines.append("")
