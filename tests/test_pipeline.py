@@ -7,7 +7,10 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +25,6 @@ from rattle_lab.fit import fit_store
 from rattle_lab.pipeline import (Pipeline, code_fingerprint, load_pipeline_file, needed_stages,
                                  parse_pipeline, read_detections, run_pipeline)
 from rattle_lab.results import read_results
-from record_factory import run_cli
 
 PIPELINES = Path(__file__).resolve().parents[1] / "pipelines"
 
@@ -183,41 +185,62 @@ def _as_plain(obj: Any) -> Any:
     return obj
 
 
+# The Dask tests run rattle_lab in several processes: this one, the workers and the CLI.  Each
+# imports the sources when it starts, so a source tree edited while the suite runs would give
+# them different code, which the pipeline rightly refuses (each task checks the fingerprint).
+# They therefore all run one snapshot of the sources, taken when the cluster starts.
+
 @pytest.fixture(scope="module")
-def cluster() -> Any:
-    """A real ``dask.distributed`` LocalCluster of two worker processes, and a client."""
+def pinned_sources(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A copy of the rattle_lab package: PYTHONPATH for every process of the Dask tests."""
+    root = tmp_path_factory.mktemp("pinned")
+    shutil.copytree(Path(pipeline_module.__file__).parent, root / "rattle_lab",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    return root
+
+
+@pytest.fixture(scope="module")
+def cluster(pinned_sources: Path) -> Any:
+    """A real ``dask.distributed`` LocalCluster of two worker processes (running the snapshot)."""
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as local, \
-            distributed.Client(local) as client:
+    with pytest.MonkeyPatch.context() as mp:
+        # spawned workers take this process's sys.path; rattle_lab, already imported here,
+        # is not affected
+        mp.syspath_prepend(str(pinned_sources))
+        local = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                         dashboard_address=None)
+    with local, distributed.Client(local) as client:
         yield client
 
 
+def _pinned_cli(pinned: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
+    env["PYTHONPATH"] = str(pinned)
+    return subprocess.run([str(Path(sys.executable).with_name("rattle-lab")), *args],
+                          capture_output=True, text=True, env=env, timeout=300, cwd=pinned)
+
+
 def test_dask_local_cluster_equals_serial(synthetic_campaign_record: Path, tmp_path: Path,
-                                          cluster: Any) -> None:
-    pipe = _pipe(["detections"])
-    serial = run_pipeline(pipe, [synthetic_campaign_record], store=tmp_path / "serial.h5",
-                          out_dir=tmp_path)
-    par = run_pipeline(pipe, [synthetic_campaign_record], store=tmp_path / "dask.h5",
-                       out_dir=tmp_path, scheduler=cluster.scheduler.address)
-    assert serial.executed == par.executed == ["ingest", "detect"]
+                                          cluster: Any, pinned_sources: Path) -> None:
+    workers = set(cluster.run(code_fingerprint).values())
+    probe = subprocess.run([sys.executable, "-c", "import rattle_lab.pipeline as p; "
+                            "print(p.__file__, p.code_fingerprint())"], capture_output=True,
+                           text=True, env={**os.environ, "PYTHONPATH": str(pinned_sources)},
+                           cwd=tmp_path, check=True)  # not the checkout (first on sys.path)
+    where, fingerprint = probe.stdout.split()
+    assert Path(where).is_relative_to(pinned_sources) and workers == {fingerprint}
+    pipe = tmp_path / "detect_only.toml"
+    pipe.write_text('[pipeline]\nname = "det"\noutputs = ["detections"]\n')
+    args = ("run", str(pipe), str(synthetic_campaign_record), "--out", str(tmp_path))
+    serial = _pinned_cli(pinned_sources, *args, "--store", str(tmp_path / "serial.h5"))
+    par = _pinned_cli(pinned_sources, *args, "--store", str(tmp_path / "dask.h5"),
+                      "--scheduler", cluster.scheduler.address)
+    for proc in (serial, par):
+        assert proc.returncode == 0, proc.stderr
+        assert "detect: done" in proc.stderr and proc.stdout.startswith("detections\t")
     a, b = read_detections(tmp_path / "serial.h5"), read_detections(tmp_path / "dask.h5")
     assert len(a) == 10
     assert _diff(_as_plain(a), _as_plain(b)) == []
-    # the workers ran the code this process runs (each task checks)
-    assert set(cluster.run(code_fingerprint).values()) == {code_fingerprint()}
-
-
-def test_cli_scheduler_option(synthetic_campaign_record: Path, tmp_path: Path,
-                              cluster: Any) -> None:
-    pipe = tmp_path / "detect_only.toml"
-    pipe.write_text('[pipeline]\nname = "det"\noutputs = ["detections"]\n')
-    proc = run_cli("run", str(pipe), str(synthetic_campaign_record), "--out", str(tmp_path),
-                   "--scheduler", cluster.scheduler.address)
-    assert proc.returncode == 0, proc.stderr
-    assert proc.stdout == f"detections\t{tmp_path / 'det.h5'}\n"
-    assert "detect: done" in proc.stderr
-    assert len(read_detections(tmp_path / "det.h5")) == 10
 
 
 def _set_fingerprint(value: str) -> str:
@@ -232,6 +255,7 @@ def test_workers_with_other_code_are_refused(synthetic_campaign_record: Path, tm
     # e.g. another rattle_lab installed on the cluster, or sources edited after this process
     # imported them: the results would mix code versions, so the stage fails instead
     old = cluster.run(_set_fingerprint, "0.0.0+0000000000000000")
+    assert "0.0.0+0000000000000000" not in old.values()
     try:
         with pytest.raises(ParameterError, match=r"a worker runs other rattle_lab code "
                                                  r"\(0\.0\.0\+0+\) than the caller"):
@@ -241,7 +265,7 @@ def test_workers_with_other_code_are_refused(synthetic_campaign_record: Path, tm
     finally:
         for address, value in old.items():
             cluster.run(_set_fingerprint, value, workers=[address])
-    assert set(cluster.run(code_fingerprint).values()) == {code_fingerprint()}
+    assert cluster.run(code_fingerprint) == old
 
 
 def test_unreachable_scheduler_is_a_parameter_error(synthetic_campaign_record: Path,

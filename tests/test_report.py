@@ -5,6 +5,7 @@ Checked by reading the PDF back with pypdf (page count, text, drawings), not pix
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 from types import SimpleNamespace
@@ -138,6 +139,22 @@ def test_no_text_overlaps_the_page_footer(stores: dict[str, Path]) -> None:
         for text in fig.texts[:-1]:
             assert not text.get_window_extent(renderer).overlaps(box), (name, text.get_text())
             assert text.get_window_extent(renderer).x1 <= fig.bbox.x1, (name, text.get_text())
+
+
+def test_every_axis_is_labelled_with_its_unit(stores: dict[str, Path]) -> None:
+    pages, _ = build_pages(gather(stores["fitted"]), model=True)
+    unit = re.compile(r"\((Hz|s|m/s|m/s\^2|Pa|nondimensional|[^()]*m/s\^2[^()]*)\)")
+    n_axes = 0
+    for name, fig in pages:
+        plots = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
+        for ax in plots:
+            n_axes += 1
+            assert unit.search(ax.get_ylabel()), (name, ax.get_ylabel())
+            if ax.get_xlabel():
+                assert unit.search(ax.get_xlabel()), (name, ax.get_xlabel())
+            else:  # a shared time axis: labelled on the bottom plot of its column
+                assert any(o.get_xlabel() and o.get_xlim() == ax.get_xlim() for o in plots), name
+    assert n_axes == 12  # thresholds 2, patterns 1, waveforms 3 x 2, SPL 1, model pages 2
 
 
 def test_same_store_gives_identical_bytes(stores: dict[str, Path], full_report, tmp_path: Path
