@@ -49,7 +49,6 @@ same content is a no-op, and the store file is then not touched at all.
 
 from __future__ import annotations
 
-import collections
 import concurrent.futures
 import hashlib
 import json
@@ -459,39 +458,28 @@ def _ingest_record(out: h5py.Group, record: Record, label: str, *, storage: Stor
             linked.append(path)
         return ds
 
-    # The checks of one chunk run on a worker thread while the next chunk is read (they
-    # release the GIL: numpy reductions and the compiled scan); one worker keeps them in order.
-    checks = concurrent.futures.ThreadPoolExecutor(max_workers=1)
-
     def write_data(ds: h5py.Dataset, path: str, source: ArraySource) -> None:
+        # The checks run here, in line with the reads: the content hash already runs on a
+        # second thread, and a third (checks overlapped with reads) was slower on two cores.
         checker = plans[path].checker if path in plans else ts_checkers.get(path)
         copy = not ds.is_virtual
         if not copy and checker is None:
             return  # linked, and nothing to check
-        pending: collections.deque[concurrent.futures.Future[None]] = collections.deque()
         n = source.n_samples
-        try:
-            for start in range(0, n, n_chunk_samples):
-                stop = min(n, start + n_chunk_samples)
-                raw = source.read(start, stop)
-                if checker is not None:
-                    pending.append(checks.submit(checker.update, raw))
-                    if len(pending) > 2:  # at most three chunks in memory
-                        pending.popleft().result()
-                if copy:
-                    ds[start:stop] = raw
-                if path in plans:
-                    bar.update(stop - start)
-            while pending:
-                pending.popleft().result()
-        finally:
-            concurrent.futures.wait(pending)  # after an error: let the worker finish first
+        for start in range(0, n, n_chunk_samples):
+            stop = min(n, start + n_chunk_samples)
+            raw = source.read(start, stop)
+            if checker is not None:
+                checker.update(raw)
+            if copy:
+                ds[start:stop] = raw
+            if path in plans:
+                bar.update(stop - start)
 
     tree, sources = _store_tree(record, plans)
     try:
         write_tree(out, tree, sources, write_data=write_data, make_dataset=make_dataset)
     finally:
-        checks.shutdown(wait=True, cancel_futures=True)
         bar.close()
 
     findings: list[Finding] = []
