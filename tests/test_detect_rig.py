@@ -12,9 +12,11 @@ Tolerances at the default scene's noise (vibrometer 0.2 mm/s rms, accelerometer 
   it matters because the relative velocity changes by up to ``omega_s**2 h`` (~470 m/s^2)
   per second at an impact, so 1 us is ~0.5 mm/s of ``v_in``.
 * impact speed: median 2 %, and at most 5 % for impacts of at least 0.03 m/s (150 noise
-  rms): the fits either side leave ~0.4 mm/s (2 noise rms) typical, 2.5 mm/s at most,
-  which the slowest, grazing impacts (down to 1.3 mm/s here) cannot be measured to in
-  relative terms.
+  rms): the fits either side leave ~0.6-0.7 mm/s rms (3 noise rms), which the slowest,
+  grazing impacts (down to 1.3 mm/s here) cannot be measured to in relative terms.  The
+  rms error over all impacts must stay under 1 mm/s, and no single error may pass 3.5 mm/s:
+  five times that rms, which ~2300 Gaussian errors pass with probability ~1e-3 (the
+  largest seen is 2.5 mm/s, 3.6 rms).
 * ramp thresholds: one ramp step, the level change over one simulated piece
   (``piece_periods`` forcing periods): the rig's truth is the level of the piece holding
   the first (last) impact.
@@ -83,7 +85,8 @@ def test_rig_impact_velocities_match_truth(analysed):
     rel_a, err_a, v_a = np.concatenate(rel), np.concatenate(abs_err), np.concatenate(v_true)
     assert np.median(np.abs(rel_a)) < 0.02
     assert np.max(np.abs(rel_a[v_a >= 0.03])) < 0.05
-    assert np.max(np.abs(err_a)) < 2.5e-3
+    assert np.sqrt(np.mean(err_a ** 2)) < 1e-3
+    assert np.max(np.abs(err_a)) < 3.5e-3
     # no bias: the mean error is well inside the noise-limited scatter
     assert abs(np.mean(err_a)) < 1e-4
     assert np.median(np.concatenate(e_det)) == pytest.approx(rec.truth.e, abs=0.01)
@@ -108,7 +111,7 @@ def test_rig_thresholds_at_every_frequency(analysed):
         measured = results[spec.run_id].threshold.accel_ms2
         assert abs(measured - truth) <= step, (spec.run_id, measured, truth, step)
         checked += 1
-    assert checked == 8
+    assert checked == 10  # every ramp run of the default scene
 
 
 def test_rig_truth_thresholds_follow_the_grazing_curve(synthetic_campaign_record):

@@ -72,6 +72,16 @@ def test_grazing_rejects_a_planted_outlier():
     assert fit.residuals_ms2[4] < 0                   # the model lies below the outlier
 
 
+def test_grazing_keeps_a_2_percent_deviation_among_few_exact_points():
+    # five thresholds, three of them exact: the robust scale of the residuals is ~0, and
+    # without the 1 % floor two points 2 % off would be thrown out as outliers
+    f = np.array([95.0, 96.0, 97.0, 98.0, 100.0])
+    a = grazing_threshold_ms2(f, GAP_MM, F_S_HZ, ZETA, Q) * np.array([1.0, 1.0, 1.02, 1.0, 0.98])
+    fit = fit_grazing(f, a, participation=Q, conf_interval=False)
+    assert not fit.outlier.any()  # (a real outlier is still found: the planted-outlier test)
+    assert fit.params["gap_m"].value == pytest.approx(GAP_MM * 1e-3, rel=0.05)
+
+
 def test_grazing_reports_gap_and_participation_unidentifiable():
     fit = fit_grazing(FREQ_HZ, _thesis_thresholds(0.01), participation=Q, vary_participation=True)
     assert any("only gap/participation" in note for note in fit.unidentifiable)

@@ -45,7 +45,7 @@ def test_default_scene_is_embedded_and_small():
     # demo budget: at most ~40 simulated seconds at <= 25 kHz
     assert sum(r.duration_s for r in scene.runs) <= 40.0
     assert scene.sample_rate_hz <= 25000.0
-    assert sum(r.protocol.startswith("amplitude_ramp") for r in scene.runs) == 8
+    assert sum(r.protocol.startswith("amplitude_ramp") for r in scene.runs) == 10
     assert scene.sensor("mic") is not None
 
 

@@ -188,7 +188,7 @@ class SimulationSpec:
     ``piece_periods`` forcing periods; runs starting above grazing first settle for
     ``settle_time_constants`` modal time constants ``1 / (zeta omega_s)``."""
 
-    piece_periods: int = 2
+    piece_periods: int = 1
     settle_time_constants: float = 8.0
 
 
@@ -439,7 +439,7 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
     sim = SimulationSpec()
     smr = top.sub("simulation")
     if smr is not None:
-        sim = SimulationSpec(piece_periods=smr.integer("piece_periods", 2, low=1),
+        sim = SimulationSpec(piece_periods=smr.integer("piece_periods", 1, low=1),
                              settle_time_constants=smr.number("settle_time_constants", 8.0, low=0.0))
         smr.done()
     top.done()
