@@ -41,6 +41,7 @@ _LAZY: dict[str, str] = {
     "Record": "rattle_lab.records",
     "ingest": "rattle_lab.ingest",
     "read_catalogue": "rattle_lab.ingest",
+    "open_stored_record": "rattle_lab.ingest",
     # synthetic rigs
     "load_scene": "rattle_lab.rig",
     "synthesize": "rattle_lab.rig",
@@ -51,6 +52,10 @@ _LAZY: dict[str, str] = {
     "fit_grazing": "rattle_lab.fit",
     "fit_store": "rattle_lab.fit",
     "read_results": "rattle_lab.results",
+    # reports and pipelines
+    "write_report": "rattle_lab.report",
+    "load_pipeline_file": "rattle_lab.pipeline",
+    "run_pipeline": "rattle_lab.pipeline",
 }
 
 __all__ = ["__version__", "RattleLabError", *_LAZY]

@@ -301,7 +301,6 @@ def _edit_store(store: Path) -> Iterator[h5py.File]:
     try:
         with atomic_path(store) as tmp:
             shutil.copyfile(store, tmp)
-            shutil.copymode(store, tmp)
             with h5py.File(tmp, "a") as fh:
                 yield fh
     except OSError as exc:

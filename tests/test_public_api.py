@@ -16,9 +16,10 @@ def test_all_is_pinned():
         "grazing_F", "grazing_omegas", "linear_impact_velocity",
         "one_over_n_orbits", "bifurcation_sets", "sweep", "sweep_up_down",
         "lyapunov_exponent", "regime_map",
-        "read", "write_record", "Record", "ingest", "read_catalogue",
+        "read", "write_record", "Record", "ingest", "read_catalogue", "open_stored_record",
         "load_scene", "synthesize", "write_synthetic",
         "detect_impacts", "sound_peaks", "fit_grazing", "fit_store", "read_results",
+        "write_report", "load_pipeline_file", "run_pipeline",
     ]
 
 

@@ -15,7 +15,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .._atomic import _umask, atomic_path
+from .._atomic import atomic_path
 from ._convert import record_to_tree
 from ._model import DEFAULT_CHUNK_SAMPLES, ArraySource, Record
 from ._schema import validate_tree
@@ -80,14 +80,6 @@ def write_tree(group: h5py.Group, tree: Mapping[str, Any], sources: Mapping[str,
                 ds.attrs[key] = _attr_value(value)
             if ds.size:
                 write_data(ds, child_path, sources[child_path])
-
-
-def umask_mode(path: str | os.PathLike[str]) -> None:
-    """Give ``path`` the mode a new file gets (0o666 less the umask).
-
-    Not needed after :func:`~rattle_lab._atomic.atomic_path`, which sets the mode itself.
-    """
-    os.chmod(path, 0o666 & ~_umask())
 
 
 def write_record(path: str | os.PathLike[str], record: Record, *,

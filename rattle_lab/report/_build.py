@@ -12,7 +12,6 @@ from matplotlib.figure import Figure
 from .._atomic import atomic_path
 from .._version import __version__
 from ..exceptions import ParameterError
-from ..records._write import umask_mode
 from . import _pages
 from ._data import ReportData, gather
 
@@ -100,7 +99,6 @@ def write_report(store: str | os.PathLike[str], output: str | os.PathLike[str], 
             with PdfPages(tmp, metadata=metadata) as pdf:  # type: ignore[arg-type]
                 for _, fig in all_pages:
                     pdf.savefig(fig)
-            umask_mode(tmp)
     return ReportResult(output, n, sections, dict(data.missing))
 
 
