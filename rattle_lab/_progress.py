@@ -21,3 +21,11 @@ def progress(iterable: Iterable[T], *, total: int | None = None, desc: str = "",
     """Wrap ``iterable`` in a tqdm bar on stderr when :func:`progress_enabled`."""
     return iter(tqdm(iterable, total=total, desc=desc, unit=unit, file=sys.stderr,
                      disable=not progress_enabled(quiet), leave=False))
+
+
+def progress_bar(total: int, *, desc: str = "", quiet: bool = False, unit: str = "it",
+                 unit_scale: bool = False) -> tqdm:
+    """A tqdm bar on stderr to :meth:`~tqdm.tqdm.update` by hand (a no-op unless
+    :func:`progress_enabled`); use it as a context manager so that it is closed."""
+    return tqdm(total=total, desc=desc, unit=unit, unit_scale=unit_scale, file=sys.stderr,
+                disable=not progress_enabled(quiet), leave=False)

@@ -69,6 +69,7 @@ import numpy as np
 import xxhash
 
 from ._atomic import atomic_path
+from ._progress import progress_bar
 from ._version import __version__
 from .exceptions import ParameterError
 from .records import read
@@ -375,28 +376,6 @@ class _ChannelPlan:
     checker: ChannelChecker
 
 
-class _Bar:
-    """Progress over samples, drawn on a terminal only (see :mod:`rattle_lab._progress`)."""
-
-    def __init__(self, total: int, desc: str, quiet: bool) -> None:
-        from ._progress import progress_enabled
-
-        self._bar = None
-        if progress_enabled(quiet):
-            from tqdm.auto import tqdm
-
-            self._bar = tqdm(total=total, desc=desc, unit="samples", unit_scale=True,
-                             file=sys.stderr, leave=False)
-
-    def update(self, n: int) -> None:
-        if self._bar is not None:
-            self._bar.update(n)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
-
-
 def _store_tree(record: Record, plans: Mapping[str, _ChannelPlan]) -> tuple[dict[str, Any],
                                                                            dict[str, ArraySource]]:
     """The record's node tree for the store: the input's own attributes plus the SI conversion."""
@@ -448,7 +427,7 @@ def _ingest_record(out: h5py.Group, record: Record, label: str, *, storage: Stor
                 ts_users.setdefault(f"/runs/{run.run_id}/timestamps/{ch.timestamps}", []).append(path)
     ts_checkers = {path: TimestampChecker(limits) for path in ts_users}
     total = sum(p.channel.n_samples for p in plans.values())
-    bar = _Bar(total, Path(label).name, quiet)
+    bar = progress_bar(total, desc=Path(label).name, unit="samples", unit_scale=True, quiet=quiet)
     linked: list[str] = []
 
     def make_dataset(group: h5py.Group, name: str, node: Mapping[str, Any], path: str,

@@ -94,6 +94,34 @@ def write(tmp_path: Path, name: str = "rec.h5", record: Record | None = None) ->
     return write_record(tmp_path / name, record if record is not None else make_record())
 
 
+def run_cli_on_terminal(*args: str, timeout: float = 300) -> tuple[int, str]:
+    """Run the installed ``rattle-lab`` with a pseudo-terminal as stdin, stdout and stderr.
+
+    Returns the exit status and everything it wrote (progress bars included).
+    """
+    import fcntl
+    import pty
+    import struct
+    import termios
+
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 120, 0, 0))
+    proc = subprocess.Popen([str(RATTLE_LAB), *args], stdin=slave, stdout=slave, stderr=slave,
+                            close_fds=True)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            data = os.read(master, 1 << 16)
+        except OSError:  # EIO: the program exited and closed the terminal
+            break
+        if not data:
+            break
+        chunks.append(data)
+    os.close(master)
+    return proc.wait(timeout=timeout), b"".join(chunks).decode("utf-8", "replace")
+
+
 def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
     """Run the installed ``rattle-lab`` entry point."""
     env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}

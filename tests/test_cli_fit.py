@@ -11,6 +11,7 @@ the exact dynamics.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import h5py
@@ -24,7 +25,7 @@ from rattle_lab.ingest import ingest
 from rattle_lab.records import write_record
 from rattle_lab.records._errors import StoreError
 from rattle_lab.results import read_results
-from record_factory import run_cli
+from record_factory import run_cli, run_cli_on_terminal
 
 
 @pytest.fixture(scope="module")
@@ -185,3 +186,19 @@ def test_fit_store_ramp_model_on_the_default_scene(rig_store):
     assert run["threshold_censored"] == 0 and run["threshold_ramp_duration_s"] == 3.0
     assert run["threshold_ramp_start_ms2"] == pytest.approx(26.0, abs=0.1)
     assert run["threshold_ramp_end_ms2"] == pytest.approx(2.0, abs=0.1)
+
+
+def test_fit_and_report_draw_progress_bars_on_a_terminal_only(campaign, tmp_path):
+    store, _, _ = campaign
+    rc, text = run_cli_on_terminal("fit", str(store))
+    assert rc == 0, text[-2000:]
+    assert re.search(r"detect: +\d+%\|", text)          # tqdm: "detect:  40%|"
+    rc, text = run_cli_on_terminal("fit", str(store), "--quiet")
+    assert rc == 0 and "%|" not in text and "grazing.gap_m" in text
+    rc, text = run_cli_on_terminal("report", str(store), "-o", str(tmp_path / "r.pdf"))
+    assert rc == 0, text[-2000:]
+    assert re.search(r"model sweeps: +\d+%\|", text)
+    rc, text = run_cli_on_terminal("report", str(store), "-o", str(tmp_path / "q.pdf"), "--quiet")
+    assert rc == 0 and "%|" not in text and text.strip().endswith("q.pdf")
+    piped = run_cli("fit", str(store))
+    assert piped.returncode == 0 and "%|" not in piped.stderr

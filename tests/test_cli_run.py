@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from record_factory import run_cli_on_terminal
+
 from rattle_lab import __version__
 from rattle_lab.sdf import SDFParams, SDFState, simulate
 
@@ -105,29 +107,8 @@ def test_demo_piped_prints_the_table_and_the_pdf_path_last(tmp_path):
 
 
 def test_demo_on_a_terminal_shows_progress_bars(tmp_path):
-    import fcntl
-    import os
-    import pty
-    import struct
-    import termios
-
-    master, slave = pty.openpty()
-    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 120, 0, 0))
-    proc = subprocess.Popen([_exe(), "demo", "--out", str(tmp_path / "demo")], stdin=slave,
-                            stdout=slave, stderr=slave, close_fds=True)
-    os.close(slave)
-    chunks = []
-    while True:
-        try:
-            data = os.read(master, 1 << 16)
-        except OSError:  # EIO: the demo exited and closed the terminal
-            break
-        if not data:
-            break
-        chunks.append(data)
-    os.close(master)
-    text = b"".join(chunks).decode("utf-8", "replace")
-    assert proc.wait(timeout=300) == 0, text[-2000:]
+    rc, text = run_cli_on_terminal("demo", "--out", str(tmp_path / "demo"))
+    assert rc == 0, text[-2000:]
     for bar in ("simulate:", "raw.h5:", "detect:", "model sweeps:"):  # tqdm: "desc:  40%|"
         assert re.search(re.escape(bar) + r" +\d+%\|", text), bar
     _demo_checks(text, tmp_path / "demo")

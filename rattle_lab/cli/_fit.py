@@ -27,6 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         help="parameters from a pipeline TOML: [detect] and [fit] tables of "
                              "keyword parameters")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_run)
 
 
@@ -34,7 +35,7 @@ def _run(args: argparse.Namespace) -> int:
     from ..fit import fit_store, load_pipeline
 
     params = load_pipeline(args.pipeline)
-    result = fit_store(args.store, detect=params["detect"], fit=params["fit"])
+    result = fit_store(args.store, detect=params["detect"], fit=params["fit"], quiet=args.quiet)
     if args.json:
         print(json.dumps(result.summary, indent=2, allow_nan=False))
     else:

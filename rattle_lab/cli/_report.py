@@ -23,13 +23,14 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         help="the PDF to write (atomically)")
     parser.add_argument("--no-model", action="store_true",
                         help="leave out the model predictions (bifurcation sets and sweeps)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
     from ..report import write_report
 
-    result = write_report(args.store, args.output, model=not args.no_model)
+    result = write_report(args.store, args.output, model=not args.no_model, quiet=args.quiet)
     for name, why in result.missing.items():
         print(f"rattle-lab: note: section {name!r} left out: {' '.join(why.split())}",
               file=sys.stderr)

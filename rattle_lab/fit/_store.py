@@ -23,6 +23,7 @@ from typing import Any
 import h5py
 import numpy as np
 
+from .._progress import progress_bar
 from .._version import __version__
 from ..detect import (ImpactParams, cross_correlation_delay, detect_impacts, impact_pattern,
                       impulse_train, rms_spl_db, sound_peaks)
@@ -222,8 +223,20 @@ def json_ready(obj: Any) -> Any:
 
 
 def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None = None,
-              fit: Mapping[str, Any] | None = None, write: bool = True) -> StoreFit:
+              fit: Mapping[str, Any] | None = None, write: bool = True,
+              quiet: bool = True) -> StoreFit:
     """Detect and fit everything in an ingest store; write ``/results`` (see :mod:`rattle_lab.results`).
+
+    Parameters
+    ----------
+    store : path-like
+        An ingest store.
+    detect, fit : mapping, optional
+        Keyword parameters of the detection and the fits (see :func:`load_pipeline`).
+    write : bool
+        Write ``/results`` into the store (atomically).
+    quiet : bool
+        No progress bar over the runs (one is drawn on a terminal otherwise).
 
     Raises
     ------
@@ -246,14 +259,16 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     with h5py.File(store, "r") as fh:
         for key in keys:
             inputs[key] = str(fh[f"records/{key}"].attrs.get("ingest_input_hash", ""))
-    for key in keys:
-        record = open_stored_record(store, key)
-        try:
-            for run in record.runs:
-                runs.append(analyse_run(key, run, detect=detect, fit=fit,
-                                        mic_distance_m=record.rig.mic_distance_m))
-        finally:
-            record.close()
+    with progress_bar(int(catalogue.shape[0]), desc="detect", unit="run", quiet=quiet) as bar:
+        for key in keys:
+            record = open_stored_record(store, key)
+            try:
+                for run in record.runs:
+                    runs.append(analyse_run(key, run, detect=detect, fit=fit,
+                                            mic_distance_m=record.rig.mic_distance_m))
+                    bar.update()
+            finally:
+                record.close()
     curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
     summary = summarise_fits(runs, curve, fit)
     provenance = {"function": "rattle_lab.fit.fit_store", "rattle_lab_version": __version__,
