@@ -56,7 +56,6 @@ import mmap
 import os
 import platform
 import shutil
-import sys
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field

@@ -48,8 +48,7 @@ from ..sdf._types import SDFParams, SDFState
 from ..sdf.simulate import simulate
 from ._dask import check_execution, chunk_rows, run_chunks
 from .lyapunov import lyapunov_from_result
-from .sweep import (KIND_NAMES, PERIOD_RTOL, _check_classification_window, _check_int,
-                    _classify)
+from .sweep import PERIOD_RTOL, _check_classification_window, _check_int, _classify
 
 MapKind = Literal["regime", "basin"]
 

@@ -1,11 +1,31 @@
-"""Helpers shared by the fits: parameter summaries of lmfit results."""
+"""Helpers shared by the fits: argument checks, parameter summaries of lmfit results."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any
 
+import math
+
 import numpy as np
+
+from ..exceptions import ParameterError
+
+
+def check_positive(**values: float) -> None:
+    """Raise :class:`ParameterError` naming the first of ``values`` that is not finite and > 0.
+
+    Examples
+    --------
+    >>> check_positive(gap_m=1.3e-3, f_s_hz=96.0)
+    >>> check_positive(gap_m=1.3e-3, zeta=float("nan"))
+    Traceback (most recent call last):
+    ...
+    rattle_lab.exceptions.ParameterError: `zeta` must be finite and > 0, was nan
+    """
+    for name, value in values.items():
+        if not (math.isfinite(value) and value > 0):
+            raise ParameterError(f"`{name}` must be finite and > 0, was {value}")
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from scipy import optimize
 
 from ..exceptions import ConvergenceError, ParameterError
 from ..thresholds import Threshold
-from ._common import ParamEstimate
+from ._common import ParamEstimate, check_positive
 from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
 
 
@@ -116,10 +116,7 @@ def fit_zeta_ramp(thresholds: Sequence[Threshold], *, gap_m: float, f_s_hz: floa
     >>> bool(abs(fit.zeta.value / 0.0085 - 1) < 0.01)
     True
     """
-    for name, value in (("gap_m", gap_m), ("f_s_hz", f_s_hz), ("zeta0", zeta0),
-                        ("participation", participation)):
-        if not (np.isfinite(value) and value > 0):
-            raise ParameterError(f"`{name}` must be finite and > 0, was {value}")
+    check_positive(gap_m=gap_m, f_s_hz=f_s_hz, zeta0=zeta0, participation=participation)
     lo_rel, hi_rel = zeta_bounds_rel
     if not 0 < lo_rel < 1 < hi_rel:
         raise ParameterError(f"`zeta_bounds_rel` must satisfy 0 < low < 1 < high, was "

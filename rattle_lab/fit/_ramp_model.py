@@ -38,6 +38,7 @@ from ..analysis import one_over_n_orbits
 from ..exceptions import ParameterError
 from ..sdf import SDFParams, SDFState, simulate
 from ..thresholds import Threshold, sustained_impact_time
+from ._common import check_positive
 
 Direction = Literal["up", "down"]
 TWO_PI = 2.0 * math.pi
@@ -73,10 +74,7 @@ class RampSpec:
     def __post_init__(self) -> None:
         if self.direction not in ("up", "down"):
             raise ParameterError(f"`direction` must be 'up' or 'down', was {self.direction!r}")
-        for name in ("freq_hz", "duration_s"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ParameterError(f"`{name}` must be finite and > 0, was {value}")
+        check_positive(freq_hz=self.freq_hz, duration_s=self.duration_s)
         for name in ("level_start_ms2", "level_end_ms2"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
@@ -314,10 +312,7 @@ def model_threshold(ramp: RampSpec, *, e: float, gap_m: float, f_s_hz: float, ze
     >>> bool(6.7 < m.mean_ms2 < 7.1)    # quasi-static saddle-node: 7.64 m/s^2
     True
     """
-    for name, value in (("gap_m", gap_m), ("f_s_hz", f_s_hz), ("zeta", zeta),
-                        ("participation", participation)):
-        if not (math.isfinite(value) and value > 0):
-            raise ParameterError(f"`{name}` must be finite and > 0, was {value}")
+    check_positive(gap_m=gap_m, f_s_hz=f_s_hz, zeta=zeta, participation=participation)
     if not (math.isfinite(e) and 0.0 <= e <= 1.0):
         raise ParameterError(f"`e` must be in [0, 1], was {e}")
     if int(n_phases) != n_phases or n_phases < 1:

@@ -40,7 +40,7 @@ import numpy as np
 from ..analysis import saddle_node_forcing
 from ..exceptions import ConvergenceError, ParameterError
 from ..thresholds import Threshold
-from ._common import ParamEstimate
+from ._common import ParamEstimate, check_positive
 from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
 
 
@@ -179,13 +179,6 @@ def _down_points(thresholds: Sequence[Threshold], f_s_hz: float, zeta: float
         raise ParameterError(f"no finite downward threshold above the half-power frequency "
                              f"f_s (1 + zeta) = {f_min:.6g} Hz to fit e to")
     return use
-
-
-def _check_model(gap_m: float, f_s_hz: float, zeta: float, participation: float) -> None:
-    for name, value in (("gap_m", gap_m), ("f_s_hz", f_s_hz), ("zeta", zeta),
-                        ("participation", participation)):
-        if not (np.isfinite(value) and value > 0):
-            raise ParameterError(f"`{name}` must be finite and > 0, was {value}")
 
 
 def profile_interval(grid: np.ndarray, chi2: np.ndarray, cut: float) -> tuple[float, float]:
@@ -353,7 +346,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
     """
     if method not in METHODS:
         raise ParameterError(f"`method` must be one of {METHODS}, was {method!r}")
-    _check_model(gap_m, f_s_hz, zeta, participation)
+    check_positive(gap_m=gap_m, f_s_hz=f_s_hz, zeta=zeta, participation=participation)
     if not (np.isfinite(zeta_stderr) and zeta_stderr >= 0):
         raise ParameterError(f"`zeta_stderr` must be finite and >= 0, was {zeta_stderr}")
     points = _down_points(thresholds, f_s_hz, zeta)
