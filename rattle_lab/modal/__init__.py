@@ -1,0 +1,33 @@
+"""Multi-mode plate impact model (issue 14): N plate modes against a point striker.
+
+* :func:`plate_system` / :class:`ModalSystem`: modes from the plate solver, modal damping,
+  uniform-pressure forcing, striker position and gap.
+* :func:`simulate_modal`: event-driven exact simulation with a rigid (restitution),
+  Kelvin-Voigt or Hertz contact; impacts reported as contact episodes.
+* :func:`sdf_equivalent`: the one-mode limit as SDF parameters.
+"""
+
+from ._simulate import simulate_modal
+from ._system import (CONTACT_NAMES, THESIS_HERTZ_N_M15, THESIS_PLATE, THESIS_STRIKER_STIFFNESS_N_M,
+                      HertzContact, KelvinVoigtContact, ModalSystem, RigidContact, contact_from_name,
+                      plate_system, rayleigh_zeta)
+from ._types import ContactLog, EpisodeLog, ModalResult, ModalState
+
+__all__ = [
+    "CONTACT_NAMES",
+    "THESIS_HERTZ_N_M15",
+    "THESIS_PLATE",
+    "THESIS_STRIKER_STIFFNESS_N_M",
+    "ContactLog",
+    "EpisodeLog",
+    "HertzContact",
+    "KelvinVoigtContact",
+    "ModalResult",
+    "ModalState",
+    "ModalSystem",
+    "RigidContact",
+    "contact_from_name",
+    "plate_system",
+    "rayleigh_zeta",
+    "simulate_modal",
+]
