@@ -158,6 +158,7 @@ class _Engine:
             if mode == HERTZ:
                 mode, t, p, v, c_start, on_stop = self._hertz_step(t, p, v, th, win, c_start)
                 continue
+        self.open_contact = c_start
         return t, p, v, n_events
 
     # ------------------------------------------------------------------ free flight from inside (KV, c > 0)
@@ -184,7 +185,8 @@ class _Engine:
         v_before = v.copy()
         if isinstance(self.contact, RigidContact):
             e = self.contact.e
-            p = p + self.beta * ((self.gap - float(self.beta @ p)) / self.nb2)
+            # p is left where the crossing was located (the first float with delta >= 0):
+            # projecting it onto delta = 0 would add a systematic energy error of ~eps per impact.
             v = v - self.beta * ((1.0 + e) * float(self.beta @ v) / self.nb2) if u > 0 else v.copy()
             a_c = self.contact_accel(p, v, t)
             u_out = -float(self.beta @ v)
@@ -312,14 +314,13 @@ def _pinned(p0: np.ndarray, s: Any) -> tuple[np.ndarray, np.ndarray]:
     return np.repeat(p0[:, None], s_arr.size, axis=1), np.zeros((p0.size, s_arr.size))
 
 
-def _episodes(contacts: list[tuple], gap_s: float, sqrt_m1: float) -> EpisodeLog:
+def _episodes(contacts: list[tuple], gap_s: float, n_modes: int) -> EpisodeLog:
     groups: list[list[tuple]] = []
     for c in contacts:
         if groups and c[0] - groups[-1][-1][1] <= gap_s:
             groups[-1].append(c)
         else:
             groups.append([c])
-    n_modes = contacts[0][5].size if contacts else 0
     t0 = np.array([g[0][0] for g in groups])
     t1 = np.array([g[-1][1] for g in groups])
     u_in = np.array([g[0][2] for g in groups])
@@ -327,10 +328,10 @@ def _episodes(contacts: list[tuple], gap_s: float, sqrt_m1: float) -> EpisodeLog
     v_in = np.array([g[0][5] for g in groups]).reshape(-1, n_modes)
     v_out = np.array([g[-1][6] for g in groups]).reshape(-1, n_modes)
     with np.errstate(divide="ignore", invalid="ignore"):
-        e1 = np.where(v_in[:, 0] != 0, -v_out[:, 0] / v_in[:, 0], np.nan) if n_modes else np.zeros(0)
+        e1 = np.where(v_in[:, 0] != 0, -v_out[:, 0] / v_in[:, 0], np.nan)
     return EpisodeLog(t_s=t0, t_end_s=t1, v_in_m_s=u_in, v_out_m_s=u_out, e_mode1=e1,
                       n_contacts=np.array([len(g) for g in groups], dtype=int),
-                      mode_velocity_in=v_in / sqrt_m1, mode_velocity_out=v_out / sqrt_m1)
+                      mode_velocity_in=v_in, mode_velocity_out=v_out)
 
 
 def simulate_modal(system: ModalSystem, contact: Contact | None = None, *, cycles: float | None = None,
@@ -351,6 +352,8 @@ def simulate_modal(system: ModalSystem, contact: Contact | None = None, *, cycle
         Start (default: at rest at t = 0); must not penetrate the striker.
     episode_gap_s : float, optional
         Contacts closer than this are one impact (default ``0.25 * 2 pi / omega_1``).
+        Episodes that may still go on at the end of the run are left out of ``impacts``
+        (their contacts stay in ``contacts``).
     dense : bool
         Keep the flow pieces for :meth:`ModalResult.modal_state` (sound, figures).
     max_events : int, optional
@@ -407,7 +410,14 @@ def simulate_modal(system: ModalSystem, contact: Contact | None = None, *, cycle
     log = ContactLog(t_start_s=np.array([c[0] for c in cs]), t_end_s=np.array([c[1] for c in cs]),
                      u_in_m_s=np.array([c[2] for c in cs]), u_out_m_s=np.array([c[3] for c in cs]),
                      kind=np.array([c[4] for c in cs], dtype=int))
-    eps_log = _episodes(cs, gap_s, 1.0)
+    # An episode whose last contact ends within episode_gap_s of the end of the run (or
+    # that is still open) may go on: it is left out of the impacts, not cut short.
+    t_stop = state.t_s + dur
+    starts = [c[0] for c in cs] + ([eng.open_contact[0]] if eng.open_contact is not None else [])
+    n_done = sum(1 for c in cs if c[1] < t_stop - gap_s)
+    while 0 < n_done < len(starts) and starts[n_done] - cs[n_done - 1][1] <= gap_s:
+        n_done -= 1
+    eps_log = _episodes(cs[:n_done], gap_s, n)
     sq = np.sqrt(system.modal_mass_kg)
     eps_log = EpisodeLog(t_s=eps_log.t_s, t_end_s=eps_log.t_end_s, v_in_m_s=eps_log.v_in_m_s,
                          v_out_m_s=eps_log.v_out_m_s, e_mode1=eps_log.e_mode1, n_contacts=eps_log.n_contacts,
