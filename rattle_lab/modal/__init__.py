@@ -4,10 +4,13 @@
   uniform-pressure forcing, striker position and gap.
 * :func:`simulate_modal`: event-driven exact simulation with a rigid (restitution),
   Kelvin-Voigt or Hertz contact; impacts reported as contact episodes.
-* :func:`sdf_equivalent`: the one-mode limit as SDF parameters.
+* :func:`rayleigh_pressure`: the sound at a microphone (baffled plate, with delay).
+* :func:`modal_channels`: sensor and microphone signals of a run (for synthetic rigs).
 """
 
+from ._scene import ModalChannels, modal_channels
 from ._simulate import simulate_modal
+from ._sound import RadiatingSurface, plate_surface, rayleigh_pressure
 from ._system import (CONTACT_NAMES, THESIS_HERTZ_N_M15, THESIS_PLATE, THESIS_STRIKER_STIFFNESS_N_M,
                       HertzContact, KelvinVoigtContact, ModalSystem, RigidContact, contact_from_name,
                       plate_system, rayleigh_zeta)
@@ -22,12 +25,17 @@ __all__ = [
     "EpisodeLog",
     "HertzContact",
     "KelvinVoigtContact",
+    "ModalChannels",
     "ModalResult",
     "ModalState",
     "ModalSystem",
+    "RadiatingSurface",
     "RigidContact",
     "contact_from_name",
+    "modal_channels",
+    "plate_surface",
     "plate_system",
+    "rayleigh_pressure",
     "rayleigh_zeta",
     "simulate_modal",
 ]
