@@ -11,6 +11,7 @@
 from ._scene import ModalChannels, modal_channels
 from ._simulate import simulate_modal
 from ._sound import RadiatingSurface, plate_surface, rayleigh_pressure
+from ._spl import predicted_spl_slope
 from ._system import (CONTACT_NAMES, THESIS_HERTZ_N_M15, THESIS_PLATE, THESIS_STRIKER_STIFFNESS_N_M,
                       HertzContact, KelvinVoigtContact, ModalSystem, RigidContact, contact_from_name,
                       plate_system, rayleigh_zeta)
@@ -35,6 +36,7 @@ __all__ = [
     "modal_channels",
     "plate_surface",
     "plate_system",
+    "predicted_spl_slope",
     "rayleigh_pressure",
     "rayleigh_zeta",
     "simulate_modal",
