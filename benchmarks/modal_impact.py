@@ -72,14 +72,16 @@ def direct(system, k: float, rtol: float):
 def main() -> None:
     k = 4.4e8
     print(f"thesis plate, Kelvin-Voigt k = {k:.1e} N/m, {FREQ_HZ} Hz, {CYCLES} forcing periods; "
-          "times per contact (shared 2-core machine, under load)")
+          "times per contact, exact: best of 3 (shared 2-core machine, under load)")
     print(f"{'N':>3}  {'method':>16}  {'contacts':>8}  {'max rel err v_in':>16}  {'ms/contact':>10}  {'total s':>8}")
     for n in (1, 2, 4, 8, 16, 32, 64):
         system = plate_system(n_modes=n, freq_hz=FREQ_HZ, skip_unexcited=True)
         simulate_modal(system, KelvinVoigtContact(k), cycles=1)  # compile / warm up
-        t0 = time.perf_counter()
-        res = simulate_modal(system, KelvinVoigtContact(k), cycles=CYCLES)
-        dt = time.perf_counter() - t0
+        dt = float("inf")
+        for _ in range(3):  # best of 3: the machine is shared
+            t0 = time.perf_counter()
+            res = simulate_modal(system, KelvinVoigtContact(k), cycles=CYCLES)
+            dt = min(dt, time.perf_counter() - t0)
         ref = res.contacts.u_in_m_s
         m = len(ref)
         print(f"{n:>3}  {'exact':>16}  {m:>8}  {'(rounding)':>16}  {1e3 * dt / max(m, 1):10.3f}  {dt:8.2f}")
