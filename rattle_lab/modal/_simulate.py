@@ -191,8 +191,13 @@ class _Engine:
             a_c = self.contact_accel(p, v, t)
             u_out = -float(self.beta @ v)
             if a_c > 0.0 and max(u_out, 0.0) ** 2 <= 2.0 * a_c * H_RES_REL * self.gap:
+                if u > 0:  # the last micro-impact is a contact of its own
+                    self.contacts.append((t, t, u, u_out, 0 if kind == ex.CROSSING else 1, v_before, v.copy()))
                 v = v - self.beta * (float(self.beta @ v) / self.nb2)
-                return STICK, p, v, (t, u, v_before)
+                # The unresolved flights form a geometric series (ratio e, each 2 u / a_c
+                # long): sticking is reported from their accumulation point.
+                tail = 2.0 * max(u_out, 0.0) / (a_c * (1.0 - e)) if e < 1.0 else 0.0
+                return STICK, p, v, (t + tail, 0.0, v.copy())
             self.contacts.append((t, t, u, u_out, 0 if kind == ex.CROSSING else 1, v_before, v.copy()))
             return FREE, p, v, None
         if isinstance(self.contact, KelvinVoigtContact):
