@@ -36,7 +36,7 @@ import scipy.linalg
 
 from ..exceptions import ParameterError, SimulationError
 from . import _expsum as ex
-from ._flows import FreeModes, LinearFlow
+from ._flows import FreeModes, LinearFlow, _mv
 from ._system import Contact, HertzContact, KelvinVoigtContact, ModalSystem, RigidContact
 from ._types import ContactLog, EpisodeLog, ModalResult, ModalState
 
@@ -239,15 +239,15 @@ class _Engine:
     def _stick_step(self, t: float, p: np.ndarray, v: np.ndarray, th: float, win: float, c_start: Any) -> tuple:
         T, st = self.T, self.stick
         n = self.sys.n_modes
-        z0 = np.concatenate([T.T @ (p - self.p0), T.T @ v])
+        z0 = np.concatenate([_mv(T.T, p - self.p0), _mv(T.T, v)])
         gamma, Zt = st.start(z0, th)
         a, lam, c0 = st.functional(gamma, Zt, -self.w_lam, -self.c_lam, -self.f_lam * np.exp(1j * th))
 
         def to_pv(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             m = T.shape[1]
             if z.ndim == 1:
-                return self.p0 + T @ z[:m], T @ z[m:]
-            return self.p0[:, None] + T @ z[:m], T @ z[m:]
+                return self.p0 + _mv(T, z[:m]), _mv(T, z[m:])
+            return self.p0[:, None] + _mv(T, z[:m]), _mv(T, z[m:])
 
         ev = (lambda s, g=gamma, Z=Zt: to_pv(st.state(g, Z, s)) if st.n else _pinned(self.p0, s))
         h0 = ex.value(a, lam, c0, 0.0, 0)
