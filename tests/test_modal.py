@@ -106,7 +106,7 @@ def test_kelvin_voigt_elastic_contact_conserves_energy():
     p0 = np.zeros(4)
     v0 = np.array([0.3, -0.1, 0.05, 0.02])
     E0 = _energy(system, p0, v0)
-    res = simulate_modal(system, KelvinVoigtContact(stiffness_n_m=2e6), duration_s=10.0,
+    res = simulate_modal(system, KelvinVoigtContact(stiffness_n_m=2e6), duration_s=12.0,
                          state=ModalState(0.0, p0, v0))
     assert len(res.contacts) >= 1000
     assert abs(_energy(system, res.state.p, res.state.v) - E0) <= 1e-11 * E0
