@@ -248,3 +248,24 @@ def test_many_mode_sticking_holds_the_constraint_and_releases_at_zero_force():
         assert np.max(np.abs(u)) <= 1e-9 * system.gap_m * w[0]
         lam_end, _, _ = force(np.array([t1]))
         assert abs(lam_end[0]) <= 1e-9 * scale
+
+
+@pytest.mark.parametrize(("margin", "touches"), [(1e-12, True), (-1e-12, False)])
+def test_grazing_contact_is_found_or_excluded_to_rounding(margin, touches):
+    # Two undamped, unforced modes whose sum peaks once per beat at (1 + margin) gap: a
+    # narrow, near-tangent maximum between far-apart ones.  The derivative-bound search
+    # must find the touch when the peak exceeds the gap by 1e-12 relative, and exclude
+    # it when it falls short by as much (the grazing tolerance is 4 eps = 9e-16).
+    system = ModalSystem(omega_rad_s=[600.0, 660.0], zeta=[0.0, 0.0], modal_mass_kg=[1.0, 1.0], load_m2=[0.0, 0.0],
+                         shape_at_striker=[1.0, 1.0], gap_m=1e-3, pressure_pa=0.0, freq_hz=50.0)
+    amp = 0.5e-3 * (1 + margin)  # the two modes peak together at t0: sum 2 amp = (1 + margin) gap
+    t0 = 1e-3
+    w = np.array([600.0, 660.0])
+    p0 = amp * np.cos(-w * t0)  # p_k(t) = amp cos(w_k (t - t0))
+    v0 = -amp * w * np.sin(-w * t0)
+    res = simulate_modal(system, RigidContact(e=1.0), duration_s=2e-3, state=ModalState(0.0, p0, v0))
+    if touches:
+        assert len(res.contacts) >= 1
+        assert res.contacts.t_start_s[0] == pytest.approx(t0, abs=1e-6)
+    else:
+        assert len(res.contacts) == 0
