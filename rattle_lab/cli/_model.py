@@ -15,6 +15,7 @@ MODEL_COMMAND_MODULES: tuple[str, ...] = (
     "rattle_lab.cli._model_plate",
     "rattle_lab.cli._model_orbits",
     "rattle_lab.cli._model_sweep",
+    "rattle_lab.cli._model_modal",
 )
 
 

@@ -1,0 +1,43 @@
+"""Multi-mode plate impact model (issue 14): N plate modes against a point striker.
+
+* :func:`plate_system` / :class:`ModalSystem`: modes from the plate solver, modal damping,
+  uniform-pressure forcing, striker position and gap.
+* :func:`simulate_modal`: event-driven exact simulation with a rigid (restitution),
+  Kelvin-Voigt or Hertz contact; impacts reported as contact episodes.
+* :func:`rayleigh_pressure`: the sound at a microphone (baffled plate, with delay).
+* :func:`modal_channels`: sensor and microphone signals of a run (for synthetic rigs).
+"""
+
+from ._scene import ModalChannels, modal_channels
+from ._simulate import simulate_modal
+from ._sound import RadiatingSurface, plate_surface, rayleigh_pressure
+from ._spl import predicted_spl_slope
+from ._system import (CONTACT_NAMES, THESIS_HERTZ_N_M15, THESIS_PLATE, THESIS_STRIKER_STIFFNESS_N_M,
+                      HertzContact, KelvinVoigtContact, ModalSystem, RigidContact, contact_from_name,
+                      plate_system, rayleigh_zeta)
+from ._types import ContactLog, EpisodeLog, ModalResult, ModalState
+
+__all__ = [
+    "CONTACT_NAMES",
+    "THESIS_HERTZ_N_M15",
+    "THESIS_PLATE",
+    "THESIS_STRIKER_STIFFNESS_N_M",
+    "ContactLog",
+    "EpisodeLog",
+    "HertzContact",
+    "KelvinVoigtContact",
+    "ModalChannels",
+    "ModalResult",
+    "ModalState",
+    "ModalSystem",
+    "RadiatingSurface",
+    "RigidContact",
+    "contact_from_name",
+    "modal_channels",
+    "plate_surface",
+    "plate_system",
+    "predicted_spl_slope",
+    "rayleigh_pressure",
+    "rayleigh_zeta",
+    "simulate_modal",
+]
