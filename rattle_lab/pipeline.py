@@ -73,6 +73,7 @@ import numpy as np
 
 from ._atomic import atomic_path
 from ._progress import progress
+from ._resources import find_resource
 from ._version import __version__
 from .exceptions import DataError, OutputError, ParameterError
 
@@ -253,6 +254,8 @@ def load_pipeline_file(path: str | os.PathLike[str]) -> Pipeline:
     ParameterError
         If the file cannot be read or is invalid.
     """
+    if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
+        path = find_resource("pipelines", str(path)) or path
     try:
         doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
@@ -588,6 +591,9 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
     """
     say = log or (lambda line: None)
     items = [str(i) for i in inputs]
+    # a scene shipped with rattle_lab may be named instead of given as a file
+    items = [i if i == "default" or Path(i).exists() else str(find_resource("scenes", i) or i)
+             for i in items]
     if not items:
         raise ParameterError("`inputs` must name at least one record file or scene")
     out = Path(out_dir)

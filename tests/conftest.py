@@ -16,13 +16,43 @@ Treat the files as read-only: they are shared by every test in the session.
 
 from __future__ import annotations
 
+import shutil
+import sys
 from pathlib import Path
 
 import pytest
 
 from rattle_lab.rig import write_synthetic
 
-SCENES = Path(__file__).resolve().parents[1] / "synthetic"
+CHECKOUT = Path(__file__).resolve().parents[1]
+SCENES = CHECKOUT / "synthetic"
+
+
+def find_entry_point(name: str = "rattle-lab") -> Path:
+    """The installed console script ``name``, as a user would run it.
+
+    Looked for next to the running interpreter (the ``bin/`` or ``Scripts/`` folder of the
+    venv that runs the tests), then in this checkout's ``.venv``, then on ``PATH``.  If it is
+    nowhere, the bare name comes back and the tests that run it fail saying so.
+    """
+    here = Path(sys.executable).parent  # not resolved: a venv's python is a symlink
+    venv = CHECKOUT / ".venv"
+    for candidate in (here / name, here / f"{name}.exe", venv / "bin" / name,
+                      venv / "Scripts" / f"{name}.exe"):
+        if candidate.is_file():
+            return candidate
+    found = shutil.which(name)
+    return Path(found) if found else Path(name)
+
+
+RATTLE_LAB = find_entry_point()
+
+
+@pytest.fixture(scope="session")
+def rattle_lab_exe() -> Path:
+    """Path of the installed ``rattle-lab`` entry point (see :func:`find_entry_point`)."""
+    assert RATTLE_LAB.is_file(), "the rattle-lab entry point is not installed (pip install -e .)"
+    return RATTLE_LAB
 
 
 @pytest.fixture(scope="session")

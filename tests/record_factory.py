@@ -14,13 +14,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from conftest import RATTLE_LAB  # the one entry-point finder
 
 from rattle_lab.records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable,
                                 Truth, write_record)
 
 FS_HZ = 51200.0
 N_SAMPLES = 4096
-RATTLE_LAB = Path(sys.executable).with_name("rattle-lab")
 
 
 def plate_rig() -> Rig:

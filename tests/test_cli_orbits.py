@@ -13,9 +13,7 @@ import pytest
 from rattle_lab.analysis.orbits import one_over_n_orbits, saddle_node_forcing
 from rattle_lab.sdf import SDFParams
 
-EXE = Path(sys.executable).parent / "rattle-lab"
-if not EXE.exists():  # pragma: no cover - e.g. a non-venv interpreter
-    EXE = Path(shutil.which("rattle-lab") or "rattle-lab")
+from conftest import RATTLE_LAB as EXE
 
 
 def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:

@@ -12,8 +12,9 @@ import pytest
 
 from rattle_lab.plate import ritz_modes
 
-_NEXT_TO_PYTHON = Path(sys.executable).with_name("rattle-lab")
-EXE = str(_NEXT_TO_PYTHON) if _NEXT_TO_PYTHON.exists() else shutil.which("rattle-lab")
+from conftest import RATTLE_LAB
+
+EXE = str(RATTLE_LAB) if RATTLE_LAB.is_file() else None
 
 THESIS_PLATE = ["--a", "0.254", "--b", "0.2286", "--h", "0.001", "--E", "7e10", "--nu", "0.34", "--rho", "2710"]
 

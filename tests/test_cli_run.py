@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import RATTLE_LAB
 from record_factory import run_cli_on_terminal
 
 from rattle_lab import __version__
@@ -19,10 +20,8 @@ from rattle_lab.sdf import SDFParams, SDFState, simulate
 
 
 def _exe() -> str:
-    here = Path(sys.executable).parent / "rattle-lab"
-    found = str(here) if here.exists() else shutil.which("rattle-lab")
-    assert found, "the rattle-lab entry point must be installed (pip install -e .)"
-    return found
+    assert RATTLE_LAB.is_file(), "the rattle-lab entry point must be installed (pip install -e .)"
+    return str(RATTLE_LAB)
 
 
 def run(*args: str, check_rc: int | None = 0) -> subprocess.CompletedProcess[str]:

@@ -17,9 +17,7 @@ import pytest
 from rattle_lab.analysis import one_over_n_orbits
 from rattle_lab.sdf import SDFParams
 
-EXE = Path(sys.executable).with_name("rattle-lab")
-if not EXE.exists():  # pragma: no cover - the venv of the brief
-    EXE = Path("/work/main/.venv/bin/rattle-lab")
+from conftest import RATTLE_LAB as EXE
 
 
 def _run(*args: str) -> subprocess.CompletedProcess[str]:

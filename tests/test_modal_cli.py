@@ -12,8 +12,9 @@ import pytest
 
 from rattle_lab.plate import ritz_modes
 
-_NEXT_TO_PYTHON = Path(sys.executable).with_name("rattle-lab")
-EXE = str(_NEXT_TO_PYTHON) if _NEXT_TO_PYTHON.exists() else shutil.which("rattle-lab")
+from conftest import RATTLE_LAB
+
+EXE = str(RATTLE_LAB) if RATTLE_LAB.is_file() else None
 
 
 def run(*args: str) -> subprocess.CompletedProcess[str]:

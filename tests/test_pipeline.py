@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 import pypdf
+from conftest import RATTLE_LAB
 
 import rattle_lab.pipeline as pipeline_module
 from rattle_lab.exceptions import ParameterError
@@ -216,7 +217,7 @@ def cluster(pinned_sources: Path) -> Any:
 def _pinned_cli(pinned: Path, *args: str) -> subprocess.CompletedProcess[str]:
     env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
     env["PYTHONPATH"] = str(pinned)
-    return subprocess.run([str(Path(sys.executable).with_name("rattle-lab")), *args],
+    return subprocess.run([str(RATTLE_LAB), *args],
                           capture_output=True, text=True, env=env, timeout=300, cwd=pinned)
 
 

@@ -26,7 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     parser.add_argument("-o", "--output", required=True, metavar="STORE",
                         help="the store (.h5): created, or appended to")
     parser.add_argument("--mapping", metavar="FILE.toml",
-                        help="TOML mapping for foreign layouts (applied to every non-native FILE)")
+                        help="TOML mapping for foreign layouts, a file or the name of a shipped "
+                             "mapping (see data_schema/mappings/); applied to every non-native FILE")
     parser.add_argument("--allow-flagged", action="store_true",
                         help="ingest data with NaN, Inf, clipping, dropouts, rate mismatch, "
                              "non-monotonic timestamps or empty channels, flagged, instead of "

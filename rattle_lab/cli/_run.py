@@ -14,9 +14,11 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         description="Run the stages a pipeline TOML asks for, lazily: a stage runs only if a "
                     "requested output needs it, and a stage whose inputs and parameters are "
                     "unchanged is not rerun (content hashes are kept in the store under "
-                    "/pipeline_cache). INPUT is a record file, or a scene (.toml, or 'default') "
-                    "which is simulated first.")
-    parser.add_argument("pipeline", metavar="PIPELINE", help="pipeline TOML (see pipelines/)")
+                    "/pipeline_cache). INPUT is a record file, or a scene (.toml, 'default' or "
+                    "the name of a shipped scene) which is simulated first.")
+    parser.add_argument("pipeline", metavar="PIPELINE",
+                        help="pipeline TOML file, or the name of a shipped pipeline "
+                             "('full_campaign', ...; see pipelines/)")
     parser.add_argument("inputs", nargs="+", metavar="INPUT", help="record files or scenes")
     parser.add_argument("--store", metavar="STORE.h5",
                         help="the store (default: OUT/<pipeline name>.h5)")

@@ -15,7 +15,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         description="Run the exact SDF simulator through a scene's protocol and write a "
                     "synthetic rattle record with its ground truth (/truth). SCENE is a TOML "
                     "file (see synthetic/) or 'default' for the embedded demo scene.")
-    parser.add_argument("scene", metavar="SCENE", help="scene TOML file, or 'default'")
+    parser.add_argument("scene", metavar="SCENE",
+                        help="scene TOML file, or the name of a shipped scene "
+                             "('default', 'thesis_cfcf_1p3mm', ...; see synthetic/)")
     parser.add_argument("-o", "--output", required=True, metavar="RAW.h5", help="record to write")
     parser.add_argument("--seed", type=int, help="override the scene's seed")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")

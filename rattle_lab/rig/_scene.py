@@ -16,6 +16,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
+from .._resources import find_resource
 from ..exceptions import ParameterError
 
 __all__ = ["SceneError", "Scene", "PlateSpec", "ModelSpec", "AcousticSpec", "SensorSpec",
@@ -467,6 +468,8 @@ def load_scene(scene: str | Path) -> Scene:
         source = "default"
     else:
         path = Path(scene)
+        if not path.exists():  # a scene shipped with rattle_lab, by name
+            path = find_resource("scenes", str(scene)) or path
         source = str(path)
         try:
             text = path.read_text("utf-8")

@@ -58,6 +58,7 @@ from typing import Any, Protocol
 import h5py
 import numpy as np
 
+from ..._resources import find_resource
 from ...exceptions import FileFormatError
 from .._convert import (CHANNEL_FIELDS, RIG_FIELDS, ROOT_FIELDS, RUN_FIELDS, SCHEMA_NAME,
                         SCHEMA_VERSION)
@@ -119,6 +120,8 @@ def load_mapping(source: str | Path | Mapping[str, Any]) -> MappingSpec:
         digest = hashlib.sha256(repr(sorted(data.items())).encode()).hexdigest()
     else:
         path = Path(source)
+        if not path.exists():  # a mapping shipped with rattle_lab, by name
+            path = find_resource("mappings", str(source)) or path
         label = str(path)
         try:
             raw = path.read_bytes()
