@@ -4,8 +4,10 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-test
 STAMP_RUN := $(VENV)/.installed
+STAMP_DEV := $(VENV)/.installed-dev
+STAMP_DOCS := $(VENV)/.installed-docs
 
-.PHONY: demo test bench install clean
+.PHONY: demo test lint docs bench install clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -19,19 +21,36 @@ $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@ $(STAMP_RUN)
 
+$(STAMP_DEV): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[test,dev]"
+	touch $@ $(STAMP) $(STAMP_RUN)
+
+$(STAMP_DOCS): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $@
+
 install: $(STAMP_RUN)
 
 ## make demo: simulate the embedded default scene, then ingest, fit and report
 demo: $(STAMP_RUN)
 	$(BIN)/rattle-lab demo --out demo_out
 
-## make test: the whole test suite
+## make test: the whole test suite and every docstring example (doctests)
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
+
+## make lint: ruff (style, bugs) and mypy (types of the package)
+lint: $(STAMP_DEV)
+	$(BIN)/ruff check .
+	$(BIN)/mypy
+
+## make docs: the API reference (Sphinx, warnings are errors) in docs/_build/html
+docs: $(STAMP_DOCS)
+	$(BIN)/python -m sphinx -W --keep-going -b html -q docs docs/_build/html
 
 ## make bench: every benchmark table (not part of CI)
 bench: $(STAMP)
 	for b in benchmarks/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
 
 clean:
-	rm -rf $(VENV) build *.egg-info demo_out .pytest_cache
+	rm -rf $(VENV) build *.egg-info demo_out .pytest_cache .mypy_cache .ruff_cache docs/_build

@@ -94,7 +94,7 @@ def main() -> None:
             c = min(len(u), m)
             err = float(np.max(np.abs(u[:c] - ref[:c]) / np.abs(ref[:c]))) if c else float("nan")
             flag = "" if len(u) == m else f" ({len(u)} found)"
-            print(f"{n:>3}  {'DOP853 rtol=%g' % rtol:>16}  {m:>8}  {err:16.2e}  {1e3 * dt / max(len(u), 1):10.3f}  "
+            print(f"{n:>3}  {f'DOP853 rtol={rtol:g}':>16}  {m:>8}  {err:16.2e}  {1e3 * dt / max(len(u), 1):10.3f}  "
                   f"{dt:8.2f}{flag}")
 
 

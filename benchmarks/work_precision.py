@@ -334,7 +334,8 @@ def report(rows: list[Row], windows: dict[str, Window], info: dict[str, Any]) ->
               f"e={case.e:g} x0={case.x0:.4g} v0={case.v0:.4g} theta0={case.theta0:.4g}: compared "
               f"{w.n_cmp}/{w.n_total} impacts, t < {w.t_cut:.4g}; |ref40 - ref30| = {w.self_check:.1e}")  # fmt: skip
     print()
-    head = f"{'case':>4} {'method':<11} {'setting':<11} {'time_s':>9} {'err_t':>9} {'err_v':>9} {'missed':>6} {'spur':>5}  note"
+    head = (f"{'case':>4} {'method':<11} {'setting':<11} {'time_s':>9} {'err_t':>9} {'err_v':>9} "
+            f"{'missed':>6} {'spur':>5}  note")
     print(head)
     print("-" * len(head))
     last = None
@@ -360,7 +361,8 @@ def _targets(rows: list[Row]) -> None:
     worst = max(max(r.err_t, r.err_v) if math.isfinite(r.err_t) else math.inf for r in ex.values())
     clean = all(r.missed == 0 and r.spurious == 0 for r in ex.values())
     ok = worst <= 1e-12 and clean
-    print(f"{'PASS' if ok else 'FAIL'}: exact max impact error {worst:.2e} <= 1e-12, no missed/spurious impacts: {clean}")
+    print(f"{'PASS' if ok else 'FAIL'}: exact max impact error {worst:.2e} <= 1e-12, "
+          f"no missed/spurious impacts: {clean}")
 
     dop = {r.case: r for r in rows if r.method == "ivp-DOP853" and r.setting == "rtol=1e-12"}
     ratios = {c: dop[c].time_s / ex[c].time_s for c in ex if c in dop}
@@ -378,7 +380,8 @@ def _targets(rows: list[Row]) -> None:
         acc = max(rk[c].err_t, floor) / max(e_row.err_t, floor)  # nan (nothing matched) fails
         penal = rk[c].missed + rk[c].spurious
         ok &= speed > 1 and acc > 1e6
-        parts.append(f"{c}: {speed:.1f}x faster, {acc:.1e}x more accurate" + (f" (rk4 missed+spurious {penal})" if penal else ""))
+        parts.append(f"{c}: {speed:.1f}x faster, {acc:.1e}x more accurate"
+                     + (f" (rk4 missed+spurious {penal})" if penal else ""))
     print(f"{'PASS' if ok else 'FAIL'}: exact faster than rk4-thesis h=T/200 and > 1e6x more accurate (impact time): "
           + "; ".join(parts))  # fmt: skip
 

@@ -59,7 +59,7 @@ import shutil
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import datetime, UTC
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -226,7 +226,7 @@ def input_key(content_hash: str, mapping_sha256: str | None) -> str:
 
 
 def _now_iso() -> str:
-    return datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
+    return datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
 
 
 # --- the store ------------------------------------------------------------------------------
@@ -587,7 +587,7 @@ class _Input:
 def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[str], *,
            mapping: str | os.PathLike[str] | Mapping[str, Any] | MappingSpec | None = None,
            storage: Storage = "link", allow_flagged: bool = False, quiet: bool = True,
-           limits: QualityLimits = QualityLimits(),
+           limits: QualityLimits = QualityLimits(),  # noqa: B008 (frozen, immutable)
            n_chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
            on_warning: Callable[[Finding], None] | None = None) -> IngestReport:
     """Ingest record files into an HDF5 store (created, or appended to).
@@ -697,7 +697,7 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
             sizes.add(item.size)
             new.append(item)
         changed = False
-        columns = index.columns
+        columns: Mapping[str, Any] = index.columns
         if new:
             added, columns = _write_store(store, index, new, spec, key_of, storage=storage,
                                  allow_flagged=allow_flagged, limits=limits,
@@ -823,12 +823,12 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
 # --- reading the store ------------------------------------------------------------------------
 
 
-def _frame(columns: Mapping[str, np.ndarray]) -> pd.DataFrame:
+def _frame(columns: Mapping[str, Sequence[Any] | np.ndarray]) -> pd.DataFrame:
     import pandas as pd
 
     data = {}
     for name, kind in CATALOGUE_COLUMNS:
-        values = columns.get(name, [])
+        values: Sequence[Any] | np.ndarray = columns.get(name, [])
         if kind == "str":
             data[name] = pd.Series([str(v) for v in values], dtype=object)
         elif kind == "int":
@@ -870,7 +870,7 @@ def read_catalogue(store: str | os.PathLike[str],
     keys = ["input_key", "file", "campaign_id", "run_id", "protocol", "excitation_freq_hz",
             "nominal_level", "nominal_level_units", "run_start_iso"]
     rows = []
-    for values, group in frame.groupby(keys[:4], sort=False, dropna=False):
+    for _values, group in frame.groupby(keys[:4], sort=False, dropna=False):
         first = group.iloc[0]
         flags = dict.fromkeys(f for text in group["flags"] for f in text.split(",") if f)
         rows.append({**{k: first[k] for k in keys}, "n_channels": len(group),

@@ -59,6 +59,7 @@ def _speed_or_nan(omega: npt.ArrayLike, radicand: npt.ArrayLike) -> np.ndarray:
     ndarray
         The speed (broadcast shape), NaN where ``radicand`` is negative or NaN.
     """
+    radicand = np.asarray(radicand)
     with np.errstate(invalid="ignore"):
         return np.where(radicand >= 0, omega * np.sqrt(np.where(radicand >= 0, radicand, np.nan)),
                         np.nan)

@@ -33,7 +33,7 @@ def check_figure_path(path: str | Path) -> Path:
     return p
 
 
-def save_figure(fig: "Figure", path: str | Path) -> Path:
+def save_figure(fig: Figure, path: str | Path) -> Path:
     """Write ``fig`` atomically to ``path`` (format from the suffix)."""
     p = check_figure_path(path)
     with atomic_path(p) as tmp:
@@ -42,7 +42,7 @@ def save_figure(fig: "Figure", path: str | Path) -> Path:
     return p
 
 
-def plot_time_history(res: "SimResult", path: str | Path) -> Path:
+def plot_time_history(res: SimResult, path: str | Path) -> Path:
     """Time histories (x, v, a with forced/transient parts) and the phase portrait.
 
     ``res`` must hold dense samples with fields x, v, a, forced and excitation.

@@ -1143,7 +1143,8 @@ class SDFScaling:
         """
         if (accel_ms2 is None) == (pressure_pa is None):
             raise ParameterError(
-                f"give exactly one of `accel_ms2` and `pressure_pa`, was accel_ms2={accel_ms2!r}, pressure_pa={pressure_pa!r}"
+                f"give exactly one of `accel_ms2` and `pressure_pa`, was accel_ms2={accel_ms2!r}, "
+                f"pressure_pa={pressure_pa!r}"
             )
         if accel_ms2 is not None:
             F = F_from_accel(accel_ms2, self.participation, self.omega_s_rad_s, self.gap_m)

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from scipy import signal
@@ -238,7 +238,7 @@ def ramp_threshold(run_id: str, base_accel_ms2: object, fs_hz: float, freq_hz: f
     amp = fundamental_amplitude(base_accel_ms2, fs_hz, freq_hz, lowpass_hz=lowpass_hz)
     cutoff = freq_hz / 20.0 if lowpass_hz is None else lowpass_hz
     start, end, duration, rms = ramp_line(amp, fs_hz, edge_s=1.0 / cutoff)
-    ramp = dict(ramp_start_ms2=start, ramp_end_ms2=end, ramp_duration_s=duration,
+    ramp: dict[str, Any] = dict(ramp_start_ms2=start, ramp_end_ms2=end, ramp_duration_s=duration,
                 ramp_rms_ms2=rms)
     cycles_from_edge = ((t_thr - start_time_s) if direction == "up"
                         else (start_time_s + duration - t_thr)) * freq_hz

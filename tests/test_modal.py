@@ -36,7 +36,8 @@ def _ss_system(n_modes: int, xs: float, ys: float, *, zeta: float = 0.0, pressur
     omega = np.array([c[0] for c in cands])
     W = np.array([math.sin(m * math.pi * xs / a) * math.sin(n * math.pi * ys / b) for _, m, n in cands])
     L = np.array([a * b / (m * n * math.pi**2) * (1 - (-1) ** m) * (1 - (-1) ** n) for _, m, n in cands])
-    return ModalSystem(omega_rad_s=omega, zeta=np.full(n_modes, zeta), modal_mass_kg=np.full(n_modes, rho * h * a * b / 4),
+    return ModalSystem(omega_rad_s=omega, zeta=np.full(n_modes, zeta),
+                       modal_mass_kg=np.full(n_modes, rho * h * a * b / 4),
                        load_m2=L, shape_at_striker=W, gap_m=gap_m, pressure_pa=pressure_pa, freq_hz=50.0)
 
 

@@ -134,7 +134,8 @@ class TestSDFScaling:
 
     def test_errors(self):
         s = self.make()
-        with pytest.raises(ParameterError, match=r"give exactly one of `accel_ms2` and `pressure_pa`, was accel_ms2=None"):
+        with pytest.raises(ParameterError,
+                           match=r"give exactly one of `accel_ms2` and `pressure_pa`, was accel_ms2=None"):
             s.to_nondimensional(freq_hz=100.0)
         with pytest.raises(ParameterError, match=r"give exactly one of .* accel_ms2=1.0, pressure_pa=2.0"):
             s.to_nondimensional(freq_hz=100.0, accel_ms2=1.0, pressure_pa=2.0)
@@ -184,8 +185,10 @@ class TestErrors:
             (lambda: sc.v_im_from_velocity(float("nan"), 660.0, 1e-3), r"`velocity_ms` must be finite, was nan"),
             (lambda: sc.inv_F_from_gap(1e-3, 660.0, 0.0), r"`F_es_ms2` must be > 0, was 0.0"),
             (lambda: sc.gap_m_from_inv_F(0.0, 660.0, 130.0), r"`inv_F` must be > 0, was 0.0"),
-            (lambda: sc.v_im_over_F_from_velocity(float("nan"), 660.0, 130.0), r"`velocity_ms` must be finite, was nan"),
-            (lambda: sc.velocity_ms_from_v_im_over_F(float("nan"), 660.0, 130.0), r"`v_im_over_F` must be finite, was nan"),
+            (lambda: sc.v_im_over_F_from_velocity(float("nan"), 660.0, 130.0),
+             r"`velocity_ms` must be finite, was nan"),
+            (lambda: sc.velocity_ms_from_v_im_over_F(float("nan"), 660.0, 130.0),
+             r"`v_im_over_F` must be finite, was nan"),
         ],
     )
     def test_messages_name_argument_and_value(self, call, match):

@@ -193,7 +193,7 @@ def find_periodic_orbit(params: SDFParams, phase: float, v_im: float, m: int, n:
     scale_inv = np.diag([1.0 / w, 1.0])
     theta, u = float(phase), float(v_im)
     residual = math.inf
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007 (``it`` is read after the loop)
         th, uu = theta, u
         J = np.eye(2)
         for _ in range(m):

@@ -164,6 +164,7 @@ def synthetic_campaign(*, fs_hz: float = 12800.0, duration_s: float = 1.0,
     from ..analysis import saddle_node_forcing
     from ..linear import threshold_accel_ms2
     from ..records import Channel, Record, Rig, Run
+    from ..records._model import as_source
 
     rng = np.random.default_rng(seed)
     n = int(round(duration_s * fs_hz))
@@ -174,16 +175,16 @@ def synthetic_campaign(*, fs_hz: float = 12800.0, duration_s: float = 1.0,
     up_a = np.asarray(threshold_accel_ms2(up_f, gap_m, f_s_hz, zeta, participation), dtype=float)
     F_sn, _ = saddle_node_forcing(1, down_f / f_s_hz, zeta, e)
     down_a = gap_m * (2 * np.pi * f_s_hz) ** 2 * np.asarray(F_sn) / participation
-    runs = []
+    runs: list[Run] = []
     impacts: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
-    def chans(sig: dict[str, np.ndarray], skip_plate: bool = False) -> list[Any]:
-        common = {"sample_rate_hz": fs_hz, "start_time_s": 0.0}
-        out = [Channel("base", "base_acceleration", "m/s^2", sig["base_acc"], **common),
-               Channel("mic", "sound_pressure", "Pa", sig["pressure"], **common)]
+    def chans(sig: dict[str, np.ndarray], skip_plate: bool = False) -> Any:
+        common: dict[str, Any] = {"sample_rate_hz": fs_hz, "start_time_s": 0.0}
+        out = [Channel("base", "base_acceleration", "m/s^2", as_source(sig["base_acc"]), **common),
+               Channel("mic", "sound_pressure", "Pa", as_source(sig["pressure"]), **common)]
         if not skip_plate:
-            out += [Channel("velocity", "plate_velocity", "m/s", sig["velocity"], **common),
-                    Channel("plate", "plate_acceleration", "m/s^2", sig["plate_acc"], **common)]
+            out += [Channel("velocity", "plate_velocity", "m/s", as_source(sig["velocity"]), **common),
+                    Channel("plate", "plate_acceleration", "m/s^2", as_source(sig["plate_acc"]), **common)]
         return out
 
     for direction, freqs, thrs in (("up", up_f, up_a), ("down", down_f, down_a)):
@@ -198,7 +199,8 @@ def synthetic_campaign(*, fs_hz: float = 12800.0, duration_s: float = 1.0,
                                     rng=rng)
             run_id = f"ramp_{direction}_{f:.1f}".replace(".", "p")
             impacts[run_id] = (ti, vin)
-            runs.append(Run(run_id, f"amplitude_ramp_{direction}", chans(sig),
+            runs.append(Run(run_id, "amplitude_ramp_up" if direction == "up" else "amplitude_ramp_down",
+                            chans(sig),
                             excitation_freq_hz=float(f),
                             nominal_level=float(amp[0]), level_end=float(amp[-1]),
                             nominal_level_units="m/s^2", start_time_iso="2026-01-01T00:00:00Z"))
@@ -210,12 +212,13 @@ def synthetic_campaign(*, fs_hz: float = 12800.0, duration_s: float = 1.0,
         runs.append(Run("dwell_quiet", "sine_dwell", chans(sig), excitation_freq_hz=90.0,
                         nominal_level=0.5, nominal_level_units="m/s^2", start_time_iso="2026-01-01T00:00:00Z"))
         runs.append(Run("base_only", "sine_dwell", chans(sig, skip_plate=True),
-                        excitation_freq_hz=90.0, nominal_level=0.5, nominal_level_units="m/s^2", start_time_iso="2026-01-01T00:00:00Z"))
+                        excitation_freq_hz=90.0, nominal_level=0.5, nominal_level_units="m/s^2",
+                        start_time_iso="2026-01-01T00:00:00Z"))
     rig = Rig(apparatus="plate_striker", plate_length_m=0.254, plate_width_m=0.2286,
               plate_thickness_m=0.00096, plate_material="aluminium", edge_conditions="CFCF",
               striker_x_m=0.127, striker_y_m=0.1143, gap_m=gap_m,
               mic_distance_m=ac.delay_s * 343.0)
-    record = Record("synthetic_ramps", "measured", rig, runs,
+    record = Record("synthetic_ramps", "measured", rig, tuple(runs),
                     description="hand-built ramp campaign (rattle_lab.detect._synthetic)")
     truth = CampaignTruth(gap_m, f_s_hz, zeta, e, participation, up_f, up_a, down_f, down_a,
                           impacts, ac)

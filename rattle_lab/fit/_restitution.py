@@ -32,7 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import lmfit
 import numpy as np
@@ -362,7 +362,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
     acc = np.array([t.accel_ms2 for t in points])
     sigma = np.array([threshold_sigma_ms2(r, t.ramp_rms_ms2, level_hold_periods)
                       for r, t in zip(ramps, points)])
-    common = dict(gap_m=gap_m, f_s_hz=f_s_hz, participation=participation, n_phases=n_phases,
+    common: dict[str, Any] = dict(gap_m=gap_m, f_s_hz=f_s_hz, participation=participation, n_phases=n_phases,
                   n_confirm=n_confirm, max_gap_cycles=max_gap_cycles, edge_cycles=edge_cycles,
                   level_hold_periods=level_hold_periods)
 

@@ -320,8 +320,8 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
     n_confirm = int(fit.get("n_confirm", FIT_KEYS["n_confirm"]))
     hold = int(fit.get("level_hold_periods", FIT_KEYS["level_hold_periods"]))
     p = grazing.params
-    modal = dict(gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value,
-                 participation=p["participation"].value)
+    modal: dict[str, Any] = dict(gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value,
+                                 participation=p["participation"].value)
     fits: dict[str, Any] = {}
     missing: dict[str, str] = {}
     zeta, zeta_se, zeta_note = p["zeta"].value, p["zeta"].stderr, ""

@@ -96,7 +96,7 @@ def modal_channels(system: ModalSystem, contact: Contact | None, t_s: npt.ArrayL
     plate = system.plate
     res = simulate_modal(system, contact, duration_s=float(t[-1] - t0), state=state, dense=True)
     xs, ys = (system.striker_xi * plate.a_m, system.striker_eta * plate.b_m) if sensor_xy_m is None else sensor_xy_m
-    W = np.asarray(system.modes.evaluate(xs / plate.a_m, ys / plate.b_m), dtype=float)  # type: ignore[attr-defined]
+    W = np.asarray(system.modes.evaluate(xs / plate.a_m, ys / plate.b_m), dtype=float)  # type: ignore[attr-defined, type-var]
     p, v = res.modal_state(t)
     sq = np.sqrt(system.modal_mass_kg)
     disp = W @ (p / sq[:, None])

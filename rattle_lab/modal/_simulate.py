@@ -103,7 +103,8 @@ class _Engine:
             self.segments.append((t0, t1, ev))
 
     # ------------------------------------------------------------------ run
-    def run(self, t: float, p: np.ndarray, v: np.ndarray, t_end: float, max_events: int) -> tuple[float, np.ndarray, np.ndarray, int]:
+    def run(self, t: float, p: np.ndarray, v: np.ndarray, t_end: float,
+            max_events: int) -> tuple[float, np.ndarray, np.ndarray, int]:
         mode = FREE
         on_stop = False
         n_events = 0
@@ -238,7 +239,6 @@ class _Engine:
     # ------------------------------------------------------------------ rigid contact: sticking
     def _stick_step(self, t: float, p: np.ndarray, v: np.ndarray, th: float, win: float, c_start: Any) -> tuple:
         T, st = self.T, self.stick
-        n = self.sys.n_modes
         z0 = np.concatenate([_mv(T.T, p - self.p0), _mv(T.T, v)])
         gamma, Zt = st.start(z0, th)
         a, lam, c0 = st.functional(gamma, Zt, -self.w_lam, -self.c_lam, -self.f_lam * np.exp(1j * th))

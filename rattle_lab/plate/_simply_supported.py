@@ -111,6 +111,6 @@ def simply_supported_modes(aspect_ratio: float, n_modes: int = 6) -> tuple[Plate
     r = _check_aspect_ratio(aspect_ratio)
     k = _check_count("n_modes", n_modes)
     # The k lowest modes have m <= k and n <= k.
-    cands = sorted(((math.pi**2 * (m**2 + n**2 / r**2), m, n)
-                    for m in range(1, k + 1) for n in range(1, k + 1)))
+    cands = sorted((math.pi**2 * (m**2 + n**2 / r**2), m, n)
+                    for m in range(1, k + 1) for n in range(1, k + 1))
     return tuple(simply_supported_mode(m, n, r) for _, m, n in cands[:k])

@@ -89,8 +89,9 @@ def _truth_from_tree(node: Mapping[str, Any], sources: Mapping[str, ArraySource]
         impacts[run_id] = ImpactTable(*(_read_all(sources[f"{base}/{k}"])
                                         for k in ("t_s", "v_in_m_s", "v_out_m_s")))
     th_node = node["members"]["thresholds"]
-    thresholds = ThresholdTable(*(_read_all(sources[f"/truth/thresholds/{k}"])
-                                  for k in ("freq_hz", "onset_level", "disappearance_level")),
+    freq, onset, disappearance = (_read_all(sources[f"/truth/thresholds/{k}"])
+                                  for k in ("freq_hz", "onset_level", "disappearance_level"))
+    thresholds = ThresholdTable(freq, onset, disappearance,
                                 level_units=th_node["attrs"]["level_units"])
     return Truth(**known, impacts=impacts, thresholds=thresholds, extra=extra)
 

@@ -135,8 +135,8 @@ def build_pages(data: ReportData, *, model: bool = True, quiet: bool = True
         try:
             figs = (_pages.model_pages(data, quiet=quiet) if build is _pages.model_pages
                     else build(data))
-        except _pages.Missing as why:
-            data.missing[name] = " ".join(str(why).split())
+        except _pages.Missing as exc:
+            data.missing[name] = " ".join(str(exc).split())
             continue
         sections.append(name)
         pages.extend((name, fig) for fig in figs)

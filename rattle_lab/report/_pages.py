@@ -29,7 +29,7 @@ class Missing(Exception):
 def landscape_figure() -> Figure:
     """An A4 landscape figure, constrained layout, with the bottom 2.5 % kept for the footer."""
     fig = Figure(figsize=LANDSCAPE_IN, layout="constrained")
-    fig.get_layout_engine().set(rect=(0.0, 0.025, 1.0, 0.975))  # type: ignore[union-attr]
+    fig.get_layout_engine().set(rect=(0.0, 0.025, 1.0, 0.975))  # type: ignore[union-attr, call-arg]
     return fig
 
 
@@ -473,7 +473,7 @@ def pattern_page(data: ReportData) -> list[Figure]:
     if data.results is None:
         raise Missing(data.missing.get("results", "no results"))
     cat = data.catalogue
-    pts: list[tuple[float, float, int]] = []
+    pts: list[tuple[float, float, int, float]] = []
     units = set()
     for (key, run_id), r in sorted(data.results.runs.items()):
         if r.get("status") != "ok" or "t_s" not in r:
@@ -552,8 +552,8 @@ def waveform_page(data: ReportData, *, n_examples: int = 2, n_cycles: int = 5) -
         with open_stored_record(data.store, key) as record:
             run = record.run(run_id)
             by_q: dict[str, Any] = {}
-            for ch in run.channels:
-                by_q.setdefault(ch.quantity, ch)
+            for channel in run.channels:
+                by_q.setdefault(channel.quantity, channel)
             rows = (("plate_acceleration", "plate acceleration (m/s^2)"),
                     ("plate_velocity", "plate velocity (m/s)"),
                     ("sound_pressure", "sound pressure (Pa)"))

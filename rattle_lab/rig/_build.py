@@ -18,6 +18,7 @@ from ..exceptions import OutputError
 from ..plate import Plate
 from ..records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable, Truth,
                        scale_to_si, write_record)
+from ..records._model import as_source
 from . import _channels as ch
 from ._counter import StageCounter
 from ._motion import Modal, RunMotion, simulate_run, thresholds
@@ -139,7 +140,7 @@ def _store(sensor: SensorSpec, si: np.ndarray, noise_rng: np.random.Generator, f
     stored = si / scale
     if sensor.range is not None:
         stored = np.clip(stored, -sensor.range, sensor.range)   # the ADC saturates (ingest flags it)
-    return Channel(sensor.name, sensor.quantity, sensor.units, stored.astype(np.float32),
+    return Channel(sensor.name, sensor.quantity, sensor.units, as_source(stored.astype(np.float32)),
                    sample_rate_hz=fs_hz, start_time_s=0.0, sensitivity=sensor.sensitivity,
                    sensitivity_units=sensor.sensitivity_units,
                    sensor_id=sensor.name if with_id else None, sensor_model=sensor.model,
@@ -184,7 +185,7 @@ def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz:
             data = chan.data.read(0, chan.n_samples).copy()
             lo = data.size // 2
             data[lo:lo + ch.n_samples(art.dropout_s, fs_hz)] = 0.0
-            chan = dataclasses.replace(chan, data=data)
+            chan = dataclasses.replace(chan, data=as_source(data))
         out.append(chan)
     return out
 

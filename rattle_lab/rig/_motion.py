@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -162,16 +163,19 @@ def simulate_run(modal: Modal, run: RunSpec, *, piece_periods: int, settle_time_
     w_s = modal.omega_s_rad_s
     state, tau0 = initial_state(modal, pieces[0], settle_time_constants)
     sampled = sample_rate_hz is not None
-    n = round(run.duration_s * sample_rate_hz) if sampled else 0
-    t_samples = np.arange(n) / sample_rate_hz if sampled else np.empty(0)
+    n = round(run.duration_s * sample_rate_hz) if sample_rate_hz is not None else 0
+    t_samples = np.arange(n) / sample_rate_hz if sample_rate_hz is not None else np.empty(0)
     bounds = np.searchsorted(t_samples, [p.t0_s for p in pieces] + [run.duration_s], side="left")
-    fields = tuple(f for f, want in (("v", want_v), ("a", want_a)) if want)
+    fields: tuple[Any, ...] = tuple(f for f, want in (("v", want_v), ("a", want_a)) if want)
     theta = np.empty(n) if sampled else None
     level = np.empty(n) if sampled else None
     freq = np.empty(n) if sampled else None
     v_rel = np.empty(n) if want_v and sampled else None
     a_rel = np.empty(n) if want_a and sampled else None
-    imp_t, imp_v, imp_vo, imp_lvl = [], [], [], []
+    imp_t: list[Any] = []
+    imp_v: list[Any] = []
+    imp_vo: list[Any] = []
+    imp_lvl: list[Any] = []
     piece_impacts = np.zeros(len(pieces), dtype=np.int64)
     for k, piece in enumerate(pieces):
         params = SDFParams(F=modal.F(piece.level_m_s2), omega=piece.freq_hz / modal.f_s_hz,
@@ -193,11 +197,14 @@ def simulate_run(modal: Modal, run: RunSpec, *, piece_periods: int, settle_time_
             freq[lo:hi] = piece.freq_hz
             if dense_t is not None:
                 counter.add("motion_dense")
-                assert res.dense is not None
+                dense = res.dense
+                assert dense is not None
                 if v_rel is not None:
-                    v_rel[lo:hi] = res.dense.v * w_s * modal.gap_m
+                    assert dense.v is not None
+                    v_rel[lo:hi] = dense.v * w_s * modal.gap_m
                 if a_rel is not None:
-                    a_rel[lo:hi] = res.dense.a * w_s**2 * modal.gap_m
+                    assert dense.a is not None
+                    a_rel[lo:hi] = dense.a * w_s**2 * modal.gap_m
         m = len(res.impacts)
         piece_impacts[k] = m
         if m:

@@ -10,6 +10,7 @@ seed.  Every key is checked: an unknown key or a value of the wrong type raises
 from __future__ import annotations
 
 import math
+import os
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -450,7 +451,7 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
                  mic_distance_m=mic_distance_m, source=source)
 
 
-def load_scene(scene: str | Path) -> Scene:
+def load_scene(scene: str | os.PathLike[str]) -> Scene:
     """Read and validate a scene: a TOML file path, or ``"default"`` for the embedded scene.
 
     Raises

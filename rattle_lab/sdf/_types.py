@@ -73,7 +73,7 @@ class SDFParams:
         """Forcing period ``2 pi / omega`` (nondimensional time)."""
         return TWO_PI / self.omega
 
-    def replace(self, **changes: float) -> "SDFParams":
+    def replace(self, **changes: float) -> SDFParams:
         """Return a copy with some parameters changed (validated again)."""
         values = {"F": self.F, "omega": self.omega, "zeta": self.zeta, "e": self.e}
         values.update(changes)

@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 import re
 import tomllib
 from collections.abc import Mapping
@@ -106,7 +107,7 @@ class MappingSpec:
         return self.data.get("mapping", {}).get("format")
 
 
-def load_mapping(source: str | Path | Mapping[str, Any]) -> MappingSpec:
+def load_mapping(source: str | os.PathLike[str] | Mapping[str, Any]) -> MappingSpec:
     """Read and check a TOML mapping (a path) or take a mapping given as a dict.
 
     Raises
