@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 import subprocess
 import sys
+
+import pytest
 
 import rattle_lab
 
@@ -42,3 +46,103 @@ def test_unknown_attribute_raises():
         assert "no_such_thing" in str(exc)
     else:
         raise AssertionError("expected AttributeError")
+
+
+# The public names of every package, in the order ``__all__`` lists them.  Changing one is an
+# API decision: update this table in the same commit.
+PACKAGES: dict[str, list[str]] = {
+    "rattle_lab.analysis": [
+        "OneOverNOrbit", "BranchEvent", "PeriodicOrbit", "BifurcationSets", "BoundaryCurve",
+        "one_over_n_orbits", "impact_quadratic", "impact_velocities", "orbit_forcing",
+        "floquet_multipliers", "orbit_clearance", "grazing_forcing", "saddle_node_forcing",
+        "branch_events", "impact_map", "find_periodic_orbit", "periodic_orbit_from_impacts",
+        "bifurcation_sets", "plot_bifurcation_sets", "Regime", "SweepPoint", "Sweep",
+        "LyapunovResult", "AttractorMap", "DisturbanceMap", "classify_impacts", "sweep_values",
+        "sweep", "sweep_up_down", "plot_sweeps", "write_sweeps_csv", "lyapunov_exponent",
+        "lyapunov_from_result", "tangent_log_growth", "regime_map", "basin_map",
+        "disturbance_threshold", "disturbance_map", "plot_attractor_map", "plot_disturbance_map"
+    ],
+    "rattle_lab.cli": [
+        "COMMAND_MODULES", "build_parser", "main"
+    ],
+    "rattle_lab.detect": [
+        "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "SoundPeaks", "a_weight",
+        "a_weighting_db", "cross_correlation_delay", "detect_impacts", "impact_pattern",
+        "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
+        "sound_peaks", "spl_db", "trigger_onsets"
+    ],
+    "rattle_lab.explorer": [
+        "Explorer", "Histories", "compute_histories", "save_histories", "impacts_path",
+        "display_available", "HISTORY_COLUMNS", "IMPACT_COLUMNS", "DATA_SUFFIXES",
+        "DEFAULT_SAVE_PATH"
+    ],
+    "rattle_lab.fit": [
+        "DbLaw", "GrazingFit", "analyse_run", "fit_store", "json_ready", "load_pipeline",
+        "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
+        "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
+        "grazing_threshold_ms2", "restitution_from_ratios", "saddle_node_threshold_ms2",
+        "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold"
+    ],
+    "rattle_lab.modal": [
+        "CONTACT_NAMES", "THESIS_HERTZ_N_M15", "THESIS_PLATE", "THESIS_STRIKER_STIFFNESS_N_M",
+        "ContactLog", "EpisodeLog", "HertzContact", "KelvinVoigtContact", "ModalChannels",
+        "ModalResult", "ModalState", "ModalSystem", "RadiatingSurface", "RigidContact",
+        "contact_from_name", "modal_channels", "plate_surface", "plate_system",
+        "predicted_spl_slope", "rayleigh_pressure", "rayleigh_zeta", "simulate_modal"
+    ],
+    "rattle_lab.plate": [
+        "Plate", "PlateMode", "PlateModes", "TableMode", "EDGE_ORDER", "DEFAULT_N_TERMS",
+        "TABLE_ASPECT_RATIOS", "simply_supported_mode", "simply_supported_modes", "table_modes",
+        "ritz_modes"
+    ],
+    "rattle_lab.records": [
+        "read", "write_record", "detect_format", "load_schema", "validate_tree", "load_mapping",
+        "MappingSpec", "Record", "Rig", "Sensor", "Run", "Channel", "Truth", "ImpactTable",
+        "ThresholdTable", "Skipped", "Origin", "ArraySource", "ArrayData", "GeneratedData",
+        "Finding", "QualityLimits", "FLAGS", "FATAL_FLAGS", "SI_UNITS", "scale_to_si",
+        "MappingError", "DuplicateRunError", "StoreError", "DataQualityError", "NaNGapError",
+        "InfValueError", "ClippingError", "DropoutError", "SampleRateMismatchError",
+        "NonMonotonicTimestampsError", "EmptyChannelError", "NaNGapWarning", "InfValueWarning",
+        "ClippingWarning", "DropoutWarning", "SampleRateMismatchWarning",
+        "NonMonotonicTimestampsWarning", "EmptyChannelWarning", "UncalibratedWarning"
+    ],
+    "rattle_lab.report": [
+        "write_report", "build_pages", "ReportResult", "ReportData", "gather", "SECTIONS"
+    ],
+    "rattle_lab.rig": [
+        "load_scene", "parse_scene", "synthesize", "write_synthetic", "Scene", "SceneError",
+        "StageCounter", "Synthesis", "RunSummary", "Modal", "Piece", "RunMotion", "schedule",
+        "simulate_run", "thresholds", "resolve_modal"
+    ],
+    "rattle_lab.sdf": [
+        "SDFParams", "SDFState", "ImpactLog", "Crossings", "DenseSamples", "SimResult",
+        "simulate", "flow", "particular_coeffs", "particular_state", "homogeneous_transition"
+    ],
+}
+
+
+def _public_packages() -> list[str]:
+    """Every package under rattle_lab whose dotted name has no private (``_``) part."""
+    found = []
+    for info in pkgutil.walk_packages(rattle_lab.__path__, "rattle_lab."):
+        if info.ispkg and not any(part.startswith("_") for part in info.name.split(".")):
+            found.append(info.name)
+    return sorted(found)
+
+
+def test_every_public_package_is_pinned():
+    assert _public_packages() == sorted(PACKAGES)
+
+
+@pytest.mark.parametrize("name", sorted(PACKAGES))
+def test_package_all_is_pinned(name: str):
+    module = importlib.import_module(name)
+    assert module.__all__ == PACKAGES[name]
+
+
+@pytest.mark.parametrize("name", sorted(PACKAGES))
+def test_package_public_names_resolve_and_are_unique(name: str):
+    module = importlib.import_module(name)
+    assert len(set(module.__all__)) == len(module.__all__)
+    for attr in module.__all__:
+        assert hasattr(module, attr), f"{name}.{attr}"

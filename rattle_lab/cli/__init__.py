@@ -21,6 +21,8 @@ from collections.abc import Sequence
 from .._version import __version__
 from ..exceptions import RattleLabError
 
+__all__ = ["COMMAND_MODULES", "build_parser", "main"]
+
 #: Modules that register top-level commands, in the order ``--help`` lists them.
 COMMAND_MODULES: tuple[str, ...] = (
     "rattle_lab.cli._model",
