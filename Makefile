@@ -46,7 +46,7 @@ lint: $(STAMP_DEV)
 
 ## make docs: the API reference (Sphinx, warnings are errors) in docs/_build/html
 docs: $(STAMP_DOCS)
-	$(BIN)/python -m sphinx -W --keep-going -b html -q docs docs/_build/html
+	$(BIN)/python -m sphinx -W --keep-going -E -b html -q docs docs/_build/html
 
 ## make bench: every benchmark table (not part of CI)
 bench: $(STAMP)

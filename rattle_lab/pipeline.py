@@ -17,17 +17,17 @@ The ``[detect]`` and ``[fit]`` tables are those of ``rattle-lab fit --pipeline``
 
 Stages and what they call (the same library functions as the CLI commands):
 
-==========  ============================================  =====================
-stage       calls                                         depends on
-==========  ============================================  =====================
-simulate    :func:`rattle_lab.rig.write_synthetic`        (scene inputs only)
-ingest      :func:`rattle_lab.ingest.ingest`              simulate
-detect      :func:`rattle_lab.fit.analyse_run`, per run   ingest
+==========  =================================================  =====================
+stage       calls                                              depends on
+==========  =================================================  =====================
+simulate    :func:`rattle_lab.rig.write_synthetic`             (scene inputs only)
+ingest      :func:`rattle_lab.ingest.ingest`                   simulate
+detect      :func:`rattle_lab.fit.analyse_run`, per run        ingest
 thresholds  :func:`rattle_lab.thresholds.tabulate_thresholds`  detect
-fit         the fits of :func:`rattle_lab.fit.fit_store`,  thresholds, detect
+fit         the fits of :func:`rattle_lab.fit.fit_store`,      thresholds, detect
             :func:`rattle_lab.results.write_results`
-report      :func:`rattle_lab.report.write_report`        fit, ingest
-==========  ============================================  =====================
+report      :func:`rattle_lab.report.write_report`             fit, ingest
+==========  =================================================  =====================
 
 Each stage has a *key*: the SHA-256 of its parameters, the package version and
 the keys of the stages it depends on (the simulate key hashes the scene file's

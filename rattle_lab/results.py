@@ -70,7 +70,7 @@ class RunResult:
         Excitation frequency, Hz (NaN if not stated).
     channels_used : tuple of str
         Channel names used for detection.
-    impacts : ImpactLog or None
+    impacts : rattle_lab.detect.ImpactLog or None
         Detected impacts (possibly empty: a valid result).
     peaks : SoundPeaks or None
         Sound peaks after each impact (with a microphone).
@@ -138,8 +138,9 @@ class StoredResults:
     ----------
     summary, provenance : dict
         As written.
-    runs : dict of (input_key, run_id) to dict
-        Per-run attributes and arrays (keys as in the layout above).
+    runs : dict
+        Per-run attributes and arrays, keyed by ``(input_key, run_id)`` (keys as in the
+        layout above).
     thresholds : dict of str to ndarray
         ``freq_hz, up_ms2, down_ms2, hysteresis_ms2``.
     created_iso, rattle_lab_version : str

@@ -270,7 +270,7 @@ def periodic_orbit_from_impacts(params: SDFParams, impacts: ImpactLog, *, max_m:
     ----------
     params : SDFParams
         The parameters that were simulated.
-    impacts : ImpactLog
+    impacts : rattle_lab.sdf.ImpactLog
         Impacts of a run long enough to have settled (``result.impacts`` of
         :func:`rattle_lab.sdf.simulate`); at least ``2 max_m + 1`` of them, or
         ``3 m + 1`` for the period found.

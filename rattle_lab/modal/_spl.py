@@ -47,7 +47,7 @@ def predicted_spl_slope(system: ModalSystem, contact: Contact | None = None, *,
     Returns
     -------
     float
-        ``S`` = peak |p| over the first episode divided by its ``v_in``.
+        ``S`` = peak ``|p|`` over the first episode divided by its ``v_in``.
     """
     if system.plate is None:
         raise ParameterError("`system` must come from `plate_system` (mode shapes needed)")

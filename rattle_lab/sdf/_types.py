@@ -212,7 +212,7 @@ class SimResult:
         The parameters simulated.
     method : str
         ``"exact"``, ``"exact-python"`` or ``"rk4-thesis"``.
-    impacts : ImpactLog
+    impacts : rattle_lab.sdf.ImpactLog
         Every impact, in time order (chatter micro-impacts included, up to the
         accumulation point).
     accumulations : ndarray
