@@ -97,3 +97,16 @@ def test_the_wheel_ships_every_resource(tmp_path: Path) -> None:
     for kind, files in SHIPPED.items():
         for file_name in files:
             assert f"rattle_lab/data/{kind}/{file_name}" in names, (kind, file_name)
+
+
+def test_a_pipeline_takes_a_scene_by_name(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from rattle_lab import read_catalogue
+    from rattle_lab.pipeline import parse_pipeline, run_pipeline
+
+    monkeypatch.chdir(tmp_path)  # the scene name resolves from any folder
+    pipeline = parse_pipeline({"pipeline": {"name": "t", "outputs": ["store"]}}, "t.toml")
+    run = run_pipeline(pipeline, ["fem_ch5"], out_dir=tmp_path, quiet=True)
+    assert run.executed == ["simulate", "ingest"]
+    assert (tmp_path / "fem_ch5.h5").is_file()  # named after the scene file's stem
+    catalogue = read_catalogue(run.store)
+    assert set(catalogue["campaign_id"]) == {load_scene("fem_ch5").campaign_id}
