@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from record_factory import RATTLE_LAB, make_record, replace_channel, run_cli, write
 
 from rattle_lab.ingest import read_catalogue
@@ -66,6 +67,7 @@ def test_json_output_and_rerun_is_unchanged(tmp_path):
     assert store.stat().st_mtime_ns == stamp
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_copy_flag_and_a_moved_input(tmp_path):
     src = write(tmp_path)
     store = tmp_path / "store.h5"

@@ -52,6 +52,7 @@ def test_orbits_single_n_and_table() -> None:
     assert len(lines) == 2 + 4
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_bifsets_json_and_plot(tmp_path: Path) -> None:
     proc = run("bifsets", "--n", "1..2", "--omega", "1.0:1.4", "--F", "0:0.4", "--n-omega", "41",
                "--n-F", "21", "--n-v", "21", "--json")

@@ -96,6 +96,7 @@ def _demo_checks(text: str, out_dir: Path) -> None:
     assert abs(float(rows["f_s"][1]) - 96.0) < 0.1
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_demo_piped_prints_the_table_and_the_pdf_path_last(tmp_path):
     out = run("demo", "--out", str(tmp_path / "demo"))
     _demo_checks(out.stdout, tmp_path / "demo")
@@ -103,6 +104,7 @@ def test_demo_piped_prints_the_table_and_the_pdf_path_last(tmp_path):
     assert "%|" not in out.stderr  # no progress bars when not on a terminal
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_demo_on_a_terminal_shows_progress_bars(tmp_path):
     rc, text = run_cli_on_terminal("demo", "--out", str(tmp_path / "demo"))
     assert rc == 0, text[-2000:]

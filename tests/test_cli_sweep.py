@@ -41,6 +41,7 @@ def test_sweep_json_matches_closed_form() -> None:
         assert entry["mean_impact_velocity"] > 0
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_sweep_gap_csv_and_plot(tmp_path: Path) -> None:
     csv_path, png = tmp_path / "g.csv", tmp_path / "g.png"
     out = _run("sweep", "--param", "gap", "--start", "4", "--stop", "6", "--step", "1",

@@ -19,6 +19,7 @@ def run(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run([EXE, "model", "modal-impact", *args], capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_defaults_run_the_thesis_plate_json():
     proc = run("--cycles", "8", "--modes", "6", "--json")
     assert proc.returncode == 0, proc.stderr
@@ -51,6 +52,7 @@ def test_one_rigid_mode_gives_back_e():
     assert all(imp["e_mode1"] == pytest.approx(0.6, rel=1e-12) for imp in out["impacts"])
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_table_output_and_bad_input():
     proc = run("--cycles", "3", "--modes", "2", "--contact", "hertz")
     assert proc.returncode == 0 and proc.stderr == ""

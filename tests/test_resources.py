@@ -67,6 +67,7 @@ def test_an_existing_file_wins_over_a_name(tmp_path: Path, monkeypatch: pytest.M
         load_pipeline_file("full_campaign")
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_cli_simulates_a_scene_by_name_from_another_folder(tmp_path: Path) -> None:
     proc = subprocess.run([str(RATTLE_LAB), "simulate", "no_such_scene", "-o", "x.h5"],
                           capture_output=True, text=True, cwd=tmp_path, timeout=120)
