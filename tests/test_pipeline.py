@@ -71,6 +71,7 @@ def test_needed_stages_are_lazy() -> None:
                                                        "report"]
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_cache_and_exact_reruns(synthetic_campaign_record: Path, tmp_path: Path) -> None:
     rec = [synthetic_campaign_record]
     store = tmp_path / "s.h5"
@@ -109,6 +110,7 @@ def test_cache_and_exact_reruns(synthetic_campaign_record: Path, tmp_path: Path)
     assert rep2.executed == ["report"]
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_report_parameter_reruns_only_the_report_and_outside_fits_are_noticed(
         synthetic_campaign_record: Path, tmp_path: Path) -> None:
     rec, store = [synthetic_campaign_record], tmp_path / "s.h5"
@@ -127,6 +129,7 @@ def test_report_parameter_reruns_only_the_report_and_outside_fits_are_noticed(
     assert read_results(store).provenance["via"] == "rattle_lab.pipeline"
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_shipped_pipelines_run(synthetic_campaign_record: Path, tmp_path: Path) -> None:
     rec = [synthetic_campaign_record]
     thr = run_pipeline(load_pipeline_file(PIPELINES / "threshold_campaign.toml"), rec,
@@ -221,6 +224,7 @@ def _pinned_cli(pinned: Path, *args: str) -> subprocess.CompletedProcess[str]:
                           capture_output=True, text=True, env=env, timeout=300, cwd=pinned)
 
 
+@pytest.mark.slow  # > 8 s (measured under load)
 def test_dask_local_cluster_equals_serial(synthetic_campaign_record: Path, tmp_path: Path,
                                           cluster: Any, pinned_sources: Path) -> None:
     workers = set(cluster.run(code_fingerprint).values())
