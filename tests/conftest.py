@@ -45,14 +45,9 @@ def find_entry_point(name: str = "rattle-lab") -> Path:
     return Path(found) if found else Path(name)
 
 
+#: The installed ``rattle-lab`` entry point; CLI tests import it (``from conftest import
+#: RATTLE_LAB``) rather than look for it themselves.
 RATTLE_LAB = find_entry_point()
-
-
-@pytest.fixture(scope="session")
-def rattle_lab_exe() -> Path:
-    """Path of the installed ``rattle-lab`` entry point (see :func:`find_entry_point`)."""
-    assert RATTLE_LAB.is_file(), "the rattle-lab entry point is not installed (pip install -e .)"
-    return RATTLE_LAB
 
 
 @pytest.fixture(scope="session")
