@@ -60,23 +60,29 @@ from .lyapunov import LyapunovResult, lyapunov_exponent
 SweepParam = Literal["omega", "F", "e", "gap"]
 Direction = Literal["up", "down"]
 LyapunovMode = Literal["aperiodic", "all", "none"]
-RegimeKind = Literal["no-impact", "periodic", "aperiodic"]
+RegimeKind = Literal["no-impact", "periodic", "aperiodic", "unsettled"]
 
 SWEEP_PARAMS: tuple[SweepParam, ...] = ("omega", "F", "e", "gap")
 DIRECTIONS: tuple[Direction, ...] = ("up", "down")
 LYAPUNOV_MODES: tuple[LyapunovMode, ...] = ("aperiodic", "all", "none")
 #: Integer codes of the regime kinds in arrays (maps).
-KIND_CODES: dict[RegimeKind, int] = {"no-impact": 0, "periodic": 1, "aperiodic": 2}
-KIND_NAMES: tuple[RegimeKind, ...] = ("no-impact", "periodic", "aperiodic")
+KIND_CODES: dict[RegimeKind, int] = {"no-impact": 0, "periodic": 1, "aperiodic": 2,
+                                     "unsettled": 3}
+KIND_NAMES: tuple[RegimeKind, ...] = ("no-impact", "periodic", "aperiodic", "unsettled")
 
 #: Default relative tolerance of the period detection (see :func:`classify_impacts`).
 PERIOD_RTOL = 1e-4
+#: Extra forcing periods a periodic label that has not settled is run for before
+#: the motion is called "unsettled" (see :func:`classify_settled`).
+SETTLE_CYCLES = 1000
 
 __all__ = [
     "Regime",
     "SweepPoint",
     "Sweep",
     "classify_impacts",
+    "classify_settled",
+    "periodic_label_settled",
     "sweep_values",
     "sweep",
     "sweep_up_down",
@@ -95,8 +101,11 @@ class Regime:
 
     Attributes
     ----------
-    kind : {"no-impact", "periodic", "aperiodic"}
-        No impact in the window; ``m/n`` periodic; neither.
+    kind : {"no-impact", "periodic", "aperiodic", "unsettled"}
+        No impact in the window; ``m/n`` periodic; neither; or a periodic
+        match in the window that is a transient still converging (to a
+        shorter period, or away from the match) and did not settle when run
+        longer (:func:`classify_settled`): no period is claimed.
     m : int
         Impacts per period (0 unless periodic).
     n : int
@@ -109,10 +118,10 @@ class Regime:
 
     @property
     def label(self) -> str:
-        """``"no impact"``, ``"m/n"`` or ``"aperiodic"``."""
+        """``"no impact"``, ``"m/n"``, ``"aperiodic"`` or ``"unsettled"``."""
         if self.kind == "periodic":
             return f"{self.m}/{self.n}"
-        return "no impact" if self.kind == "no-impact" else "aperiodic"
+        return "no impact" if self.kind == "no-impact" else self.kind
 
     @property
     def code(self) -> int:
@@ -231,6 +240,153 @@ def classify_impacts(t: ArrayLike, v_in: ArrayLike, *, t_start: float, t_stop: f
     return Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n))
 
 
+def _repeat_residuals(t: np.ndarray, v: np.ndarray, m: int, n: int, period: float,
+                      vscale: float) -> np.ndarray:
+    """Largest relative mismatch of the ``m``-impact, ``n``-period repeat, per repeat.
+
+    Entry ``j`` is the maximum over impacts ``i`` of the ``j``-th group of ``m``
+    of ``max(|t_{i+m} - t_i - n T| / T, |v_{i+m} - v_i| / vscale)``.
+    """
+    if t.size <= m:
+        return np.empty(0)
+    d = np.maximum(np.abs(t[m:] - t[:-m] - n * period) / period,
+                   np.abs(v[m:] - v[:-m]) / vscale)
+    groups = d.size // m
+    return d[:groups * m].reshape(groups, m).max(axis=1)
+
+
+def _decays_to_zero(d: np.ndarray) -> bool:
+    """``d`` (a residual per repeat) decreases geometrically towards zero.
+
+    Three equally spaced entries ``d1 > d2 > d3`` of ``q + c r^j`` give its
+    limit exactly (Aitken): ``q = (d1 d3 - d2^2) / (d1 + d3 - 2 d2)``.  The
+    sequence is decaying to zero when that limit is below half the last value.
+    """
+    if d.size < 3:
+        return False
+    h = (d.size - 1) // 2
+    d1, d2, d3 = float(d[-1 - 2 * h]), float(d[-1 - h]), float(d[-1])
+    if not d1 > d2 > d3:
+        return False
+    den = d1 + d3 - 2.0 * d2
+    if den <= 0.0:  # decreasing but not convex: not a geometric decay
+        return False
+    return (d1 * d3 - d2 * d2) / den < 0.5 * d3
+
+
+def periodic_label_settled(t: ArrayLike, v_in: ArrayLike, *, m: int, n: int, omega: float,
+                           rtol: float = PERIOD_RTOL) -> bool:
+    """Whether an ``m/n`` match of the impacts ``(t, v_in)`` is a settled orbit.
+
+    The period detection (:func:`classify_impacts`) accepts a repeat within
+    ``rtol``; a transient can pass it with the wrong period.  Two cases are
+    refused here:
+
+    * a shorter period is being approached: for a proper divisor ``k`` of
+      ``gcd(m, n)`` the mismatch of the ``(m/k)/(n/k)`` repeat decays
+      geometrically towards zero across the window (for example a 1/3 orbit
+      whose multiplier is near -1 matches 2/6 long before it matches 1/3);
+    * the match is being left: its own mismatch grows more than fourfold
+      across the window and exceeds ``rtol / 1000`` (far above rounding).
+
+    Parameters
+    ----------
+    t, v_in : array_like
+        Impact times and incoming velocities in the window (sorted).
+    m, n : int
+        The matched impacts per period and forcing periods per period.
+    omega : float
+        Forcing frequency (nondimensional).
+    rtol : float
+        The tolerance the match was found with.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> T = 2 * np.pi
+    >>> k = np.arange(12)
+    >>> v = 0.5 + 1e-5 * (-0.9) ** k            # 1/1 orbit approached, mu = -0.9
+    >>> periodic_label_settled(k * T, v, m=2, n=2, omega=1.0)
+    False
+    >>> periodic_label_settled(k * T, 0.5 + 1e-5 * (-1.0) ** k, m=2, n=2, omega=1.0)
+    True
+    """
+    tt = np.ascontiguousarray(t, dtype=float).ravel()
+    vv = np.ascontiguousarray(v_in, dtype=float).ravel()
+    period = 2.0 * math.pi / float(omega)
+    vscale = max(float(np.max(np.abs(vv))) if vv.size else 0.0, 1e-300)
+    own = _repeat_residuals(tt, vv, m, n, period, vscale)
+    if own.size >= 2 and own[-1] > 4.0 * own[0] and own[-1] > 1e-3 * rtol:
+        return False
+    g = math.gcd(int(m), int(n))
+    for k in range(2, g + 1):
+        if g % k == 0 and _decays_to_zero(
+                _repeat_residuals(tt, vv, m // k, n // k, period, vscale)):
+            return False
+    return True
+
+
+def classify_settled(params: SDFParams, t: np.ndarray, v_in: np.ndarray, *, t_start: float,
+                     end_state: SDFState, n_max: int, rtol: float = PERIOD_RTOL,
+                     settle_cycles: float = SETTLE_CYCLES) -> tuple[Regime, float]:
+    """Classify the impacts of ``[t_start, end_state.t]``, running longer until settled.
+
+    An ``m/n`` match that is not settled (:func:`periodic_label_settled`) is
+    not reported.  Instead the motion is continued from ``end_state`` (a side
+    run: the caller's state is not changed) in windows as long as the given
+    one and each window is classified again, until a settled label (or no
+    impact, or aperiodic motion) is found or ``settle_cycles`` extra forcing
+    periods are spent; then the regime is ``"unsettled"``.
+
+    Parameters
+    ----------
+    params : SDFParams
+        The model parameters.
+    t, v_in : ndarray
+        Impact times and incoming velocities in the window.
+    t_start : float
+        Start of the window; it ends at ``end_state.t``.
+    end_state : SDFState
+        The state at the end of the window.
+    n_max, rtol : int, float
+        As for :func:`classify_impacts`.
+    settle_cycles : float
+        Most extra forcing periods to run (>= 0).
+
+    Returns
+    -------
+    regime : Regime
+    extra_cycles : float
+        Forcing periods run beyond the window to settle it (0 if settled at once).
+    """
+    period = params.period
+    kind, m, n = _classify(np.ascontiguousarray(t, dtype=float),
+                           np.ascontiguousarray(v_in, dtype=float), float(t_start),
+                           float(end_state.t), period, int(n_max), float(rtol))
+    if kind != 1 or periodic_label_settled(t, v_in, m=m, n=n, omega=params.omega, rtol=rtol):
+        return Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n)), 0.0
+    window = (end_state.t - t_start) / period
+    if abs(window - round(window)) < 1e-6 * max(1.0, window):
+        window = float(round(window))  # whole forcing periods, as sweeps and maps keep
+    state = end_state
+    extra = 0.0
+    while extra + window <= settle_cycles + 1e-9:
+        t0 = state.t
+        res = simulate(params, cycles=window, state=state)
+        state = res.state
+        extra += window
+        imp = res.impacts
+        kind, m, n = _classify(imp.t, imp.v_in, t0, state.t, period, int(n_max), float(rtol))
+        if kind != 1 or periodic_label_settled(imp.t, imp.v_in, m=m, n=n, omega=params.omega,
+                                               rtol=rtol):
+            return Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n)), extra
+    return Regime(kind="unsettled"), extra
+
+
 def _check_int(name: str, value: object, lo: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) < lo:
         raise ParameterError(f"`{name}` must be an integer >= {lo}, was {value!r}")
@@ -273,6 +429,11 @@ class SweepPoint:
     linear_impact_velocity : float
         Linear estimate of the impact velocity, eq. (4.7)-(4.11)
         (``omega sqrt(x_max^2 - 1)``); NaN where linear theory predicts no impact.
+    settle_cycles : float
+        Extra forcing periods run (on a side run from the value's end state) to
+        settle a periodic match that was still converging in the kept window
+        (:func:`classify_settled`); 0 when it was settled at once.  The
+        recorded impacts are those of the kept window either way.
     """
 
     value: float
@@ -285,6 +446,7 @@ class SweepPoint:
     sticking: bool
     lyapunov: LyapunovResult | None
     linear_impact_velocity: float
+    settle_cycles: float = 0.0
 
     @property
     def chaotic(self) -> bool:
@@ -308,6 +470,7 @@ class SweepPoint:
             "lyapunov": None if self.lyapunov is None else self.lyapunov.to_dict(),
             "chaotic": self.chaotic,
             "linear_impact_velocity": _num(self.linear_impact_velocity),
+            "settle_cycles": self.settle_cycles,
         }
 
 
@@ -501,7 +664,7 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
           cycles: int = 100, discard: int = 70, state: SDFState | None = None, n_max: int = 12,
           rtol: float = PERIOD_RTOL, lyapunov: LyapunovMode = "aperiodic",
           lyapunov_cycles: float = 300.0, lyapunov_warmup: float = 50.0,
-          quiet: bool = True) -> Sweep:
+          settle_cycles: float = SETTLE_CYCLES, quiet: bool = True) -> Sweep:
     """Slow sweep of one parameter with the state carried from value to value (thesis 4.2).
 
     Parameters
@@ -536,6 +699,12 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
         ``lyapunov_warmup`` of them aligning the tangent vector.
     lyapunov_cycles, lyapunov_warmup : float
         See ``lyapunov``.
+    settle_cycles : float
+        A periodic match in the kept window that is still converging (to a
+        shorter period, say a 1/3 orbit near its period doubling that matches
+        2/6 first) is not reported: the motion is run longer, on a side run of
+        at most this many forcing periods, until it settles, else the regime
+        is ``"unsettled"`` (:func:`classify_settled`).
     quiet : bool
         No progress bar (one is drawn on a terminal otherwise).
 
@@ -562,6 +731,9 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
         raise ParameterError(f"`direction` must be one of {DIRECTIONS}, was {direction!r}")
     cycles_i, discard_i, n_max_i = _check_settings(param, cycles, discard, n_max, rtol,
                                                    lyapunov, lyapunov_cycles, lyapunov_warmup)
+    settle_cycles = float(settle_cycles)
+    if not (math.isfinite(settle_cycles) and settle_cycles >= 0):
+        raise ParameterError(f"`settle_cycles` must be finite and >= 0, was {settle_cycles}")
     grid = np.asarray(values, dtype=float).ravel()
     if grid.size == 0:
         raise ParameterError("`values` must not be empty")
@@ -592,8 +764,9 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
         res = simulate(p, cycles=kept, state=state, crossings=True)
         state = res.state
         imp = res.impacts
-        kind, m, n = _classify(imp.t, imp.v_in, t0, state.t, p.period, n_max_i, float(rtol))
-        regime = Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n))
+        regime, extra = classify_settled(p, imp.t, imp.v_in, t_start=t0, end_state=state,
+                                         n_max=n_max_i, rtol=float(rtol),
+                                         settle_cycles=settle_cycles)
         lyap = None
         if lyapunov == "all" or (lyapunov == "aperiodic" and regime.kind == "aperiodic"):
             lyap = lyapunov_exponent(p, cycles=lyapunov_cycles, warmup_cycles=lyapunov_warmup,
@@ -606,7 +779,7 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
             mean_impact_velocity=float(np.sum(imp.v_in) / kept),
             regime=regime, sticking=bool(res.sticking.shape[0] > 0 or res.accumulations.size > 0),
             lyapunov=lyap,
-            linear_impact_velocity=float(v_lin)))
+            linear_impact_velocity=float(v_lin), settle_cycles=extra))
     provenance: dict[str, object] = {
         "package": "rattle_lab", "version": __version__,
         "function": "rattle_lab.analysis.sweep",
@@ -617,6 +790,7 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
                       "rtol": float(rtol), "lyapunov": lyapunov,
                       "lyapunov_cycles": float(lyapunov_cycles),
                       "lyapunov_warmup": float(lyapunov_warmup),
+                      "settle_cycles": settle_cycles,
                       "initial_state": {"t": initial.t, "x": initial.x, "v": initial.v,
                                         "theta": initial.theta, "stuck": initial.stuck}},
     }

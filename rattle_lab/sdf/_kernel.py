@@ -797,6 +797,44 @@ def micro_bounce(F, omega, zeta, th, w0, rem):
 
 
 @jit
+def _two_sum(a, b):
+    """Error-free sum: (s, err) with s = fl(a + b) and s + err = a + b exactly (Knuth)."""
+    s = a + b
+    bb = s - a
+    err = (a - (s - bb)) + (b - bb)
+    return s, err
+
+
+@jit
+def _time_add(t_hi, t_lo, s):
+    """Advance the compensated time ``t_hi + t_lo`` by ``s``.
+
+    Time is kept as an unevaluated sum of two floats (``|t_lo| <= ulp(t_hi) / 2``),
+    so that summing ~1e6 flight times loses nothing: ``t_hi`` stays the correctly
+    rounded time, where ``t += s`` drifts by the bias of repeated rounding (1e-8
+    after 1e4 forcing periods, 1e-6 after 1e5).
+    """
+    hi, err = _two_sum(t_hi, s)
+    lo = t_lo + err
+    hi2 = hi + lo
+    return hi2, lo - (hi2 - hi)
+
+
+@jit
+def _time_at(t_hi, t_lo, s):
+    """The float nearest ``t_hi + t_lo + s`` (a time s after the compensated time)."""
+    hi, err = _two_sum(t_hi, s)
+    return hi + (err + t_lo)
+
+
+@jit
+def _time_left(e_hi, e_lo, t_hi, t_lo):
+    """``(e_hi + e_lo) - (t_hi + t_lo)`` to rounding of the difference."""
+    d, err = _two_sum(e_hi, -t_hi)
+    return d + (err + (e_lo - t_lo))
+
+
+@jit
 def _grow(arr, n):
     if n < arr.shape[0]:
         return arr
@@ -837,11 +875,12 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
     W = min(TWO_PI, TWO_PI / omega)
     hmax = W / 8.0
     t = t0
+    t_lo = 0.0  # compensated time: t + t_lo (see _time_add)
     x = x0
     v = v0
     th = reduce_phase(th0)
     stuck = stuck0
-    t_end = t0 + duration
+    t_end, t_end_lo = _two_sum(t0, duration)
     rem = duration
     n_events = 0
     status = 0
@@ -851,7 +890,8 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
     last_was_impact = False
     released_now = False
     while rem > 0.0:
-        rem = t_end - t  # recomputed, so that t ends at t0 + duration to rounding
+        # recomputed, so that t ends at t0 + duration to rounding
+        rem = _time_left(t_end, t_end_lo, t, t_lo)
         if rem <= 0.0:
             break
         if n_events >= max_events:
@@ -881,12 +921,13 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             stk[n_stk, 0] = t
             if s_rel >= rem:
                 t = t_end
+                t_lo = t_end_lo
                 th = reduce_phase(th + omega * rem)
                 rem = 0.0
                 stk[n_stk, 1] = t
                 n_stk += 1
                 break
-            t += s_rel
+            t, t_lo = _time_add(t, t_lo, s_rel)
             th = th_rel
             stk[n_stk, 1] = t
             n_stk += 1
@@ -945,7 +986,7 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
                 xc, vc, ac, yc, ydc, zc = evaluate(P, S, sc)
                 if sig > 0.0 and vc > 0.0:  # v = 0 is a tangency, not a crossing
                     crs = _grow(crs, n_crs)
-                    crs[n_crs, 0] = t + sc
+                    crs[n_crs, 0] = _time_at(t, t_lo, sc)
                     crs[n_crs, 1] = vc
                     n_crs += 1
                 sig = -sig
@@ -957,7 +998,7 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             if x == 1.0:
                 x = 1.0 - EPS  # a window end within rounding of the stop (no impact found)
             v = vn
-            t += Wn
+            t, t_lo = _time_add(t, t_lo, Wn)
             th = reduce_phase(th + omega * Wn)
             tau_prev = -1.0
             n_chat = 0
@@ -967,7 +1008,7 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
         xi, v_in, ai, yi, ydi, zi = evaluate(P, S, s_imp)
         if v_in < 0.0:
             v_in = 0.0  # grazing: the crossing velocity is zero to rounding
-        t_imp = t + s_imp
+        t_imp = _time_at(t, t_lo, s_imp)
         th = reduce_phase(th + omega * s_imp)
         imp = _grow(imp, n_imp)
         imp[n_imp, 0] = t_imp
@@ -979,8 +1020,8 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
         x = 1.0
         v = -e * v_in
         tau = s_imp if last_was_impact else -1.0
-        t = t_imp
-        rem = t_end - t
+        t, t_lo = _time_add(t, t_lo, s_imp)
+        rem = _time_left(t_end, t_end_lo, t, t_lo)
         last_was_impact = True
         # complete chatter: jump to the accumulation point
         a_stop = F * math.cos(th) - 1.0
@@ -1001,7 +1042,7 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
                 tail_err = tail * dq / ((1.0 - q) * (1.0 - q))
                 if (tail <= res or tail_err <= res or n_chat >= N_CHATTER_MAX) and tail < rem:
                     if F * math.cos(th + omega * tail) - 1.0 > 0.0:
-                        t += tail
+                        t, t_lo = _time_add(t, t_lo, tail)
                         th = reduce_phase(th + omega * tail)
                         acc = _grow(acc, n_acc)
                         acc[n_acc, 0] = t
@@ -1018,11 +1059,11 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
                 dt_avg, w_end, n_b, now_stuck = micro_bounce(F, omega, zeta, th, e * v_in, rem)
                 avg = _grow(avg, n_avg)
                 avg[n_avg, 0] = t
-                avg[n_avg, 1] = t + dt_avg
+                avg[n_avg, 1] = _time_at(t, t_lo, dt_avg)
                 avg[n_avg, 2] = n_b
                 n_avg += 1
                 n_events += 1
-                t += dt_avg
+                t, t_lo = _time_add(t, t_lo, dt_avg)
                 th = reduce_phase(th + omega * dt_avg)
                 v = -w_end
                 if now_stuck:
