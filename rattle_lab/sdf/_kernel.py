@@ -238,16 +238,18 @@ def start_segment(P, S, th, x, v, on_stop):
         S[J_TAY + 1] = v
         fact = 1.0
         wk = 1.0
+        cth = math.cos(th)  # one cos and one sin for all the terms
+        sth = math.sin(th)
         for k in range(N_TAYLOR - 1):
             q = k % 4
             if q == 0:
-                trig = math.cos(th)
+                trig = cth
             elif q == 1:
-                trig = -math.sin(th)
+                trig = -sth
             elif q == 2:
-                trig = -math.cos(th)
+                trig = -cth
             else:
-                trig = math.sin(th)
+                trig = sth
             dnew = F * wk * trig - 2.0 * z * dk - dkm1
             if k <= 2 and abs(dnew) <= 8.0 * EPS * (F * wk + 2.0 * z * abs(dk) + abs(dkm1)):
                 # rounding noise of an exact zero (release from sticking, contact at
@@ -505,18 +507,18 @@ def _push_chunk(stk, n, sa, sb, ga, gva, gaa, ya, yda, gb, gvb, gab, level):
 
 
 @jit
-def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag):
+def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
     """Earliest s in (sa, sb] with g(s) >= 0, or -1.  va = values at sa (g < 0).
 
     out_b receives the values at sb (g, g', g'', y, yd) for the next chunk.
     At most MAX_WORK sub-intervals are examined; past that the chunk is
     settled at the current resolution and diag[0] counts it (reported to the
-    caller as a NumericalWarning).
+    caller as a NumericalWarning).  ``stk`` is the work stack (at least
+    ``MAX_LEVEL + 4`` rows of 12), allocated once per run by the caller.
     """
     work = 0
     graze = c == 1.0
     gtol = GRAZE_TOL if graze else 0.0
-    stk = np.empty((MAX_LEVEL + 4, 12))
     gb, gvb, gab, yb, ydb = level_values(P, S, sb, c, sig)
     out_b[0] = gb
     out_b[1] = gvb
@@ -600,13 +602,21 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag):
 
 
 @jit
-def first_reach(P, S, c, sig, s_lo, s_hi, hmax, diag):
+def new_work():
+    """Scratch for :func:`first_reach`: the search stack and two rows of values."""
+    return np.empty((MAX_LEVEL + 6, 12))
+
+
+@jit
+def first_reach(P, S, c, sig, s_lo, s_hi, hmax, diag, work):
     """Earliest s in (s_lo, s_hi] where sig (x(s) - c) >= 0, or -1.
 
-    Requires sig (x(s_lo) - c) < 0.
+    Requires sig (x(s_lo) - c) < 0.  ``work`` is scratch of shape
+    ``(MAX_LEVEL + 6, 12)`` (see :func:`new_work`), allocated once per run: no
+    allocation per search.
     """
-    va = np.empty(5)
-    vb = np.empty(5)
+    va = work[MAX_LEVEL + 4]
+    vb = work[MAX_LEVEL + 5]
     g, gv, ga, y, yd = level_values(P, S, s_lo, c, sig)
     va[0] = g
     va[1] = gv
@@ -618,7 +628,7 @@ def first_reach(P, S, c, sig, s_lo, s_hi, hmax, diag):
         sb = min(sa + hmax, s_hi)
         if s_hi - sb < 0.25 * hmax:
             sb = s_hi
-        r = _search_chunk(P, S, c, sig, sa, sb, va, vb, diag)
+        r = _search_chunk(P, S, c, sig, sa, sb, va, vb, diag, work)
         if r >= 0.0:
             return r
         for i in range(5):
@@ -860,6 +870,7 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
     P = make_params(F, omega, zeta, e)
     S = np.zeros(N_S)
     diag = np.zeros(2)
+    work = new_work()
     imp = np.empty((64, 4))
     acc = np.empty((4, 1))
     stk = np.empty((4, 2))
@@ -966,7 +977,7 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             s_imp = micro_flight(P, S, Wn)
             micro = s_imp >= 0.0
         if not micro and s_lo < Wn:
-            s_imp = first_reach(P, S, 1.0, 1.0, s_lo, Wn, hmax, diag)
+            s_imp = first_reach(P, S, 1.0, 1.0, s_lo, Wn, hmax, diag, work)
         s_end = s_imp if s_imp >= 0.0 else Wn
         # a micro flight stays within |v0| s_imp of the stop: it cannot reach x = 0
         if want_cross and not (micro and -S[J_TAY + 1] * s_imp < 0.5):
@@ -980,7 +991,7 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             if xs == 0.0:
                 s_from = min(level_exit(P, S, 0.0, 0.0, sig, hmax), s_end)
             while s_from < s_end:
-                sc = first_reach(P, S, 0.0, sig, s_from, s_end, hmax, diag)
+                sc = first_reach(P, S, 0.0, sig, s_from, s_end, hmax, diag, work)
                 if sc < 0.0:
                     break
                 xc, vc, ac, yc, ydc, zc = evaluate(P, S, sc)
