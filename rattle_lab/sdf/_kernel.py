@@ -276,7 +276,15 @@ def evaluate(P, S, s):
     yd0 = S[J_YD]
     y = (Ec + z * Es) * y0 + Es * yd0
     yd = -Es * y0 + (Ec - z * Es) * yd0
-    xp, vp = particular(P, th, s)
+    c = math.cos(th)  # shared by the particular part and the force
+    sn = math.sin(th)
+    if P[I_RES] != 0.0:
+        h = 0.5 * P[I_F]
+        xp = h * s * sn
+        vp = h * (sn + s * c)
+    else:
+        xp = P[I_AC] * c + P[I_AS] * sn
+        vp = P[I_W] * (P[I_AS] * c - P[I_AC] * sn)
     x = xp + y
     v = vp + yd
     zstop = x - 1.0
@@ -289,7 +297,7 @@ def evaluate(P, S, s):
         zstop = zs * s
         v = vs
         x = 1.0 + zstop
-    a = P[I_F] * math.cos(th) - 2.0 * z * v - x
+    a = P[I_F] * c - 2.0 * z * v - x
     return x, v, a, y, yd, zstop
 
 
