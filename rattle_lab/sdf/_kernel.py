@@ -119,6 +119,8 @@ TAU_EXIT = 1e-2
 GRAZE_TOL = 4.0 * EPS
 #: Maximum sub-intervals examined in one search chunk.
 MAX_WORK = 20000
+#: A flight's window is searched in chunks of at most W / CHUNKS_PER_WINDOW.
+CHUNKS_PER_WINDOW = 8.0
 
 # Layout of the parameter vector P.
 I_F, I_W, I_Z, I_E, I_AC, I_AS, I_R, I_RES, I_REG, I_WD, I_R1, I_R2, I_LAM = range(13)
@@ -892,7 +894,7 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
     n_crs = 0
     n_seg = 0
     W = min(TWO_PI, TWO_PI / omega)
-    hmax = W / 8.0
+    hmax = W / CHUNKS_PER_WINDOW
     t = t0
     t_lo = 0.0  # compensated time: t + t_lo (see _time_add)
     x = x0
