@@ -305,6 +305,27 @@ def test_unsettled_matches_get_no_period_label() -> None:
             assert more[-1] == pytest.approx(orbit.v_im, rel=1e-4)
 
 
+@pytest.mark.parametrize("discard", [0, 20])
+def test_one_compiled_call_equals_the_simulate_loop(discard: int) -> None:
+    # The sweep runs a whole direction in one compiled call; it must be the same motion,
+    # bit for bit, as the loop of simulate() calls it replaces (state carried over).
+    values = sweep_values(0.9, 1.0, 0.02)
+    sw = sweep("omega", values, base=BASE, direction="down", cycles=40, discard=discard,
+               n_max=10, lyapunov="none")
+    state = SDFState()
+    for p, w in zip(sw.points, values[::-1]):
+        params = BASE.replace(omega=float(w))
+        if discard:
+            state = simulate(params, cycles=discard, state=state).state
+        res = simulate(params, cycles=40 - discard, state=state, crossings=True)
+        state = res.state
+        assert res.crossings is not None
+        np.testing.assert_array_equal(p.impact_velocities, res.impacts.v_in)
+        np.testing.assert_array_equal(p.impact_phases, res.impacts.phase)
+        np.testing.assert_array_equal(p.crossing_velocities, res.crossings.v)
+    assert sw.final_state == state
+
+
 def test_fig43_period_labels_are_settled(fig43: tuple[Sweep, Sweep]) -> None:
     # Every m/n label of the Fig. 4-3 sweeps that is a repetition of a shorter
     # period (2/2, 2/4, 2/6, ...) is a genuine period-doubled motion: the shorter

@@ -40,6 +40,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -51,7 +52,7 @@ from numpy.typing import ArrayLike
 
 from .._progress import progress
 from .._version import __version__
-from ..exceptions import ParameterError
+from ..exceptions import NumericalWarning, ParameterError, SimulationError
 from ..linear import linear_impact_velocity
 from ..sdf._types import SDFParams, SDFState
 from ..sdf.simulate import simulate
@@ -660,6 +661,34 @@ def _check_settings(param: object, cycles: object, discard: object, n_max: objec
     return cycles_i, discard_i, n_max_i
 
 
+def _run_sweep(all_params: Sequence[SDFParams], state: SDFState, discard: int, kept: int
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Run a sweep direction in one compiled call; raise and warn as ``simulate`` does.
+
+    Returns the arrays of :func:`rattle_lab.sdf._kernel.run_sweep`.
+    """
+    from ..sdf._compiled import jit_kernel
+
+    zeta = all_params[0].zeta
+    out = jit_kernel.run_sweep(np.array([q.F for q in all_params]),
+                               np.array([q.omega for q in all_params]),
+                               np.array([q.e for q in all_params]), zeta, state.t, state.x,
+                               state.v, state.theta, bool(state.stuck), float(discard), float(kept))
+    imp, crs, off, ends, info = out
+    bad = np.flatnonzero(info[:, 1] != 0)
+    if bad.size:
+        q = all_params[int(bad[0])]
+        raise SimulationError(
+            f"event budget exhausted in the sweep at F={q.F}, omega={q.omega}, zeta={q.zeta}, "
+            f"e={q.e}; shorten `cycles`")
+    unresolved = int(np.sum(info[:, 2]))
+    if unresolved:
+        warnings.warn(f"{unresolved} event searches of the sweep were settled at the work cap; "
+                      "impacts in them are located only to the resolution reached",
+                      NumericalWarning, stacklevel=3)
+    return imp, crs, off, ends, info
+
+
 def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: Direction = "up",
           cycles: int = 100, discard: int = 70, state: SDFState | None = None, n_max: int = 12,
           rtol: float = PERIOD_RTOL, lyapunov: LyapunovMode = "aperiodic",
@@ -752,32 +781,31 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
     linear = np.atleast_1d(linear_impact_velocity(np.array([q.F for q in all_params]),
                                                   np.array([q.omega for q in all_params]),
                                                   base.zeta))
+    # The whole direction in one compiled call (rattle_lab.sdf._kernel.run_sweep): at each
+    # value `discard` periods without crossings (a second call from the same state and
+    # forcing phase is the same motion, and the cheaper one), then the kept periods.
+    imp_all, crs_all, off, ends, info = _run_sweep(all_params, state, discard_i, kept)
     points: list[SweepPoint] = []
-    for value, p, v_lin in progress(zip(order, all_params, linear), total=len(all_params),
-                                    desc=f"{direction}-sweep of {param}", quiet=quiet,
-                                    unit="value"):
-        # The discarded periods need no crossings: a second call (same state, same
-        # forcing phase) is the same motion, and the cheaper one.
-        if discard_i:
-            state = simulate(p, cycles=discard_i, state=state).state
-        t0 = state.t
-        res = simulate(p, cycles=kept, state=state, crossings=True)
-        state = res.state
-        imp = res.impacts
-        regime, extra = classify_settled(p, imp.t, imp.v_in, t_start=t0, end_state=state,
+    for i, (value, p, v_lin) in enumerate(progress(
+            zip(order, all_params, linear), total=len(all_params),
+            desc=f"{direction}-sweep of {param}", quiet=quiet, unit="value")):
+        imp = imp_all[off[i, 0]:off[i + 1, 0]]
+        t0 = float(ends[i, 0])
+        state = SDFState(t=float(ends[i, 1]), x=float(ends[i, 2]), v=float(ends[i, 3]),
+                         theta=float(ends[i, 4]), stuck=bool(ends[i, 5]))
+        regime, extra = classify_settled(p, imp[:, 0], imp[:, 2], t_start=t0, end_state=state,
                                          n_max=n_max_i, rtol=float(rtol),
                                          settle_cycles=settle_cycles)
         lyap = None
         if lyapunov == "all" or (lyapunov == "aperiodic" and regime.kind == "aperiodic"):
             lyap = lyapunov_exponent(p, cycles=lyapunov_cycles, warmup_cycles=lyapunov_warmup,
                                      state=state)
-        assert res.crossings is not None
         points.append(SweepPoint(
             value=float(value), params=p,
-            impact_velocities=np.array(imp.v_in), impact_phases=np.array(imp.phase),
-            crossing_velocities=np.array(res.crossings.v),
-            mean_impact_velocity=float(np.sum(imp.v_in) / kept),
-            regime=regime, sticking=bool(res.sticking.shape[0] > 0 or res.accumulations.size > 0),
+            impact_velocities=np.array(imp[:, 2]), impact_phases=np.array(imp[:, 1]),
+            crossing_velocities=np.array(crs_all[off[i, 1]:off[i + 1, 1], 1]),
+            mean_impact_velocity=float(np.sum(imp[:, 2]) / kept),
+            regime=regime, sticking=bool(info[i, 0]),
             lyapunov=lyap,
             linear_impact_velocity=float(v_lin), settle_cycles=extra))
     provenance: dict[str, object] = {

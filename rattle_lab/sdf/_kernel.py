@@ -1107,3 +1107,78 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             n_chat = 0
     return (imp, n_imp, acc, n_acc, stk, n_stk, crs, n_crs, seg, n_seg,
             t, x, v, th, stuck, n_events, status, diag[0], avg, n_avg)
+
+
+@jit
+def _append_rows(dst, n, src, m):
+    """Append rows ``src[:m]`` to ``dst`` (``n`` rows used); returns (dst, n + m)."""
+    while n + m > dst.shape[0]:
+        dst = _grow(dst, dst.shape[0])
+    for i in range(m):
+        for j in range(src.shape[1]):
+            dst[n + i, j] = src[i, j]
+    return dst, n + m
+
+
+@jit
+def run_sweep(F_arr, w_arr, e_arr, zeta, t0, x0, v0, th0, stuck0, discard_cycles, kept_cycles):
+    """A whole sweep direction in one call: at each value, ``discard_cycles`` forcing
+    periods, then ``kept_cycles`` with crossings, the state carried over.
+
+    Exactly the calls :func:`rattle_lab.analysis.sweep.sweep` made through
+    ``simulate`` (same durations ``cycles * 2 pi / omega`` and event budgets), so
+    the motion is the same to the last bit.  Returns (imp, crs, off, ends, info):
+    imp rows (t, phase, v_in) and crs rows (t, v) of every kept window, value i's
+    rows ``off[i, 0]:off[i + 1, 0]`` and ``off[i, 1]:off[i + 1, 1]``; ends rows
+    (t at the kept window's start, t, x, v, theta, stuck) at its end; info rows
+    (sticking or accumulation in the kept window, status, searches settled at the
+    work cap), status as for :func:`run` (the sweep stops at the first nonzero).
+    """
+    n = F_arr.shape[0]
+    imp = np.empty((64, 3))
+    crs = np.empty((64, 2))
+    n_imp = 0
+    n_crs = 0
+    off = np.zeros((n + 1, 2), dtype=np.int64)
+    ends = np.zeros((n, 6))
+    info = np.zeros((n, 3))
+    t = t0
+    x = x0
+    v = v0
+    th = th0
+    stuck = stuck0
+    for i in range(n):
+        period = TWO_PI / w_arr[i]
+        if discard_cycles > 0.0:
+            d = discard_cycles * period
+            me = 10**6 + int(1000.0 * (d / period + 1.0))
+            out = run(F_arr[i], w_arr[i], zeta, e_arr[i], t, x, v, th, stuck, d, False, False, me)
+            t, x, v, th, stuck = out[10], out[11], out[12], out[13], out[14]
+            info[i, 1] = out[16]
+            info[i, 2] += out[17]
+            if out[16] != 0:
+                off[i + 1:, 0] = n_imp
+                off[i + 1:, 1] = n_crs
+                return imp[:n_imp], crs[:n_crs], off, ends, info
+        ends[i, 0] = t
+        d = kept_cycles * period
+        me = 10**6 + int(1000.0 * (d / period + 1.0))
+        out = run(F_arr[i], w_arr[i], zeta, e_arr[i], t, x, v, th, stuck, d, True, False, me)
+        t, x, v, th, stuck = out[10], out[11], out[12], out[13], out[14]
+        imp, n_imp = _append_rows(imp, n_imp, out[0][:, :3], out[1])
+        crs, n_crs = _append_rows(crs, n_crs, out[6], out[7])
+        off[i + 1, 0] = n_imp
+        off[i + 1, 1] = n_crs
+        ends[i, 1] = t
+        ends[i, 2] = x
+        ends[i, 3] = v
+        ends[i, 4] = th
+        ends[i, 5] = 1.0 if stuck else 0.0
+        info[i, 0] = 1.0 if (out[5] > 0 or out[3] > 0) else 0.0
+        info[i, 1] = out[16]
+        info[i, 2] += out[17]
+        if out[16] != 0:
+            off[i + 2:, 0] = n_imp
+            off[i + 2:, 1] = n_crs
+            return imp[:n_imp], crs[:n_crs], off, ends, info
+    return imp[:n_imp], crs[:n_crs], off, ends, info
