@@ -16,7 +16,10 @@ is the thesis's model of a slow sweep experiment (4.2; Appendix A.1,
 * the regime: no impact, ``m/n`` periodic, or aperiodic
   (:func:`classify_impacts`), and for aperiodic motion its largest Lyapunov
   exponent (:mod:`rattle_lab.analysis.lyapunov`), so that chaos is a measured
-  statement;
+  statement.  An ``m/n`` match must be settled (:func:`classify_settled`): a
+  transient still converging to a shorter period (a 1/3 orbit near its period
+  doubling matches 2/6 first) is run longer on a side run until it settles,
+  else it is called ``"unsettled"``; a wrong period is never reported;
 * the linear estimate of the impact velocity (eq. 4.7-4.11,
   :func:`rattle_lab.linear.linear_impact_velocity`), NaN where linear theory
   predicts no impact.
@@ -31,6 +34,13 @@ The gap
     its results are presented as ``v_im / F`` against ``1/F`` (Fig. 4-4).  The
     nondimensional state ``(x, v)`` is carried to the next value unchanged, as
     for the other parameters.
+
+One compiled call
+    A whole sweep direction (all values, discarded and kept periods) is one call
+    of the compiled kernel (:func:`rattle_lab.sdf._kernel.run_sweep`), the same
+    motion bit for bit as one ``simulate`` call per window; the
+    classification, Lyapunov exponents and settle runs follow from the recorded
+    end states.
 
 All quantities are nondimensional.
 """

@@ -74,6 +74,14 @@ Chatter and sticking
     ``F cos(theta) - 1`` pushes into the stop; the mass is released at the
     analytic phase ``theta = arccos(1 / F)`` where the force reverses.
 
+Time
+    Phases are kept reduced to [0, 2 pi); time is kept as a compensated sum
+    ``t + t_lo`` (error-free two-sum of every flight time, :func:`_time_add`),
+    so impact times stay within a few ulp of the exact time however many
+    flights are summed (plain ``t += s`` drifted by 1e-8 after 1e4 forcing
+    periods and 8e-7 after 1e5: the rounding of ``t + s`` with nearly equal
+    ``s`` is biased).
+
 The kernel never lets x exceed 1 (impacts set x = 1 exactly), and every loop is
 bounded (``max_events``).
 """
