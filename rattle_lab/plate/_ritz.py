@@ -44,7 +44,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.polynomial import Legendre
+from numpy.polynomial import legendre
 
 from ..exceptions import ConvergenceError, ParameterError
 from ._beam import BeamBasis, beam_basis, gauss_points
@@ -87,35 +87,55 @@ class PolyBasis:
     0 (F) at ``s = 0`` and ``s = 1``.  Same interface as
     :class:`rattle_lab.plate._beam.BeamBasis` (``left``, ``right``, ``len``,
     ``evaluate``).
+
+    Attributes
+    ----------
+    left, right : str
+        End conditions at s = 0 and s = 1.
+    coef : numpy.ndarray
+        Shape (n, degree + 1): Legendre-series coefficients of each function in
+        ``u = 2 s - 1``.
     """
 
     left: str
     right: str
-    polys: tuple[Legendre, ...]
+    coef: np.ndarray
 
     def __len__(self) -> int:
-        return len(self.polys)
+        return int(self.coef.shape[0])
 
     def evaluate(self, s: np.ndarray, order: int = 0) -> np.ndarray:
         """``(d/ds)^order phi_i(s)`` for every function i; shape (n, len(s))."""
-        s = np.asarray(s, dtype=float)
-        return np.array([(p.deriv(order) if order else p)(s) for p in self.polys])
+        u = 2.0 * np.asarray(s, dtype=float) - 1.0
+        c = self.coef
+        if order:
+            c = legendre.legder(c, m=order, scl=2.0, axis=1)
+        return c @ legendre.legvander(u, c.shape[1] - 1).T
 
 
 @functools.lru_cache(maxsize=64)
 def poly_basis(left: str, right: str, n: int) -> PolyBasis:
     """The first ``n`` functions of :class:`PolyBasis` for the ends ``left``, ``right``."""
-    roots = [0.0] * _END_POWER[left] + [1.0] * _END_POWER[right]
-    one = Legendre([1.0], domain=[0, 1])
-    factor = Legendre.fromroots(roots, domain=[0, 1]) if roots else one
-    raw = [factor * Legendre.basis(k, domain=[0, 1]) for k in range(n)]
+    # s = (1 + u) / 2 and 1 - s = (1 - u) / 2 as Legendre series in u
+    factor = np.array([1.0])
+    for _ in range(_END_POWER[left]):
+        factor = legendre.legmul(factor, [0.5, 0.5])
+    for _ in range(_END_POWER[right]):
+        factor = legendre.legmul(factor, [0.5, -0.5])
+    deg = n - 1 + factor.size - 1
+    raw = np.zeros((n, deg + 1))
+    for k in range(n):
+        unit = np.zeros(k + 1)
+        unit[k] = 1.0
+        prod = legendre.legmul(factor, unit)
+        raw[k, :prod.size] = prod
     s, w = gauss_points()
+    vander = legendre.legvander(2.0 * s - 1.0, deg)
     for _ in range(2):  # Gram-Schmidt by Cholesky, twice for orthonormality to rounding
-        V = np.array([p(s) for p in raw])
-        T = np.linalg.inv(np.linalg.cholesky((V * w) @ V.T))
-        raw = [sum((T[k, j] * raw[j] for j in range(1, k + 1)), T[k, 0] * raw[0])
-               for k in range(n)]
-    return PolyBasis(left=left, right=right, polys=tuple(raw))
+        V = raw @ vander.T
+        raw = np.linalg.solve(np.linalg.cholesky((V * w) @ V.T), raw)
+    raw.setflags(write=False)
+    return PolyBasis(left=left, right=right, coef=raw)
 
 
 def plate_bases(edges: str, nx: int, ny: int) -> tuple[BeamBasis | PolyBasis,
@@ -175,16 +195,21 @@ def _solve_by_parity(K: np.ndarray, M: np.ndarray, px: np.ndarray,
     """
     import scipy.linalg
 
+    from threadpoolctl import threadpool_limits
+
     labels = [(a, b) for a in px for b in py]  # row-major order of the terms (i, j)
     n = K.shape[0]
     all_vals, all_vecs = [], []
-    for label in sorted(set(labels)):
-        idx = np.array([k for k, lab in enumerate(labels) if lab == label])
-        vals, vecs = scipy.linalg.eigh(K[np.ix_(idx, idx)], M[np.ix_(idx, idx)])
-        full = np.zeros((n, vals.size))
-        full[idx, :] = vecs
-        all_vals.append(vals)
-        all_vecs.append(full)
+    # One BLAS thread: these blocks (a few hundred unknowns) gain nothing from threads,
+    # and on a busy machine oversubscribed threads made them 100x slower.
+    with threadpool_limits(limits=1, user_api="blas"):
+        for label in sorted(set(labels)):
+            idx = np.array([k for k, lab in enumerate(labels) if lab == label])
+            vals, vecs = scipy.linalg.eigh(K[np.ix_(idx, idx)], M[np.ix_(idx, idx)])
+            full = np.zeros((n, vals.size))
+            full[idx, :] = vecs
+            all_vals.append(vals)
+            all_vecs.append(full)
     vals = np.concatenate(all_vals)
     vecs = np.concatenate(all_vecs, axis=1)
     order = np.argsort(vals, kind="stable")
