@@ -18,7 +18,7 @@ from ._ingest import (CATALOGUE_COLUMNS, REINGEST_ADVICE, IngestReport, InputRes
 from ._layout import (READABLE_VERSIONS, STORE_FORMAT, STORE_VERSION, edit_store, has_path,
                       open_store, store_lock)
 from ._results import StoredResults, read_results, write_results
-from ._verify import Mismatch, check_linked_inputs, verify_store
+from ._verify import Mismatch, check_linked_inputs, record_attrs_count, verify_store
 
 __all__ = ["ingest", "read_catalogue", "open_stored_record", "IngestReport", "InputResult",
            "CATALOGUE_COLUMNS", "file_hash", "input_key", "MappingIgnoredWarning",
@@ -26,4 +26,4 @@ __all__ = ["ingest", "read_catalogue", "open_stored_record", "IngestReport", "In
            "store_lock", "has_path", "read_results", "write_results", "StoredResults",
            "CACHE_GROUP", "read_cache_keys", "record_cache_keys", "read_cached", "write_cached",
            "output_digest", "input_hashes", "provenance_log", "verify_store",
-           "check_linked_inputs", "Mismatch", "REINGEST_ADVICE"]
+           "check_linked_inputs", "Mismatch", "record_attrs_count", "REINGEST_ADVICE"]

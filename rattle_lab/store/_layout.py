@@ -77,6 +77,8 @@ def open_store(store: str | os.PathLike[str]) -> h5py.File:
         If it does not exist, is not HDF5, or is not a store of a readable version.
     """
     store = Path(store)
+    if store.is_dir():
+        raise StoreError(f"{store}: is a directory, not a store; give the store's file name")
     if not store.is_file():
         raise StoreError(f"{store}: no such store")
     try:

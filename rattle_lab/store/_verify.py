@@ -101,6 +101,11 @@ def verify_store(store: str | os.PathLike[str], keys: Iterable[str] | None = Non
     return out
 
 
+def record_attrs_count(store: str | os.PathLike[str]) -> int:
+    """How many inputs the store holds."""
+    return len(record_attrs(store))
+
+
 def check_linked_inputs(store: str | os.PathLike[str], keys: Iterable[str] | None = None) -> None:
     """Raise if an input the store reads samples from is not the one ingested.
 
