@@ -351,7 +351,8 @@ def test_ctrl_c_inside_compiled_code_is_interrupted_130(monkeypatch, capsys):
 def test_argument_types_refuse_bad_values(args):
     proc = run_cli(*args)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
-    assert proc.stderr.strip().splitlines()[-1].startswith("rattle-lab model run: error: argument")
+    [line] = proc.stderr.splitlines()
+    assert line.startswith("rattle-lab model run: error: argument --")
 
 
 def test_simulate_to_a_directory_is_one_line_exit_2(tmp_path):

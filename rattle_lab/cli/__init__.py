@@ -30,6 +30,7 @@ from types import FrameType
 
 from .._version import __version__
 from ..exceptions import RattleLabError
+from ._types import OneLineParser
 
 #: Modules that register top-level commands, in the order ``--help`` lists them.
 COMMAND_MODULES: tuple[str, ...] = (
@@ -47,7 +48,7 @@ COMMAND_MODULES: tuple[str, ...] = (
 
 def build_parser() -> argparse.ArgumentParser:
     """Build the full argument parser (used by :func:`main` and the docs)."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="rattle-lab",
         description="Rattle-noise engineering: exact impact-oscillator models and shaker-lab data.",
     )
