@@ -154,3 +154,21 @@ def test_sigterm_during_ingest_cleans_up_and_keeps_the_store(tmp_path):
     assert err == "rattle-lab: terminated\n" and out == ""
     assert store.read_bytes() == before
     assert not [p for p in tmp_path.iterdir() if TMP_MARKER in p.name]
+
+
+def test_ctrl_c_during_model_sweep_is_interrupted_130_without_output(tmp_path):
+    # numba reports a Ctrl-C inside compiled code as a SystemError; the CLI must still say
+    # "interrupted" (exit 130), with no traceback and no partial CSV.
+    rng = random.Random(130)
+    args = [str(RATTLE_LAB), "model", "sweep", "--start", "0.5", "--stop", "3", "--step",
+            "0.0005", "--cycles", "400", "--csv", str(tmp_path / "sweep.csv"), "--quiet"]
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
+    for _ in range(3):
+        proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                env=env)
+        time.sleep(rng.uniform(3.0, 12.0))
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+        assert proc.returncode == 130, err
+        assert err == "rattle-lab: interrupted\n" and out == ""
+        assert list(tmp_path.iterdir()) == []

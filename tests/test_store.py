@@ -359,3 +359,15 @@ def test_simulate_to_a_directory_is_one_line_exit_2(tmp_path):
     proc = run_cli("simulate", "default", "-o", str(tmp_path))
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+
+
+def test_run_pipeline_creates_its_output_folder(tmp_path):
+    # `rattle-lab run pipelines/full_campaign.toml default --out build/` in a fresh clone
+    from rattle_lab.pipeline import parse_pipeline, run_pipeline
+
+    src = write(tmp_path, "rec.h5")
+    out = tmp_path / "build" / "nested"
+    result = run_pipeline(parse_pipeline({"pipeline": {"name": "p", "outputs": ["store"]}}),
+                          [src], out_dir=out)
+    assert out.is_dir() and result.outputs["store"] == out / "p.h5"
+    assert _runs(out / "p.h5") == {("plate96", "dwell_094")}
