@@ -752,91 +752,91 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
     replaced = {key_of(item) for item in new if item.replaces}
     runs = {run: where for run, where in index.runs.items() if where[1] not in replaced}
     with edit_store(store, create=when, what="write the store") as fh:
-            records = fh.require_group("records")
-            for item in new:
-                policy = LinkPolicy(allow=allow_links)
-                with link_policy(policy), read(item.path,
-                                               mapping=spec if item.foreign else None) as record:
-                    for run in record.runs:
-                        other = runs.get((record.campaign_id, run.run_id))
-                        if other is not None and replace and other[1] and other[1] in records:
-                            # --replace: the stored input holding this run goes (all its runs)
-                            replaced.add(other[1])
-                            del records[other[1]]
-                            runs = {r: w for r, w in runs.items() if w[1] != other[1]}
-                            other = None
-                        if other is not None:
-                            raise DuplicateRunError(
-                                f"{item.label}: /runs/{run.run_id}: run id {run.run_id!r} of "
-                                f"campaign {record.campaign_id!r} is already ingested from "
-                                f"{other[0]}; use `ingest --replace` (replace=True) to replace "
-                                "the stored input that holds it")
-                        runs[(record.campaign_id, run.run_id)] = (item.label, "")
-                    pending = records.create_group("_pending", track_order=True)
-                    # samples reached through references are copied (the store links inputs
-                    # only, and only by their own datasets)
-                    findings, stats, linked = _ingest_record(
-                        pending, record, item.label,
-                        storage="copy" if policy.targets else storage, limits=limits,
-                        n_chunk_samples=n_chunk_samples, quiet=quiet)
-                    fatal = [f for f in findings if f.fatal]
-                    if fatal and not allow_flagged:
-                        more = (f" (and {len(fatal) - 1} more fatal findings)" if len(fatal) > 1
-                                else "")
-                        err = fatal[0].error()
-                        err.args = (err.args[0] + more + "; use --allow-flagged (allow_flagged=True) "
-                                    "to ingest with flags",)
-                        raise err
-                    content_hash = item.digest()
-                    key = key_of(item)
-                    if key in records:  # an outdated link, ingested again in its place
-                        del records[key]
-                    records.move("_pending", key)
-                    group = records[key]
-                    skipped = record.origin.skipped if record.origin else ()
-                    kept: Storage = "link" if linked else "copy"
-                    group.attrs.update({
-                        "ingest_input_path": str(item.path.resolve()),
-                        "ingest_input_hash": content_hash,
-                        "ingest_input_size_bytes": item.size,
-                        "ingest_input_mtime_ns": item.mtime_ns,
-                        "ingest_storage": kept,
-                        "ingest_format": item.format,
-                        "ingest_mapping": spec.label if (spec and item.foreign) else "",
-                        "ingest_mapping_sha256": spec.sha256 if (spec and item.foreign) else "",
-                        "ingest_time_iso": when,
-                        "ingest_rattle_lab_version": __version__,
-                        "ingest_skipped": json.dumps([[s.source, s.reason] for s in skipped]),
-                        "ingest_link_targets": json.dumps(
-                            {str(t): file_hash(t) for t in sorted(policy.targets)}),
-                    })
-                    rows.extend(_catalogue_rows(record, key, str(item.path.resolve()), content_hash,
-                                                item.format, stats, when, kept))
-                    added[item] = InputResult(item.path, content_hash, key,
-                                              "updated" if item.replaces else "added", item.format,
-                                              tuple(skipped), tuple(findings))
-            keep = [i for i, key in enumerate(index.columns.get("input_key", []))
-                    if str(key) not in replaced]
-            columns = {name: [index.columns[name][i] for i in keep] if name in index.columns else []
-                       for name, _ in CATALOGUE_COLUMNS}
-            for row in rows:
-                for name, _ in CATALOGUE_COLUMNS:
-                    columns[name].append(row[name])
-            _write_catalogue(fh, columns)
-            fh.attrs["updated_iso"] = when
-            fh.attrs["rattle_lab_version"] = __version__
-            _append_log(fh, {
-                "command": "ingest", "time_iso": when, "rattle_lab_version": __version__,
-                "python": platform.python_version(), "numpy": np.__version__,
-                "h5py": h5py.__version__, "hdf5": h5py.version.hdf5_version,
-                "allow_flagged": allow_flagged, "storage": storage,
-                "mapping": {"path": spec.label, "sha256": spec.sha256} if spec else None,
-                "inputs": [{"path": str(i.path.resolve()), "hash": r.file_hash,
-                            "input_key": r.input_key, "format": i.format, "status": r.status}
-                           for i, r in added.items()]
-                + [{"path": str(i.path.resolve()), "hash": i.digest(), "input_key": key_of(i),
-                    "format": i.format, "status": "unchanged"} for i in unchanged],
-            })
+        records = fh.require_group("records")
+        for item in new:
+            policy = LinkPolicy(allow=allow_links)
+            with link_policy(policy), read(item.path,
+                                           mapping=spec if item.foreign else None) as record:
+                for run in record.runs:
+                    other = runs.get((record.campaign_id, run.run_id))
+                    if other is not None and replace and other[1] and other[1] in records:
+                        # --replace: the stored input holding this run goes (all its runs)
+                        replaced.add(other[1])
+                        del records[other[1]]
+                        runs = {r: w for r, w in runs.items() if w[1] != other[1]}
+                        other = None
+                    if other is not None:
+                        raise DuplicateRunError(
+                            f"{item.label}: /runs/{run.run_id}: run id {run.run_id!r} of "
+                            f"campaign {record.campaign_id!r} is already ingested from "
+                            f"{other[0]}; use `ingest --replace` (replace=True) to replace "
+                            "the stored input that holds it")
+                    runs[(record.campaign_id, run.run_id)] = (item.label, "")
+                pending = records.create_group("_pending", track_order=True)
+                # samples reached through references are copied (the store links inputs
+                # only, and only by their own datasets)
+                findings, stats, linked = _ingest_record(
+                    pending, record, item.label,
+                    storage="copy" if policy.targets else storage, limits=limits,
+                    n_chunk_samples=n_chunk_samples, quiet=quiet)
+                fatal = [f for f in findings if f.fatal]
+                if fatal and not allow_flagged:
+                    more = (f" (and {len(fatal) - 1} more fatal findings)" if len(fatal) > 1
+                            else "")
+                    err = fatal[0].error()
+                    err.args = (err.args[0] + more + "; use --allow-flagged (allow_flagged=True) "
+                                "to ingest with flags",)
+                    raise err
+                content_hash = item.digest()
+                key = key_of(item)
+                if key in records:  # an outdated link, ingested again in its place
+                    del records[key]
+                records.move("_pending", key)
+                group = records[key]
+                skipped = record.origin.skipped if record.origin else ()
+                kept: Storage = "link" if linked else "copy"
+                group.attrs.update({
+                    "ingest_input_path": str(item.path.resolve()),
+                    "ingest_input_hash": content_hash,
+                    "ingest_input_size_bytes": item.size,
+                    "ingest_input_mtime_ns": item.mtime_ns,
+                    "ingest_storage": kept,
+                    "ingest_format": item.format,
+                    "ingest_mapping": spec.label if (spec and item.foreign) else "",
+                    "ingest_mapping_sha256": spec.sha256 if (spec and item.foreign) else "",
+                    "ingest_time_iso": when,
+                    "ingest_rattle_lab_version": __version__,
+                    "ingest_skipped": json.dumps([[s.source, s.reason] for s in skipped]),
+                    "ingest_link_targets": json.dumps(
+                        {str(t): file_hash(t) for t in sorted(policy.targets)}),
+                })
+                rows.extend(_catalogue_rows(record, key, str(item.path.resolve()), content_hash,
+                                            item.format, stats, when, kept))
+                added[item] = InputResult(item.path, content_hash, key,
+                                          "updated" if item.replaces else "added", item.format,
+                                          tuple(skipped), tuple(findings))
+        keep = [i for i, key in enumerate(index.columns.get("input_key", []))
+                if str(key) not in replaced]
+        columns = {name: [index.columns[name][i] for i in keep] if name in index.columns else []
+                   for name, _ in CATALOGUE_COLUMNS}
+        for row in rows:
+            for name, _ in CATALOGUE_COLUMNS:
+                columns[name].append(row[name])
+        _write_catalogue(fh, columns)
+        fh.attrs["updated_iso"] = when
+        fh.attrs["rattle_lab_version"] = __version__
+        _append_log(fh, {
+            "command": "ingest", "time_iso": when, "rattle_lab_version": __version__,
+            "python": platform.python_version(), "numpy": np.__version__,
+            "h5py": h5py.__version__, "hdf5": h5py.version.hdf5_version,
+            "allow_flagged": allow_flagged, "storage": storage,
+            "mapping": {"path": spec.label, "sha256": spec.sha256} if spec else None,
+            "inputs": [{"path": str(i.path.resolve()), "hash": r.file_hash,
+                        "input_key": r.input_key, "format": i.format, "status": r.status}
+                       for i, r in added.items()]
+            + [{"path": str(i.path.resolve()), "hash": i.digest(), "input_key": key_of(i),
+                "format": i.format, "status": "unchanged"} for i in unchanged],
+        })
     return added, columns
 
 

@@ -68,8 +68,9 @@ def check_store(fh: h5py.File, store: Path) -> int:
     return shown
 
 
-def open_store(store: str | os.PathLike[str]) -> h5py.File:
-    """Open an existing store read-only.
+def open_store(store: str | os.PathLike[str], *, check: bool = True) -> h5py.File:
+    """Open an existing store read-only (``check=False``: any HDF5 file, for callers that look
+    for their own group first and check the store after).
 
     Raises
     ------
@@ -87,7 +88,8 @@ def open_store(store: str | os.PathLike[str]) -> h5py.File:
         raise StoreError(f"{store}: exists and is not a readable HDF5 ingest store; refusing to "
                          f"overwrite it ({' '.join(str(exc).split())})") from exc
     try:
-        check_store(fh, store)
+        if check:
+            check_store(fh, store)
     except BaseException:
         fh.close()
         raise

@@ -40,7 +40,7 @@ import numpy as np
 
 from .._version import __version__
 from ..records._errors import StoreError
-from ._layout import edit_store, open_store
+from ._layout import check_store, edit_store, open_store
 
 RESULTS_VERSION = 1
 
@@ -154,9 +154,10 @@ def read_results(store: str | os.PathLike[str]) -> StoredResults:
         If the store does not exist or holds no results.
     """
     store = Path(store)
-    with open_store(store) as fh:
+    with open_store(store, check=False) as fh:
         if "results" not in fh:
             raise StoreError(f"{store}: /results: no results (run `rattle-lab fit` first)")
+        check_store(fh, store)
         root = fh["results"]
         runs: dict[tuple[str, str], dict[str, Any]] = {}
         for key, grp in root["runs"].items():
