@@ -371,3 +371,24 @@ def test_run_pipeline_creates_its_output_folder(tmp_path):
                           [src], out_dir=out)
     assert out.is_dir() and result.outputs["store"] == out / "p.h5"
     assert _runs(out / "p.h5") == {("plate96", "dwell_094")}
+
+
+def test_writer_threads_of_one_process_serialize_too(tmp_path):
+    import threading
+
+    files = [write(tmp_path, f"t{i}.h5", make_record(f"t{i}", n=512, seed=i)) for i in range(8)]
+    errors: list[BaseException] = []
+
+    def one(f: Path) -> None:
+        try:
+            ingest([f], tmp_path / "s.h5")
+        except BaseException as exc:  # noqa: BLE001 - collected and asserted below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=one, args=(f,)) for f in files]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == []
+    assert _runs(tmp_path / "s.h5") == {(f"t{i}", "dwell_094") for i in range(8)}

@@ -98,7 +98,9 @@ def open_store(store: str | os.PathLike[str], *, check: bool = True) -> h5py.Fil
 
 # --- the writers' lock ----------------------------------------------------------------------
 
-_held: dict[str, int] = {}  # folder -> depth, for this process (the lock is re-entrant here)
+# (folder, thread) -> depth: the lock is re-entrant within a thread; other threads of this
+# process open their own descriptor, and flock makes them wait like other processes.
+_held: dict[tuple[str, int], int] = {}
 _held_guard = threading.RLock()
 
 
@@ -110,7 +112,7 @@ def store_lock(store: str | os.PathLike[str]) -> Iterator[None]:
     of its own (nothing to clean up after a crash; the kernel releases it when
     the holder dies), and it also covers the temporary files written beside the
     store.  Writers to other stores of the same folder wait for each other too.
-    Re-entrant within a process (a pipeline holding it may call ``ingest``).
+    Re-entrant within a thread (a pipeline holding it may call ``ingest``).
 
     Raises
     ------
@@ -120,7 +122,8 @@ def store_lock(store: str | os.PathLike[str]) -> Iterator[None]:
     folder = Path(store).parent if str(Path(store).parent) else Path(".")
     if not folder.is_dir():
         raise OutputError(f"{store}: output directory {folder} does not exist")
-    key = str(folder.resolve())
+    path = str(folder.resolve())
+    key = (path, threading.get_ident())
     with _held_guard:
         depth = _held.get(key, 0)
         _held[key] = depth + 1
@@ -128,7 +131,7 @@ def store_lock(store: str | os.PathLike[str]) -> Iterator[None]:
             fd = -1
         else:
             try:
-                fd = os.open(key, os.O_RDONLY | os.O_DIRECTORY)
+                fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY)
             except OSError as exc:
                 _held[key] -= 1
                 raise OutputError(f"{store}: output directory {folder} cannot be used: "
