@@ -392,3 +392,25 @@ def test_writer_threads_of_one_process_serialize_too(tmp_path):
         t.join()
     assert errors == []
     assert _runs(tmp_path / "s.h5") == {(f"t{i}", "dwell_094") for i in range(8)}
+
+
+@pytest.mark.parametrize("command", ["ingest", "model_run_plot"])
+def test_a_read_only_folder_is_one_line_exit_2(tmp_path, monkeypatch, capsys, command):
+    # chmod cannot make a folder read-only for root (the tests may run as root): the refusal
+    # is injected where every atomic writer creates its temporary file.
+    import errno
+
+    import rattle_lab._atomic as atomic
+
+    def refuse(*args, **kwargs):
+        raise PermissionError(errno.EACCES, "Permission denied")
+
+    src = write(tmp_path, "rec.h5")
+    monkeypatch.setattr(atomic.tempfile, "mkstemp", refuse)
+    args = {"ingest": ["ingest", str(src), "-o", str(tmp_path / "s.h5"), "--quiet"],
+            "model_run_plot": ["model", "run", "--F", "1", "--omega", "1", "--zeta", "0.1",
+                               "--e", "0.5", "--cycles", "2", "--plot", str(tmp_path / "p.png")]}
+    assert main(args[command]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1 and "Permission denied" in captured.err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.h5"]
