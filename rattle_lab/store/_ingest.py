@@ -3,8 +3,13 @@
 :func:`ingest` reads each input with :func:`rattle_lab.records.read` (format
 detected, schema validated, files opened read-only), streams every channel in
 chunks through the data-quality checks, works out the conversion to SI, and
-writes the store atomically (a temporary file renamed into place: an error
-leaves the previous store, or no store, behind).
+writes the store atomically under the store's writers' lock
+(:func:`rattle_lab.store.edit_store`: a temporary file renamed into place; an
+error, a signal or a crash leaves the previous store, or no store, behind, and
+concurrent ingests never lose each other's runs).  References out of an HDF5
+input (external links, virtual datasets, external storage) are refused unless
+``allow_links`` (then only inside the input's folder, hashed); a dataset that
+declares more samples than its file stores is refused before any read.
 
 Samples are kept as the input stores them (raw volts, ADC counts, or SI), with
 the exact factor to SI beside them, as NWB's ``conversion`` attribute does;
@@ -631,6 +636,11 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
         A ``(campaign_id, run_id)`` already in the store from another file, or twice in the call.
     StoreError
         ``store`` exists and is not an ingest store.
+    LinkError
+        An HDF5 input refers to another file (and ``allow_links`` is False, or the
+        file is outside the input's folder).
+    DataError
+        A dataset declares more samples than its file stores.
     OutputError
         The store cannot be written.  In every error case the store is left as it was.
     ParameterError
