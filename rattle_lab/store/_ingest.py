@@ -87,7 +87,8 @@ from ..records._readers.mapping import MappingSpec, load_mapping
 from ..records._readers.native import load_group
 from ..records._schema import validate_tree
 from ..records._write import write_tree
-from ._layout import STORE_FORMAT, STORE_VERSION, edit_store, open_store, store_lock, text
+from ._layout import (STORE_FORMAT, STORE_VERSION, edit_store, open_store,  # noqa: F401
+                      store_lock, text)
 
 Storage = Literal["link", "copy"]
 
