@@ -28,7 +28,7 @@ pytestmark = pytest.mark.slow
 #: Kill delays are drawn uniformly from (0.1 s, SPAN x the duration of an uninterrupted run of
 #: the same command, measured first): from the interpreter's start-up to past the end, whatever
 #: the machine's load.
-SPAN = 1.3
+SPAN = 2.0
 N_SAMPLES = 100_000  # 5 channels of 100k float32 samples: the write takes a noticeable time
 
 
