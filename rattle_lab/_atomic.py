@@ -1,19 +1,67 @@
 """Atomic output: write to a temporary file beside the target, then rename.
 
-An interrupted run (exception, Ctrl-C, kill) leaves the previous result intact,
-because ``os.replace`` is atomic on POSIX and Windows within one filesystem.
+An interrupted run (exception, Ctrl-C, SIGTERM) leaves the previous result
+intact, because ``os.replace`` is atomic on POSIX and Windows within one
+filesystem, and the temporary file is removed on the way out.
+
+Temporary files are named ``.<target name>.rattle-tmp-<pid>-<random><suffix>``:
+recognisable, and carrying the writer's process id.  A writer killed outright
+(``kill -9``, power loss) cannot remove its file; the next :func:`atomic_path`
+in the same folder removes every such file whose writer is gone
+(:func:`remove_stale_temporaries`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import re
 import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
 from .exceptions import OutputError
+
+#: Marker in the name of every temporary file this package writes.
+TMP_MARKER = ".rattle-tmp-"
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS}
+_TMP_RE = re.compile(r"^\..*" + re.escape(TMP_MARKER) + r"(\d+)-")
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by someone else
+        return True
+    return True
+
+
+def remove_stale_temporaries(directory: str | os.PathLike[str]) -> list[Path]:
+    """Remove the temporary files in ``directory`` whose writer process is gone.
+
+    Returns the paths removed.  Files of live writers (this process included)
+    are left alone; a folder that cannot be listed is skipped silently.
+    """
+    removed: list[Path] = []
+    try:
+        names = os.listdir(directory)
+    except OSError:
+        return removed
+    for name in names:
+        match = _TMP_RE.match(name)
+        if match is None or _pid_alive(int(match.group(1))):
+            continue
+        path = Path(directory) / name
+        with contextlib.suppress(OSError):
+            path.unlink()
+            removed.append(path)
+    return removed
 
 
 @contextlib.contextmanager
@@ -34,16 +82,24 @@ def atomic_path(target: str | os.PathLike[str], suffix: str | None = None) -> It
     Raises
     ------
     OutputError
-        If the directory does not exist or the rename fails.
+        If the directory does not exist, ``target`` is a directory, or the
+        temporary file cannot be created, written or renamed (read-only
+        folder, full disk): one line naming the target.
     """
     target = Path(target)
     directory = target.parent if str(target.parent) else Path(".")
     if not directory.is_dir():
         raise OutputError(f"{target}: output directory {directory} does not exist")
-    fd, tmp_name = tempfile.mkstemp(
-        prefix=f".{target.name}.", suffix=suffix if suffix is not None else target.suffix + ".tmp",
-        dir=directory,
-    )
+    if target.is_dir():
+        raise OutputError(f"{target}: is a directory; give a file name for the output")
+    remove_stale_temporaries(directory)
+    try:
+        fd, tmp_name = tempfile.mkstemp(
+            prefix=f".{target.name}{TMP_MARKER}{os.getpid()}-",
+            suffix=suffix if suffix is not None else target.suffix, dir=directory)
+    except OSError as exc:
+        raise OutputError(f"{target}: cannot write in {directory}: "
+                          f"{exc.strerror or exc}") from exc
     try:
         # mkstemp makes the file 0o600; the result should have the mode of the file it
         # replaces, or else that of any new file (0o666 less the umask).
@@ -58,10 +114,28 @@ def atomic_path(target: str | os.PathLike[str], suffix: str | None = None) -> It
     try:
         yield tmp
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp.unlink()
+        # A full disk or a read-only filesystem is the output's problem; other OSErrors
+        # may come from reading inputs inside the block and keep their own message.
+        if (isinstance(exc, OSError) and not isinstance(exc, OutputError)
+                and exc.errno in _WRITE_ERRNOS):
+            raise output_error(target, exc) from exc
         raise
+
+
+def output_error(target: str | os.PathLike[str], exc: OSError) -> OutputError:
+    """One-line :class:`OutputError` for an OSError met while writing ``target``."""
+    if exc.errno == errno.ENOSPC:
+        why = "no space left on the device"
+    elif exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+        why = "permission denied (read-only folder or file?)"
+    elif exc.errno == errno.EISDIR:
+        why = "is a directory"
+    else:
+        why = " ".join(str(exc.strerror or exc).split())
+    return OutputError(f"{target}: cannot write: {why}")
 
 
 def _umask() -> int:

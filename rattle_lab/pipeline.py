@@ -56,26 +56,22 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import importlib
 import json
 import os
-import shutil
 import sys
 import tomllib
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
-
-import h5py
-import numpy as np
 
 from ._atomic import atomic_path
 from ._progress import progress
 from ._resources import find_resource
 from ._version import __version__
-from .exceptions import DataError, OutputError, ParameterError
+from .exceptions import OutputError, ParameterError
+from .store import (CACHE_GROUP, check_linked_inputs, has_path, input_hashes, output_digest,
+                    read_cache_keys, read_cached, record_cache_keys, store_lock, write_cached)
 
 Stage = Literal["simulate", "ingest", "detect", "thresholds", "fit", "report"]
 
@@ -94,7 +90,6 @@ _OWN_KEYS: dict[str, dict[str, Any]] = {"simulate": {"seed": None},
                                         "report": {"model": True}}
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
-CACHE_GROUP = "pipeline_cache"
 #: Seconds to wait for a scheduler given by address.
 CONNECT_TIMEOUT_S = 10
 
@@ -285,83 +280,6 @@ def _scene_bytes(item: str) -> bytes:
         raise ParameterError(f"{item}: cannot read scene: {exc}") from exc
 
 
-def _read_cache(store: Path) -> dict[str, str]:
-    if not store.is_file():
-        return {}
-    try:
-        with h5py.File(store, "r") as fh:
-            g = fh.get(CACHE_GROUP)
-            if g is None:
-                return {}
-            return {k: (v.decode() if isinstance(v, bytes) else str(v)) for k, v in g.attrs.items()}
-    except OSError:
-        return {}
-
-
-@contextmanager
-def _edit_store(store: Path) -> Iterator[h5py.File]:
-    """Open a copy of ``store`` for writing; rename it over the store on success."""
-    try:
-        with atomic_path(store) as tmp:
-            shutil.copyfile(store, tmp)
-            with h5py.File(tmp, "a") as fh:
-                yield fh
-    except OSError as exc:
-        if isinstance(exc, OutputError):
-            raise
-        raise OutputError(f"{store}: could not update {CACHE_GROUP}: {exc}") from exc
-
-
-def _record_keys(store: Path, keys: Mapping[str, str]) -> None:
-    with _edit_store(store) as fh:
-        fh.require_group(CACHE_GROUP).attrs.update(dict(keys))
-
-
-# --- serialising detection results (frozen dataclasses of arrays and scalars) ----------------
-
-def _put(group: h5py.Group, name: str, value: Any) -> None:
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        sub = group.create_group(name)
-        cls = type(value)
-        sub.attrs["__class__"] = f"{cls.__module__}:{cls.__qualname__}"
-        for f in dataclasses.fields(value):
-            _put(sub, f.name, getattr(value, f.name))
-    elif isinstance(value, np.ndarray):
-        group.create_dataset(name, data=value)
-    else:
-        group.attrs[name] = json.dumps(value.item() if isinstance(value, np.generic) else value,
-                                       allow_nan=True)
-
-
-def _get(group: h5py.Group) -> Any:
-    path = group.attrs["__class__"]
-    module, _, qualname = (path.decode() if isinstance(path, bytes) else str(path)).partition(":")
-    if not module.startswith("rattle_lab."):  # only our own result classes are rebuilt
-        raise DataError(f"{group.name}: attribute '__class__': {module}:{qualname} is not a "
-                        "rattle_lab class")
-    cls = getattr(importlib.import_module(module), qualname)
-    kwargs: dict[str, Any] = {}
-    for f in dataclasses.fields(cls):
-        if f.name in group:
-            item = group[f.name]
-            kwargs[f.name] = _get(item) if isinstance(item, h5py.Group) else item[()]
-        elif f.name in group.attrs:
-            value = json.loads(group.attrs[f.name])
-            kwargs[f.name] = tuple(value) if isinstance(value, list) else value
-    return cls(**kwargs)
-
-
-def _write_detections(store: Path, runs: Sequence[Any]) -> None:
-    with _edit_store(store) as fh:
-        cache = fh.require_group(CACHE_GROUP)
-        if "detect" in cache:
-            del cache["detect"]
-        g = cache.create_group("detect")
-        g.attrs["n_runs"] = len(runs)
-        for i, r in enumerate(runs):
-            _put(g, f"{i:06d}", r)
-
-
 def read_detections(store: str | os.PathLike[str]) -> tuple[Any, ...]:
     """The per-run detection results the detect stage cached in ``store``.
 
@@ -374,44 +292,7 @@ def read_detections(store: str | os.PathLike[str]) -> tuple[Any, ...]:
     DataError
         If the store holds none.
     """
-    with h5py.File(store, "r") as fh:
-        g = fh.get(f"{CACHE_GROUP}/detect")
-        if g is None:
-            raise DataError(f"{store}: /{CACHE_GROUP}/detect: no cached detections")
-        return tuple(_get(g[name]) for name in sorted(g))
-
-
-def _has(store: Path, path: str) -> bool:
-    if not store.is_file():
-        return False
-    with h5py.File(store, "r") as fh:
-        return path in fh
-
-
-def _output_digest(store: Path, stage: str) -> str:
-    """A digest of what ``stage`` left in the store ("" if absent).
-
-    ``ingest``: the records and their input hashes; ``fit``: the ``/results``
-    header (summary, provenance, time written), which any rewrite changes.
-    """
-    if not store.is_file():
-        return ""
-    try:
-        with h5py.File(store, "r") as fh:
-            if stage == "ingest":
-                group = fh.get("records")
-                if group is None:
-                    return ""
-                items = sorted((k, str(g.attrs.get("ingest_input_hash", "")))
-                               for k, g in group.items())
-            else:
-                group = fh.get("results")
-                if group is None:
-                    return ""
-                items = sorted((k, str(v)) for k, v in group.attrs.items())
-    except OSError:
-        return ""
-    return _digest(items)
+    return read_cached(store, "detect")
 
 
 # --- stage functions --------------------------------------------------------------------------
@@ -446,7 +327,7 @@ def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any
         another rattle_lab).
     """
     from .fit import analyse_run
-    from .ingest import open_stored_record
+    from .store import open_stored_record
 
     if code is not None and code != _FINGERPRINT:
         raise ParameterError(f"`scheduler`: a worker runs other rattle_lab code ({_FINGERPRINT}) "
@@ -476,9 +357,10 @@ def _connect(scheduler: Any) -> tuple[Any, bool]:
 
 def _detect_all(store: Path, detect: Mapping[str, Any], fit: Mapping[str, Any],
                 scheduler: Any, quiet: bool = True) -> list[Any]:
-    from .ingest import read_catalogue
+    from .store import read_catalogue
 
     catalogue = read_catalogue(store, level="runs")
+    check_linked_inputs(store, dict.fromkeys(catalogue["input_key"]))
     jobs = [(str(store), str(k), str(r)) for k, r in zip(catalogue["input_key"],
                                                        catalogue["run_id"])]
     if scheduler is None:
@@ -507,8 +389,7 @@ def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipel
     from .results import StoreFit, write_results
 
     fit = pipeline.params["fit"]
-    with h5py.File(store, "r") as fh:
-        inputs = {k: str(g.attrs.get("ingest_input_hash", "")) for k, g in fh["records"].items()}
+    inputs = input_hashes(store)
     provenance = {"function": "rattle_lab.fit.fit_store", "via": "rattle_lab.pipeline",
                   "pipeline": pipeline.name, "rattle_lab_version": __version__,
                   "python": sys.version.split()[0],
@@ -520,7 +401,7 @@ def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipel
 
 
 def _file_hash(path: Path) -> str:
-    from .ingest import file_hash
+    from .store import file_hash
 
     return file_hash(path)
 
@@ -566,7 +447,8 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
     store : path-like, optional
         The store (default ``out_dir/<pipeline.name>.h5``).
     out_dir : path-like
-        Directory of simulated records and of the report ``<pipeline.name>.pdf``.
+        Directory of simulated records and of the report ``<pipeline.name>.pdf``
+        (created, with its parents, if missing).
     scheduler : str or distributed.Client, optional
         Run per-run detection on this Dask cluster (default: serially here).
     log : callable, optional
@@ -584,7 +466,7 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
     Raises
     ------
     ParameterError
-        If there are no inputs, an input is missing, ``out_dir`` does not exist, the
+        If there are no inputs, an input is missing, ``out_dir`` is a file, the
         scheduler cannot be reached or one of its workers runs other rattle_lab code.
     RattleLabError
         Whatever a stage raises (the store is left as the last completed stage wrote it).
@@ -597,11 +479,16 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
     if not items:
         raise ParameterError("`inputs` must name at least one record file or scene")
     out = Path(out_dir)
-    if not out.is_dir():
+    if out.exists() and not out.is_dir():
         raise ParameterError(f"`out_dir` {str(out)!r} is not a directory")
     for item in items:
         if item != "default" and not Path(item).is_file():
             raise ParameterError(f"input {item!r}: no such file")
+    try:  # the output folder is made, as `--out build/` leads a user to expect
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"`out_dir` {str(out)!r}: cannot be created: "
+                          f"{exc.strerror or exc}") from exc
     store_path = Path(store) if store is not None else out / f"{pipeline.name}.h5"
     scenes = [i for i in items if _is_scene(i)]
     p = pipeline.params
@@ -628,7 +515,7 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
                               "up": [keys["fit"], keys["ingest"]]})
     run = PipelineRun(store_path)
     stages = needed_stages(pipeline.outputs, scenes=bool(scenes))
-    cache = _read_cache(store_path)
+    cache = read_cache_keys(store_path)
     report_path = Path(report) if report is not None else out / f"{pipeline.name}.pdf"
     runs: list[Any] | None = None
     curve: Any = None
@@ -648,7 +535,7 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
         entries = {stage: key, **(extra or {})}
         cache.update(entries)
         if store_path.is_file():
-            _record_keys(store_path, entries)
+            record_cache_keys(store_path, entries)
 
     for stage in stages:
         if stage == "simulate":
@@ -668,10 +555,10 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
         key = keys[stage]
         run.keys[stage] = key
         if stage == "ingest":
-            if fresh("ingest", key, cache.get("ingest:records") == _output_digest(store_path,
+            if fresh("ingest", key, cache.get("ingest:records") == output_digest(store_path,
                                                                                  "ingest")):
                 continue
-            from .ingest import ingest
+            from .store import ingest
 
             files = [raw_for.get(i, Path(i)) for i in items]
             if "ingest" in cache and store_path.is_file():
@@ -679,7 +566,7 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
                 # new seed: same run ids, new data): rebuild it from the current inputs; its
                 # /results and /pipeline_cache are stale anyway.  A store the pipeline did not
                 # make (no cached ingest key) is only ever appended to.
-                with atomic_path(store_path) as tmp:
+                with store_lock(store_path), atomic_path(store_path) as tmp:
                     tmp.unlink()
                     ingest(files, tmp, allow_flagged=p["ingest"]["allow_flagged"], quiet=quiet)
                 kept = {k: v for k, v in cache.items() if k.startswith("simulate:")}
@@ -690,38 +577,33 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
                        quiet=quiet)
             # the simulate keys are recorded now that the store exists
             done("ingest", key, {**{k: v for k, v in cache.items() if k.startswith("simulate:")},
-                                 "ingest:records": _output_digest(store_path, "ingest")})
+                                 "ingest:records": output_digest(store_path, "ingest")})
         elif stage == "detect":
-            if fresh("detect", key, _has(store_path, f"{CACHE_GROUP}/detect")):
+            if fresh("detect", key, has_path(store_path, f"{CACHE_GROUP}/detect")):
                 continue
             runs = _detect_all(store_path, p["detect"], {**p["fit"]}, scheduler, quiet)
-            _write_detections(store_path, runs)
+            write_cached(store_path, "detect", runs)
             done("detect", key)
         elif stage == "thresholds":
-            if fresh("thresholds", key, _has(store_path, f"{CACHE_GROUP}/thresholds")):
+            if fresh("thresholds", key, has_path(store_path, f"{CACHE_GROUP}/thresholds")):
                 continue
             from .thresholds import tabulate_thresholds
 
             if runs is None:
                 runs = list(read_detections(store_path))
             curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
-            with _edit_store(store_path) as fh:
-                cache_group = fh.require_group(CACHE_GROUP)
-                if "thresholds" in cache_group:
-                    del cache_group["thresholds"]
-                _put(cache_group, "thresholds", curve)
+            write_cached(store_path, "thresholds", curve)
             done("thresholds", key)
         elif stage == "fit":
             if fresh("fit", key, bool(cache.get("fit:results"))
-                     and cache.get("fit:results") == _output_digest(store_path, "fit")):
+                     and cache.get("fit:results") == output_digest(store_path, "fit")):
                 continue
             if runs is None:
                 runs = list(read_detections(store_path))
             if curve is None:
-                with h5py.File(store_path, "r") as fh:
-                    curve = _get(fh[f"{CACHE_GROUP}/thresholds"])
+                curve = read_cached(store_path, "thresholds")
             _fit_and_write(store_path, runs, curve, pipeline)
-            done("fit", key, {"fit:results": _output_digest(store_path, "fit")})
+            done("fit", key, {"fit:results": output_digest(store_path, "fit")})
         elif stage == "report":
             ok = report_path.is_file() and cache.get("report:hash") == _file_hash(report_path)
             if fresh("report", key, ok):

@@ -36,6 +36,11 @@ def test_orbits_json() -> None:
     assert hi2["phase"] == pytest.approx(ref.phase, rel=1e-15)
     assert by_n[1][1]["instability"] == "period-doubling" and not by_n[1][1]["stable"]
     assert not by_n[3][1]["exists"] and by_n[3][1]["clearance"] < 0  # intermediate contact
+    # existence and stability are separate verdicts: a non-existent orbit has none
+    for n in (3, 4, 5):
+        assert not by_n[n][1]["exists"] and by_n[n][1]["v_im"] > 0
+        assert by_n[n][1]["stable"] is None and by_n[n][1]["instability"] is None
+    assert by_n[1][0]["stable"] is None  # v_im < 0: not a motion
     assert by_n[1][0]["v_im"] < 0 and by_n[1][0]["multipliers"] == [[None, None], [None, None]]
 
 

@@ -66,7 +66,9 @@ def test_model_run_table_and_plot(tmp_path):
     (["--F", "-1", "--omega", "1", "--zeta", "0.05", "--e", "0.6"], "`F` must be >= 0, was -1.0"),
     (["--F", "0.2", "--omega", "1", "--zeta", "0.05", "--e", "2"], r"`e` must be in [0, 1], was 2.0"),
     (["--F", "0.2", "--omega", "1", "--zeta", "0.05", "--e", "0.6", "--cycles", "-3"],
-     "`cycles` must be finite and >= 0, was -3.0"),
+     "`cycles` must be finite and >= 1, was -3.0"),  # issue 16: cycles >= 1
+    (["--F", "0.2", "--omega", "1", "--zeta", "0.05", "--e", "0.6", "--cycles", "0"],
+     "`cycles` must be finite and >= 1, was 0.0"),
     (["--F", "0.2", "--omega", "1", "--zeta", "0.05", "--e", "0.6", "--plot", "out.gif"],
      "must end in one of .png, .pdf, .svg"),
 ])

@@ -351,7 +351,7 @@ def test_provenance_is_recorded(tmp_path):
         assert attrs["ingest_input_path"] == str(src.resolve())
         assert attrs["ingest_time_iso"].endswith("Z")
         [entry] = [json.loads(x) for x in fh["provenance/log"].asstr()[()]]
-        assert fh.attrs["store_format"] == "rattle_store" and fh.attrs["store_version"] == 2
+        assert fh.attrs["store_format"] == "rattle_store" and fh.attrs["store_version"] == 3
     assert entry["rattle_lab_version"] == __version__ and entry["allow_flagged"] is False
     assert entry["inputs"][0]["hash"] == _xxh3(src) and entry["storage"] == "link"
 
@@ -522,8 +522,8 @@ def test_damaged_stores_are_refused(tmp_path):
     newer = tmp_path / "newer.h5"
     newer.write_bytes(store.read_bytes())
     with h5py.File(newer, "a") as fh:
-        fh.attrs["store_version"] = 3
-    with pytest.raises(StoreError, match=r"newer\.h5: /: attribute 'store_version': 3 is not supported"):
+        fh.attrs["store_version"] = 4
+    with pytest.raises(StoreError, match=r"newer\.h5: /: attribute 'store_version': 4 is not supported"):
         ingest([src], newer)
     no_cat = tmp_path / "no_cat.h5"
     no_cat.write_bytes(store.read_bytes())

@@ -173,8 +173,10 @@ def test_input_errors(tmp_path: Path) -> None:
         run_pipeline(_pipe(["store"]), [tmp_path / "absent.h5"], out_dir=tmp_path)
     with pytest.raises(ParameterError, match="at least one"):
         run_pipeline(_pipe(["store"]), [], out_dir=tmp_path)
+    # a missing out_dir is created (issue 16: `--out build/` in a fresh clone); a file is refused
+    (tmp_path / "afile").write_text("x")
     with pytest.raises(ParameterError, match="is not a directory"):
-        run_pipeline(_pipe(["store"]), ["default"], out_dir=tmp_path / "nodir")
+        run_pipeline(_pipe(["store"]), ["default"], out_dir=tmp_path / "afile")
 
 
 def _as_plain(obj: Any) -> Any:

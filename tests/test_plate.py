@@ -427,7 +427,9 @@ class TestPlate:
         # Section 5.1.1: f1 = 105 Hz; the Ritz lambda must give it within 1.5 %.
         plate = Plate(**THESIS_PLATE, edges="CFCF")
         lam = plate.modes(n_modes=2).lam[0]
-        assert lam == pytest.approx(_ritz(plate.aspect_ratio, plate.edges, plate.nu).lam[0], rel=1e-12)
+        # Plate.modes is ritz_modes with the solver's default (converged) basis size
+        assert lam == pytest.approx(
+            ritz_modes(plate.aspect_ratio, plate.edges, nu=plate.nu, n_modes=2).lam[0], rel=1e-12)
         assert plate.frequency_hz(lam) == pytest.approx(105.0, rel=0.015)
 
     @pytest.mark.parametrize(
@@ -446,3 +448,35 @@ class TestPlate:
         kwargs = THESIS_PLATE | {"edges": "CFCF", field: value}
         with pytest.raises(ParameterError, match=match):
             Plate(**kwargs)
+
+
+# --------------------------------------------------------------------------- converged basis size
+class TestConvergedSize:
+    def test_sfsf_matches_leissa_exact_levy_value(self):
+        # Leissa (1973) SFSF square, nu = 0.3: 9.6314 (exact Levy-type solution).
+        # Products of beam functions gave 0.4 % high with 12 x 12 terms; the
+        # polynomial basis chosen by the convergence check must give 1e-4.
+        modes = ritz_modes(1.0, "SFSF", nu=0.3, n_modes=1)
+        assert modes.lam[0] == pytest.approx(9.6314, rel=1e-4)
+
+    @pytest.mark.parametrize(("edges", "r"), [("SFSF", 0.5), ("CFCF", 1.0), ("CFFF", 1.0),
+                                              ("CCCC", 0.5), ("SSSF", 2.0)])
+    def test_default_within_1e4_of_high_order(self, edges, r):
+        # Reference: the same Ritz problem with 36 terms per side (1296 unknowns), past
+        # the default's size.  CFCF converges algebraically (clamped-free corners are
+        # singular): its 36-term value is itself within ~3e-6 of the limit.
+        modes = ritz_modes(r, edges, nu=0.3, n_modes=4)
+        ref = ritz_modes(r, edges, nu=0.3, n_modes=4, n_terms=36)
+        assert modes.n_terms[0] < 36
+        np.testing.assert_allclose(modes.lam, ref.lam, rtol=1e-4)
+        # Ritz converges from above (to the ~1e-9 rounding of converged eigenvalues)
+        assert np.all(modes.lam >= ref.lam * (1 - 1e-8))
+
+    def test_cccc_half_table_entry_is_flagged_as_misprint(self):
+        # Leissa's clamped 2:1 plate, 24.58 in units of the long side = 98.32 in units of a;
+        # the thesis prints 97.3 (flagged), the converged Ritz value is 98.31.
+        lam = ritz_modes(0.5, "CCCC", nu=0.3, n_modes=1).lam[0]
+        assert lam == pytest.approx(24.58 * 4, rel=2e-4)
+        row = table_modes("CCCC", 0.5)[0]
+        assert row.lam_leissa == 97.3 and "misprint" in row.note
+        assert all(m.note == "" for m in table_modes("CFCF", 0.9))

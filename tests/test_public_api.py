@@ -83,6 +83,10 @@ PACKAGES: dict[str, list[str]] = {
         "grazing_threshold_ms2", "restitution_from_ratios", "saddle_node_threshold_ms2",
         "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold"
     ],
+    "rattle_lab.ingest": [
+        "ingest", "read_catalogue", "open_stored_record", "IngestReport", "InputResult",
+        "CATALOGUE_COLUMNS", "file_hash", "input_key"
+    ],
     "rattle_lab.modal": [
         "CONTACT_NAMES", "THESIS_HERTZ_N_M15", "THESIS_PLATE", "THESIS_STRIKER_STIFFNESS_N_M",
         "ContactLog", "EpisodeLog", "HertzContact", "KelvinVoigtContact", "ModalChannels",
@@ -117,6 +121,15 @@ PACKAGES: dict[str, list[str]] = {
     "rattle_lab.sdf": [
         "SDFParams", "SDFState", "ImpactLog", "Crossings", "DenseSamples", "SimResult",
         "simulate", "flow", "particular_coeffs", "particular_state", "homogeneous_transition"
+    ],
+    "rattle_lab.store": [
+        "ingest", "read_catalogue", "open_stored_record", "IngestReport", "InputResult",
+        "CATALOGUE_COLUMNS", "file_hash", "input_key", "MappingIgnoredWarning", "STORE_FORMAT",
+        "STORE_VERSION", "READABLE_VERSIONS", "open_store", "edit_store", "store_lock",
+        "has_path", "read_results", "write_results", "StoredResults", "CACHE_GROUP",
+        "read_cache_keys", "record_cache_keys", "read_cached", "write_cached", "output_digest",
+        "input_hashes", "provenance_log", "verify_store", "check_linked_inputs", "Mismatch",
+        "record_attrs_count", "REINGEST_ADVICE"
     ],
 }
 

@@ -48,7 +48,14 @@ from ..sdf._types import SDFParams, SDFState
 from ..sdf.simulate import simulate
 from ._dask import check_execution, chunk_rows, run_chunks
 from .lyapunov import lyapunov_from_result
-from .sweep import PERIOD_RTOL, _check_classification_window, _check_int, _classify
+from .sweep import (
+    KIND_CODES,
+    KIND_NAMES,
+    PERIOD_RTOL,
+    _check_classification_window,
+    _check_int,
+    classify_settled,
+)
 
 MapKind = Literal["regime", "basin"]
 
@@ -85,7 +92,9 @@ def _attractor_rows(task: tuple[np.ndarray, tuple[int, int, int, float, bool]]) 
         imp = res.impacts
         i0 = int(np.searchsorted(imp.t, t_keep, side="left"))
         t, v = imp.t[i0:], imp.v_in[i0:]
-        kind, m, n = _classify(t, v, t_keep, res.state.t, p.period, n_max, rtol)
+        regime, _ = classify_settled(p, t, v, t_start=t_keep, end_state=res.state,
+                                     n_max=n_max, rtol=rtol)
+        kind, m, n = KIND_CODES[regime.kind], regime.m, regime.n
         lyap = math.nan
         if lyapunov and kind == 2:
             lyap = lyapunov_from_result(res, t_start=0.0, warmup=t_keep).exponent
@@ -169,7 +178,10 @@ class AttractorMap:
         (``x0``, ``v0``, ``theta0``) of a regime map; ``F``, ``omega``,
         ``zeta``, ``e``, ``theta0`` of a basin map.
     code : ndarray of int
-        0 no impact, 1 periodic, 2 aperiodic (:data:`rattle_lab.analysis.sweep.KIND_CODES`).
+        0 no impact, 1 periodic, 2 aperiodic, 3 unsettled: a periodic match still
+        converging after the extra periods of
+        :func:`~rattle_lab.analysis.sweep.classify_settled`
+        (:data:`rattle_lab.analysis.sweep.KIND_CODES`).
     m, n : ndarray of int
         ``m/n`` of periodic points (0 elsewhere).
     mean_impact_velocity : ndarray
@@ -210,12 +222,12 @@ class AttractorMap:
     provenance: dict[str, object] = field(default_factory=dict)
 
     def labels(self) -> np.ndarray:
-        """Label of every point: ``"no impact"``, ``"m/n"`` or ``"aperiodic"``."""
+        """Label of every point: ``"no impact"``, ``"m/n"``, ``"aperiodic"`` or ``"unsettled"``."""
         out = np.empty(self.code.shape, dtype=object)
         for idx in np.ndindex(self.code.shape):
             c = int(self.code[idx])
-            out[idx] = f"{int(self.m[idx])}/{int(self.n[idx])}" if c == 1 else \
-                ("no impact" if c == 0 else "aperiodic")
+            out[idx] = f"{int(self.m[idx])}/{int(self.n[idx])}" if c == 1 else KIND_NAMES[c]\
+                .replace("no-impact", "no impact")
         return out
 
     def counts(self) -> dict[str, int]:
@@ -693,7 +705,7 @@ def plot_attractor_map(amap: AttractorMap, path: str | Path, *, max_labels: int 
     check_plot_path(path)
     labels = amap.labels().astype(str)
     ranked = list(amap.counts())
-    fixed_colors = {"no impact": "#ffffff", "aperiodic": "#222222"}
+    fixed_colors = {"no impact": "#ffffff", "aperiodic": "#222222", "unsettled": "#bbbbbb"}
     shown = ranked[:max_labels - 1] if len(ranked) > max_labels else ranked
     palette = list(matplotlib.colormaps["tab20"].colors)  # type: ignore[attr-defined]
     colors: list[Any] = []

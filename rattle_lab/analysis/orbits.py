@@ -268,13 +268,22 @@ class OneOverNOrbit:
         NaN if ``v_im <= 0``.
     trace, det : float
         Trace and determinant of the monodromy (``det = e^2 exp(-2 zeta T)``).
-    stable : bool
-        Both multipliers strictly inside the unit circle (meaningful when
-        ``exists``).
-    instability : {"none", "saddle-node", "period-doubling"}
+    stable : bool or None
+        Both multipliers strictly inside the unit circle.  ``None`` when the
+        orbit does not exist (``exists`` is False: the impact velocity is not
+        positive, or the trajectory reaches the stop between impacts): a
+        motion that is not one of the model has no stability verdict.
+    instability : {"none", "saddle-node", "period-doubling"} or None
         Which way a multiplier is outside the unit circle: real ``> 1`` (lost
         or gained through +1, a saddle-node) or real ``< -1`` (through -1, a
-        period doubling).
+        period doubling); ``None`` when the orbit does not exist.
+
+    Notes
+    -----
+    Existence and stability are two verdicts: ``multipliers``, ``trace`` and
+    ``det`` are those of the formal fixed point of the impact map (also where
+    it is not a motion of the model, for continuation), but only an existing
+    orbit is classified.
     """
 
     params: SDFParams
@@ -289,8 +298,8 @@ class OneOverNOrbit:
     multipliers: tuple[complex, complex]
     trace: float
     det: float
-    stable: bool
-    instability: Instability
+    stable: bool | None
+    instability: Instability | None
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready dictionary (non-finite numbers become None)."""
@@ -336,7 +345,7 @@ def one_over_n_orbits(params: SDFParams, n: int) -> tuple[OneOverNOrbit, ...]:
     -------
     tuple of OneOverNOrbit
         ``(lo, hi)`` when eq. (3.5) has real roots, else empty.  Check
-        ``exists`` and ``stable`` on each.
+        ``exists`` on each; ``stable`` is ``None`` where it is False.
 
     Raises
     ------
@@ -366,17 +375,20 @@ def one_over_n_orbits(params: SDFParams, n: int) -> tuple[OneOverNOrbit, ...]:
     out = []
     for i, branch in enumerate(("lo", "hi")):
         physical = v[i] > 0.0
+        exists = bool(physical and clear[i] > 0.0)
+        stable: bool | None = None
+        instability: Instability | None = None
         if physical:
-            stable, instability = _classify(float(tr[i]), float(det[i]))
             mults = (complex(l1[i]), complex(l2[i]))
+            if exists:
+                stable, instability = _classify(float(tr[i]), float(det[i]))
         else:
-            stable, instability = False, "none"
             mults = (complex(math.nan, math.nan),) * 2
         out.append(OneOverNOrbit(
             params=params, n=n, branch=branch, v_im=float(v[i]),  # type: ignore[arg-type]
             phase=float(phase[i]), period=float(fam.T),
             clearance=float(clear[i]), t_max=float(t_max[i]),
-            exists=bool(physical and clear[i] > 0.0), multipliers=mults,
+            exists=exists, multipliers=mults,
             trace=float(tr[i]) if physical else math.nan, det=float(det[i]),
             stable=stable, instability=instability))
     return tuple(out)

@@ -16,7 +16,10 @@ is the thesis's model of a slow sweep experiment (4.2; Appendix A.1,
 * the regime: no impact, ``m/n`` periodic, or aperiodic
   (:func:`classify_impacts`), and for aperiodic motion its largest Lyapunov
   exponent (:mod:`rattle_lab.analysis.lyapunov`), so that chaos is a measured
-  statement;
+  statement.  An ``m/n`` match must be settled (:func:`classify_settled`): a
+  transient still converging to a shorter period (a 1/3 orbit near its period
+  doubling matches 2/6 first) is run longer on a side run until it settles,
+  else it is called ``"unsettled"``; a wrong period is never reported;
 * the linear estimate of the impact velocity (eq. 4.7-4.11,
   :func:`rattle_lab.linear.linear_impact_velocity`), NaN where linear theory
   predicts no impact.
@@ -32,6 +35,13 @@ The gap
     nondimensional state ``(x, v)`` is carried to the next value unchanged, as
     for the other parameters.
 
+One compiled call
+    A whole sweep direction (all values, discarded and kept periods) is one call
+    of the compiled kernel (:func:`rattle_lab.sdf._kernel.run_sweep`), the same
+    motion bit for bit as one ``simulate`` call per window; the
+    classification, Lyapunov exponents and settle runs follow from the recorded
+    end states.
+
 All quantities are nondimensional.
 """
 
@@ -40,201 +50,55 @@ from __future__ import annotations
 import csv
 import math
 import os
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .._progress import progress
 from .._version import __version__
-from ..exceptions import ParameterError
+from ..exceptions import NumericalWarning, ParameterError, SimulationError
 from ..linear import linear_impact_velocity
 from ..sdf._types import SDFParams, SDFState
-from ..sdf.simulate import simulate
+from ._periods import (  # re-exported: the period detection lived here before the split
+    KIND_CODES,  # noqa: F401
+    KIND_NAMES,  # noqa: F401
+    PERIOD_RTOL,
+    SETTLE_CYCLES,
+    Regime,
+    RegimeKind,  # noqa: F401
+    _check_int,
+    _classify,  # noqa: F401
+    classify_impacts,
+    classify_settled,
+    periodic_label_settled,
+)
 from .lyapunov import LyapunovResult, lyapunov_exponent
 
 SweepParam = Literal["omega", "F", "e", "gap"]
 Direction = Literal["up", "down"]
 LyapunovMode = Literal["aperiodic", "all", "none"]
-RegimeKind = Literal["no-impact", "periodic", "aperiodic"]
-
 SWEEP_PARAMS: tuple[SweepParam, ...] = ("omega", "F", "e", "gap")
 DIRECTIONS: tuple[Direction, ...] = ("up", "down")
 LYAPUNOV_MODES: tuple[LyapunovMode, ...] = ("aperiodic", "all", "none")
-#: Integer codes of the regime kinds in arrays (maps).
-KIND_CODES: dict[RegimeKind, int] = {"no-impact": 0, "periodic": 1, "aperiodic": 2}
-KIND_NAMES: tuple[RegimeKind, ...] = ("no-impact", "periodic", "aperiodic")
-
-#: Default relative tolerance of the period detection (see :func:`classify_impacts`).
-PERIOD_RTOL = 1e-4
 
 __all__ = [
     "Regime",
     "SweepPoint",
     "Sweep",
     "classify_impacts",
+    "classify_settled",
+    "periodic_label_settled",
     "sweep_values",
     "sweep",
     "sweep_up_down",
     "plot_sweeps",
     "write_sweeps_csv",
 ]
-
-
-# ---------------------------------------------------------------------------
-# Period detection
-# ---------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Regime:
-    """Classification of a motion from its impacts.
-
-    Attributes
-    ----------
-    kind : {"no-impact", "periodic", "aperiodic"}
-        No impact in the window; ``m/n`` periodic; neither.
-    m : int
-        Impacts per period (0 unless periodic).
-    n : int
-        Forcing periods per period, the smallest found (0 unless periodic).
-    """
-
-    kind: RegimeKind
-    m: int = 0
-    n: int = 0
-
-    @property
-    def label(self) -> str:
-        """``"no impact"``, ``"m/n"`` or ``"aperiodic"``."""
-        if self.kind == "periodic":
-            return f"{self.m}/{self.n}"
-        return "no impact" if self.kind == "no-impact" else "aperiodic"
-
-    @property
-    def code(self) -> int:
-        """Integer code of ``kind`` (:data:`KIND_CODES`)."""
-        return KIND_CODES[self.kind]
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {"kind": self.kind, "m": self.m, "n": self.n, "label": self.label}
-
-
-@numba.njit(cache=True, nogil=True)
-def _classify(t: np.ndarray, v: np.ndarray, t_start: float, t_stop: float, period: float,
-              n_max: int, rtol: float) -> tuple[int, int, int]:
-    """(kind code, m, n); see :func:`classify_impacts`."""
-    N = t.shape[0]
-    if N == 0:
-        return 0, 0, 0
-    vscale = 0.0
-    for i in range(N):
-        vscale = max(vscale, abs(v[i]))
-    tol_t = rtol * period
-    tol_v = rtol * max(vscale, 1e-300)
-    for n in range(1, n_max + 1):
-        P = n * period
-        if t_start + 2.0 * P > t_stop + tol_t:
-            break  # two periods no longer fit in the window
-        if t[0] - P > t_start + tol_t:
-            continue  # a whole period without impact, then impacts: not n-periodic
-        m = 0
-        while m < N and t[m] < t[0] + P - tol_t:
-            m += 1
-        if m >= N:
-            continue
-        ok = True
-        for i in range(N):
-            if i + m < N:
-                if abs(t[i + m] - t[i] - P) > tol_t or abs(v[i + m] - v[i]) > tol_v:
-                    ok = False
-                    break
-            elif t[i] + P < t_stop - tol_t:
-                ok = False  # the repeat of impact i is missing from the window
-                break
-        if ok:
-            return 1, m, n
-    return 2, 0, 0
-
-
-def classify_impacts(t: ArrayLike, v_in: ArrayLike, *, t_start: float, t_stop: float,
-                     omega: float, n_max: int = 12, rtol: float = PERIOD_RTOL) -> Regime:
-    """Classify the motion in ``[t_start, t_stop]`` from its impacts: none, m/n or aperiodic.
-
-    The motion is ``m/n`` periodic when, for the smallest ``n <= n_max``, the
-    impact sequence repeats after ``m`` impacts and ``n`` forcing periods
-    ``T = 2 pi / omega``: for every impact ``i`` with a successor ``i + m`` in
-    the window ``|t_{i+m} - t_i - n T| <= rtol T`` and
-    ``|v_{i+m} - v_i| <= rtol max(v)``, and every impact whose repeat would
-    fall inside the window has one.  Only ``n`` with two full periods in the
-    window are tried (``2 n T <= t_stop - t_start``).
-
-    Why ``rtol = 1e-4``: after the discarded transient, the distance to a
-    periodic attractor decays like ``|mu|^k`` (``mu`` its leading Floquet
-    multiplier); a tolerance far above rounding lets orbits close to a
-    bifurcation (``|mu|`` near 1) count as periodic as they would on the
-    thesis's plots, while a chaotic sequence matching itself to 1e-4 over
-    a whole window (two periods or more) does not happen in practice: the
-    Lyapunov exponent, not this test, is the evidence of chaos.
-
-    Parameters
-    ----------
-    t, v_in : array_like
-        Impact times (sorted) and incoming velocities in the window.
-    t_start, t_stop : float
-        The window (nondimensional time).
-    omega : float
-        Forcing frequency (nondimensional).
-    n_max : int
-        Largest period, in forcing periods, to try (>= 1).
-    rtol : float
-        Relative tolerance (> 0), see above.
-
-    Returns
-    -------
-    Regime
-
-    Raises
-    ------
-    ParameterError
-        On an invalid argument.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> T = 2 * np.pi
-    >>> t = np.arange(10) * 2 * T + 0.3          # one impact every two periods
-    >>> classify_impacts(t, np.full(10, 0.5), t_start=0.0, t_stop=20 * T, omega=1.0).label
-    '1/2'
-    >>> classify_impacts([], [], t_start=0.0, t_stop=20 * T, omega=1.0).label
-    'no impact'
-    """
-    tt = np.ascontiguousarray(t, dtype=float).ravel()
-    vv = np.ascontiguousarray(v_in, dtype=float).ravel()
-    if tt.shape != vv.shape:
-        raise ParameterError(f"`t` and `v_in` must have the same length, were {tt.size} and {vv.size}")
-    if tt.size > 1 and np.any(np.diff(tt) < 0):
-        raise ParameterError("`t` must be sorted")
-    if not (math.isfinite(omega) and omega > 0):
-        raise ParameterError(f"`omega` must be finite and > 0, was {omega}")
-    _check_int("n_max", n_max, 1)
-    if not (math.isfinite(rtol) and rtol > 0):
-        raise ParameterError(f"`rtol` must be finite and > 0, was {rtol}")
-    if not t_stop > t_start:
-        raise ParameterError(f"`t_stop` must be > t_start = {t_start}, was {t_stop}")
-    kind, m, n = _classify(tt, vv, float(t_start), float(t_stop), 2.0 * math.pi / omega,
-                           int(n_max), float(rtol))
-    return Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n))
-
-
-def _check_int(name: str, value: object, lo: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) < lo:
-        raise ParameterError(f"`{name}` must be an integer >= {lo}, was {value!r}")
-    return int(value)
 
 
 # ---------------------------------------------------------------------------
@@ -273,6 +137,11 @@ class SweepPoint:
     linear_impact_velocity : float
         Linear estimate of the impact velocity, eq. (4.7)-(4.11)
         (``omega sqrt(x_max^2 - 1)``); NaN where linear theory predicts no impact.
+    settle_cycles : float
+        Extra forcing periods run (on a side run from the value's end state) to
+        settle a periodic match that was still converging in the kept window
+        (:func:`classify_settled`); 0 when it was settled at once.  The
+        recorded impacts are those of the kept window either way.
     """
 
     value: float
@@ -285,6 +154,7 @@ class SweepPoint:
     sticking: bool
     lyapunov: LyapunovResult | None
     linear_impact_velocity: float
+    settle_cycles: float = 0.0
 
     @property
     def chaotic(self) -> bool:
@@ -308,6 +178,7 @@ class SweepPoint:
             "lyapunov": None if self.lyapunov is None else self.lyapunov.to_dict(),
             "chaotic": self.chaotic,
             "linear_impact_velocity": _num(self.linear_impact_velocity),
+            "settle_cycles": self.settle_cycles,
         }
 
 
@@ -497,11 +368,39 @@ def _check_settings(param: object, cycles: object, discard: object, n_max: objec
     return cycles_i, discard_i, n_max_i
 
 
+def _run_sweep(all_params: Sequence[SDFParams], state: SDFState, discard: int, kept: int
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Run a sweep direction in one compiled call; raise and warn as ``simulate`` does.
+
+    Returns the arrays of :func:`rattle_lab.sdf._kernel.run_sweep`.
+    """
+    from ..sdf._compiled import jit_kernel
+
+    zeta = all_params[0].zeta
+    out = jit_kernel.run_sweep(np.array([q.F for q in all_params]),
+                               np.array([q.omega for q in all_params]),
+                               np.array([q.e for q in all_params]), zeta, state.t, state.x,
+                               state.v, state.theta, bool(state.stuck), float(discard), float(kept))
+    imp, crs, off, ends, info = out
+    bad = np.flatnonzero(info[:, 1] != 0)
+    if bad.size:
+        q = all_params[int(bad[0])]
+        raise SimulationError(
+            f"event budget exhausted in the sweep at F={q.F}, omega={q.omega}, zeta={q.zeta}, "
+            f"e={q.e}; shorten `cycles`")
+    unresolved = int(np.sum(info[:, 2]))
+    if unresolved:
+        warnings.warn(f"{unresolved} event searches of the sweep were settled at the work cap; "
+                      "impacts in them are located only to the resolution reached",
+                      NumericalWarning, stacklevel=3)
+    return imp, crs, off, ends, info
+
+
 def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: Direction = "up",
           cycles: int = 100, discard: int = 70, state: SDFState | None = None, n_max: int = 12,
           rtol: float = PERIOD_RTOL, lyapunov: LyapunovMode = "aperiodic",
           lyapunov_cycles: float = 300.0, lyapunov_warmup: float = 50.0,
-          quiet: bool = True) -> Sweep:
+          settle_cycles: float = SETTLE_CYCLES, quiet: bool = True) -> Sweep:
     """Slow sweep of one parameter with the state carried from value to value (thesis 4.2).
 
     Parameters
@@ -536,6 +435,12 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
         ``lyapunov_warmup`` of them aligning the tangent vector.
     lyapunov_cycles, lyapunov_warmup : float
         See ``lyapunov``.
+    settle_cycles : float
+        A periodic match in the kept window that is still converging (to a
+        shorter period, say a 1/3 orbit near its period doubling that matches
+        2/6 first) is not reported: the motion is run longer, on a side run of
+        at most this many forcing periods, until it settles, else the regime
+        is ``"unsettled"`` (:func:`classify_settled`).
     quiet : bool
         No progress bar (one is drawn on a terminal otherwise).
 
@@ -562,6 +467,9 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
         raise ParameterError(f"`direction` must be one of {DIRECTIONS}, was {direction!r}")
     cycles_i, discard_i, n_max_i = _check_settings(param, cycles, discard, n_max, rtol,
                                                    lyapunov, lyapunov_cycles, lyapunov_warmup)
+    settle_cycles = float(settle_cycles)
+    if not (math.isfinite(settle_cycles) and settle_cycles >= 0):
+        raise ParameterError(f"`settle_cycles` must be finite and >= 0, was {settle_cycles}")
     grid = np.asarray(values, dtype=float).ravel()
     if grid.size == 0:
         raise ParameterError("`values` must not be empty")
@@ -580,33 +488,33 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
     linear = np.atleast_1d(linear_impact_velocity(np.array([q.F for q in all_params]),
                                                   np.array([q.omega for q in all_params]),
                                                   base.zeta))
+    # The whole direction in one compiled call (rattle_lab.sdf._kernel.run_sweep): at each
+    # value `discard` periods without crossings (a second call from the same state and
+    # forcing phase is the same motion, and the cheaper one), then the kept periods.
+    imp_all, crs_all, off, ends, info = _run_sweep(all_params, state, discard_i, kept)
     points: list[SweepPoint] = []
-    for value, p, v_lin in progress(zip(order, all_params, linear), total=len(all_params),
-                                    desc=f"{direction}-sweep of {param}", quiet=quiet,
-                                    unit="value"):
-        # The discarded periods need no crossings: a second call (same state, same
-        # forcing phase) is the same motion, and the cheaper one.
-        if discard_i:
-            state = simulate(p, cycles=discard_i, state=state).state
-        t0 = state.t
-        res = simulate(p, cycles=kept, state=state, crossings=True)
-        state = res.state
-        imp = res.impacts
-        kind, m, n = _classify(imp.t, imp.v_in, t0, state.t, p.period, n_max_i, float(rtol))
-        regime = Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n))
+    for i, (value, p, v_lin) in enumerate(progress(
+            zip(order, all_params, linear), total=len(all_params),
+            desc=f"{direction}-sweep of {param}", quiet=quiet, unit="value")):
+        imp = imp_all[off[i, 0]:off[i + 1, 0]]
+        t0 = float(ends[i, 0])
+        state = SDFState(t=float(ends[i, 1]), x=float(ends[i, 2]), v=float(ends[i, 3]),
+                         theta=float(ends[i, 4]), stuck=bool(ends[i, 5]))
+        regime, extra = classify_settled(p, imp[:, 0], imp[:, 2], t_start=t0, end_state=state,
+                                         n_max=n_max_i, rtol=float(rtol),
+                                         settle_cycles=settle_cycles)
         lyap = None
         if lyapunov == "all" or (lyapunov == "aperiodic" and regime.kind == "aperiodic"):
             lyap = lyapunov_exponent(p, cycles=lyapunov_cycles, warmup_cycles=lyapunov_warmup,
                                      state=state)
-        assert res.crossings is not None
         points.append(SweepPoint(
             value=float(value), params=p,
-            impact_velocities=np.array(imp.v_in), impact_phases=np.array(imp.phase),
-            crossing_velocities=np.array(res.crossings.v),
-            mean_impact_velocity=float(np.sum(imp.v_in) / kept),
-            regime=regime, sticking=bool(res.sticking.shape[0] > 0 or res.accumulations.size > 0),
+            impact_velocities=np.array(imp[:, 2]), impact_phases=np.array(imp[:, 1]),
+            crossing_velocities=np.array(crs_all[off[i, 1]:off[i + 1, 1], 1]),
+            mean_impact_velocity=float(np.sum(imp[:, 2]) / kept),
+            regime=regime, sticking=bool(info[i, 0]),
             lyapunov=lyap,
-            linear_impact_velocity=float(v_lin)))
+            linear_impact_velocity=float(v_lin), settle_cycles=extra))
     provenance: dict[str, object] = {
         "package": "rattle_lab", "version": __version__,
         "function": "rattle_lab.analysis.sweep",
@@ -617,6 +525,7 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
                       "rtol": float(rtol), "lyapunov": lyapunov,
                       "lyapunov_cycles": float(lyapunov_cycles),
                       "lyapunov_warmup": float(lyapunov_warmup),
+                      "settle_cycles": settle_cycles,
                       "initial_state": {"t": initial.t, "x": initial.x, "v": initial.v,
                                         "theta": initial.theta, "stuck": initial.stuck}},
     }

@@ -13,6 +13,8 @@ import math
 import sys
 from typing import Any
 
+from ._types import cycles, positive
+
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     parser = sub.add_parser(
@@ -36,12 +38,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     parser.add_argument("--e", type=float, default=0.6,
                         help="coefficient of restitution, 0..1 (default 0.6)")
     parser.add_argument("--gap-m", type=float, default=1e-3, help="gap h [m] (default 0.001)")
-    parser.add_argument("--f-s-hz", type=float, default=100.0,
+    parser.add_argument("--f-s-hz", type=positive("f_s_hz"), default=100.0,
                         help="modal frequency f_s [Hz] (default 100)")
     parser.add_argument("--participation", type=float, default=1.0,
                         help="modal participation Q1/Q2 (eq. 2.27; default 1: an SDF "
                              "oscillator on a shaken base)")
-    parser.add_argument("--cycles", type=float, default=20.0,
+    parser.add_argument("--cycles", type=cycles(), default=20.0,
                         help="forcing periods shown per run (default 20)")
     parser.add_argument("--save-png", metavar="FILE",
                         help="render the initial state to FILE (png/pdf/svg) and exit; "

@@ -10,6 +10,7 @@ import argparse
 import json
 import math
 import sys
+import warnings
 from typing import Any
 
 
@@ -35,6 +36,15 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     parser.add_argument("--copy", action="store_true",
                         help="copy every sample into the store, so that it stands alone (default: "
                              "link the datasets of HDF5 inputs, copy the rest)")
+    parser.add_argument("--replace", action="store_true",
+                        help="a run already in the store from another input (e.g. this file, "
+                             "changed since it was ingested) is replaced: the stored input that "
+                             "holds it is removed, with all its runs")
+    parser.add_argument("--allow-links", action="store_true",
+                        help="resolve HDF5 external links, virtual datasets and external storage "
+                             "of the inputs, but only to files inside the input's folder (they "
+                             "are hashed and copied); default: refuse any reference out of an "
+                             "input")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_run)
@@ -46,11 +56,18 @@ def _warn(finding: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..ingest import ingest
+    from ..exceptions import RattleLabWarning
+    from ..store import ingest
 
-    report = ingest(args.files, args.output, mapping=args.mapping,
-                    storage="copy" if args.copy else "link", allow_flagged=args.allow_flagged,
-                    quiet=args.quiet, on_warning=_warn)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RattleLabWarning)
+        report = ingest(args.files, args.output, mapping=args.mapping,
+                        storage="copy" if args.copy else "link",
+                        allow_flagged=args.allow_flagged, quiet=args.quiet, on_warning=_warn,
+                        replace=args.replace, allow_links=args.allow_links)
+    for w in caught:  # options that did not apply, etc.: one line each
+        print(f"rattle-lab: warning: {w.category.__name__}: {' '.join(str(w.message).split())}",
+              file=sys.stderr)
     if args.json:
         print(json.dumps(_as_json(report), indent=2, allow_nan=False))
     else:

@@ -107,8 +107,9 @@ def _run_orbits(args: argparse.Namespace) -> int:
         for o in orbs:
             m1, m2 = (abs(m) for m in o.multipliers)
             print(f"{n:>3} {o.branch:>6} {o.v_im:>10.5f} {o.phase:>8.4f} {str(o.exists):>6} "
-                  f"{o.clearance:>10.4g} {m1:>8.4f} {m2:>8.4f} {str(o.stable):>6}  "
-                  f"{o.instability}")
+                  f"{o.clearance:>10.4g} {m1:>8.4f} {m2:>8.4f} "
+                  f"{'-' if o.stable is None else str(o.stable):>6}  "
+                  f"{'-' if o.instability is None else o.instability}")
     return 0
 
 

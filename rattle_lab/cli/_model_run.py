@@ -9,6 +9,7 @@ import sys
 import numpy as np
 
 from ..sdf import SDFParams, SDFState, simulate
+from ._types import cycles, finite, non_negative, positive, probability
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -18,16 +19,16 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
             "Simulate x'' + 2 zeta x' + x = F cos(omega t + phi) for x < 1 with v -> -e v at "
             "x = 1 (thesis eq. 2.33; all quantities nondimensional) with the exact "
             "event-driven solver, and print the impacts."))
-    parser.add_argument("--F", type=float, required=True, help="forcing amplitude F (nondimensional)")
-    parser.add_argument("--omega", type=float, required=True,
+    parser.add_argument("--F", type=non_negative("F"), required=True, help="forcing amplitude F (nondimensional)")
+    parser.add_argument("--omega", type=positive("omega"), required=True,
                         help="forcing frequency / modal frequency (nondimensional)")
-    parser.add_argument("--zeta", type=float, required=True, help="damping ratio")
-    parser.add_argument("--e", type=float, required=True, help="coefficient of restitution, 0..1")
-    parser.add_argument("--cycles", type=float, default=20.0,
+    parser.add_argument("--zeta", type=non_negative("zeta"), required=True, help="damping ratio")
+    parser.add_argument("--e", type=probability("e"), required=True, help="coefficient of restitution, 0..1")
+    parser.add_argument("--cycles", type=cycles(), default=20.0,
                         help="forcing periods to simulate (default 20)")
-    parser.add_argument("--x0", type=float, default=0.0, help="initial displacement (default 0)")
-    parser.add_argument("--v0", type=float, default=0.0, help="initial velocity (default 0)")
-    parser.add_argument("--phase", type=float, default=0.0,
+    parser.add_argument("--x0", type=finite("x0"), default=0.0, help="initial displacement (default 0)")
+    parser.add_argument("--v0", type=finite("v0"), default=0.0, help="initial velocity (default 0)")
+    parser.add_argument("--phase", type=finite("phase"), default=0.0,
                         help="initial forcing phase phi in rad (default 0)")
     parser.add_argument("--method", choices=("exact", "exact-python", "rk4-thesis"),
                         default="exact", help="solver (default: exact)")

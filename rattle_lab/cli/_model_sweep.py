@@ -44,8 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "periods from the previous value's final state (forcing phase continuous), "
                     "discards the first --discard, and records the impact velocities, the "
                     "upward x = 0 crossing velocities, the average impact velocity per cycle, "
-                    "the regime (no impact, m/n periodic, aperiodic) and, for aperiodic "
-                    "motion, the largest Lyapunov exponent.  " + _GAP_HELP + ".",
+                    "the regime (no impact, m/n periodic, aperiodic, or 'unsettled': a periodic "
+                    "match still converging after 1000 extra periods, never a wrong m/n) and, "
+                    "for aperiodic motion, the largest Lyapunov exponent.  " + _GAP_HELP + ".",
         formatter_class=_Formatter)
     sw.add_argument("--param", default="omega", help="swept parameter: omega, F, e or gap "
                     "(see the description for gap)")
@@ -211,6 +212,13 @@ def _run_sweep(args: argparse.Namespace) -> int:
         if ap:
             pos = sum(1 for p in ap if p.lyapunov is not None and p.lyapunov.exponent > 0)
             print(f"  aperiodic values: {len(ap)}, with positive Lyapunov exponent: {pos}")
+        unsettled = [p.value for p in s.points if p.regime.kind == "unsettled"]
+        longer = [p for p in s.points if p.settle_cycles > 0 and p.regime.kind != "unsettled"]
+        if unsettled or longer:
+            print(f"  run longer to settle the period: {len(longer)} values; still unsettled "
+                  f"after that: {len(unsettled)}"
+                  + (f" ({', '.join(f'{v:g}' for v in unsettled[:8])}"
+                     f"{', ...' if len(unsettled) > 8 else ''})" if unsettled else ""))
     return 0
 
 

@@ -20,7 +20,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from .._progress import progress_bar
@@ -28,8 +27,9 @@ from .._version import __version__
 from ..detect import (ImpactParams, cross_correlation_delay, detect_impacts, impact_pattern,
                       impulse_train, rms_spl_db, sound_peaks)
 from ..exceptions import ParameterError, RattleLabError
-from ..ingest import open_stored_record, read_catalogue
-from ..results import RunResult, StoreFit, write_results
+from ..results import RunResult, StoreFit
+from ..store import (check_linked_inputs, input_hashes, open_stored_record, read_catalogue,
+                     write_results)
 from ..thresholds import Threshold, ramp_threshold, tabulate_thresholds
 from ._grazing import GrazingFit, fit_grazing
 from ._damping import fit_zeta_ramp
@@ -255,10 +255,8 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     catalogue = read_catalogue(store, level="runs")
     keys = list(dict.fromkeys(catalogue["input_key"]))
     runs: list[RunResult] = []
-    inputs: dict[str, str] = {}
-    with h5py.File(store, "r") as fh:
-        for key in keys:
-            inputs[key] = str(fh[f"records/{key}"].attrs.get("ingest_input_hash", ""))
+    check_linked_inputs(store, keys)  # the bytes read are those ingested (full re-hash)
+    inputs = input_hashes(store, keys)
     with progress_bar(int(catalogue.shape[0]), desc="detect", unit="run", quiet=quiet) as bar:
         for key in keys:
             record = open_stored_record(store, key)

@@ -12,16 +12,39 @@ and kinetic energies of the thin plate give ``K c = lambda**2 M c`` with
 where ``Ek = int phi_p^(k) phi_q^(k)``, ``C = int phi_p'' phi_q`` and ``(x)`` is the
 Kronecker product; ``lambda = omega a**2 sqrt(rho h_p / D)`` (eq. 2.25).  The
 generalized symmetric eigenproblem is solved with :func:`scipy.linalg.eigh`, split
-into the symmetry classes of the terms where opposite edges are alike.  Beam
-functions are not admissible for the natural boundary conditions of a free edge
-but span them in the limit, so ``lambda`` converges from above.
+into the symmetry classes of the terms where opposite edges are alike.
+
+Free edges
+    Products of beam functions converge very slowly where an edge is free: every
+    free-free beam function has zero second and third derivatives at the free end,
+    whereas the plate's free edge has ``W_xx = -nu W_yy != 0``; with 12 x 12 terms
+    ``lambda`` was 0.4-0.45 % high (SFSF, CFCF, CFFF) and 15 x 15 terms gained only
+    7.7e-4.  For a plate with a free edge the basis is therefore polynomial in both
+    directions:
+    ``s^a (1 - s)^b P_k(2 s - 1)`` (``a, b`` = 2, 1, 0 for a clamped, simply
+    supported, free end: only the geometric conditions are imposed), made
+    orthonormal on [0, 1]; it spans every smooth admissible function and
+    converges exponentially (beam functions along a clamped direction would need
+    ~40 terms for 1e-6).  Plates without a free edge keep beam functions (exact
+    sines for S-S).  ``lambda`` converges from above either way.
+
+Basis size
+    By default (``n_terms=None``) the number of terms is chosen by a convergence
+    check: it grows by :data:`N_TERMS_STEP` per direction from
+    :data:`DEFAULT_N_TERMS` until the estimated error of the requested
+    ``lambda`` is at most :data:`CONVERGED_RTOL` (relative), so that every edge
+    set is within 1e-4 of its converged value (the tests compare with Leissa's values and a
+    high-order solution).
 """
 
 from __future__ import annotations
 
+import functools
 import math
+from dataclasses import dataclass
 
 import numpy as np
+from numpy.polynomial import legendre
 
 from ..exceptions import ConvergenceError, ParameterError
 from ._beam import BeamBasis, beam_basis, gauss_points
@@ -29,11 +52,18 @@ from ._edges import check_edges, x_ends, y_ends
 from ._simply_supported import _check_aspect_ratio, _check_count
 from ._types import PlateModes
 
-#: Default number of beam functions along each side: 12 x 12 = 144 unknowns.  It
-#: reproduces every Leissa value of Tables 2.1 and 2.2 to 1.5 % (1.04 % at worst, see
-#: the tests); raising it to 15 changes lambda_1 by 7.7e-4 relative for CFCF (free edges
-#: converge slowly) and 1e-5 for CCCC.
+#: First size (terms per side) of the convergence check, and the size of every check
+#: step's smallest problem.  Fixed at 12 x 12 beam functions, free-edge plates were
+#: 0.4-0.45 % high; see the module docstring.
 DEFAULT_N_TERMS = 12
+
+#: Terms added per direction between two sizes of the convergence check.
+N_TERMS_STEP = 4
+#: The basis has converged when the estimated error of the requested lambda
+#: (relative to max(lambda, 1)) is at most this (see :func:`_converged_size`).
+CONVERGED_RTOL = 1e-5
+#: Most terms per direction the convergence check tries.
+MAX_N_TERMS = 40
 
 #: A mode's centre is a node when |W(centre)| <= NODE_RTOL * max |W|.  Symmetry makes
 #: such centres vanish to rounding (~1e-14); 1e-6 leaves room for that.
@@ -45,7 +75,91 @@ DEGENERATE_RTOL = 1e-8
 _GRID_SEARCH = 101
 
 
-def _gram(basis: BeamBasis) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+_END_POWER = {"C": 2, "S": 1, "F": 0}
+
+
+@dataclass(frozen=True)
+class PolyBasis:
+    """Orthonormal polynomials on [0, 1] satisfying the geometric end conditions.
+
+    ``phi_k`` is an orthonormal combination (Cholesky of the Gram matrix) of
+    ``s^a (1 - s)^b P_k(2 s - 1)``, ``k < n``, with ``a, b`` = 2 (C), 1 (S),
+    0 (F) at ``s = 0`` and ``s = 1``.  Same interface as
+    :class:`rattle_lab.plate._beam.BeamBasis` (``left``, ``right``, ``len``,
+    ``evaluate``).
+
+    Attributes
+    ----------
+    left, right : str
+        End conditions at s = 0 and s = 1.
+    coef : numpy.ndarray
+        Shape (n, degree + 1): Legendre-series coefficients of each function in
+        ``u = 2 s - 1``.
+    """
+
+    left: str
+    right: str
+    coef: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.coef.shape[0])
+
+    def evaluate(self, s: np.ndarray, order: int = 0) -> np.ndarray:
+        """``(d/ds)^order phi_i(s)`` for every function i; shape (n, len(s))."""
+        u = 2.0 * np.asarray(s, dtype=float) - 1.0
+        c = self.coef
+        if order:
+            c = legendre.legder(c, m=order, scl=2.0, axis=1)
+        return c @ legendre.legvander(u, c.shape[1] - 1).T
+
+
+@functools.lru_cache(maxsize=64)
+def poly_basis(left: str, right: str, n: int) -> PolyBasis:
+    """The first ``n`` functions of :class:`PolyBasis` for the ends ``left``, ``right``."""
+    # s = (1 + u) / 2 and 1 - s = (1 - u) / 2 as Legendre series in u
+    factor = np.array([1.0])
+    for _ in range(_END_POWER[left]):
+        factor = legendre.legmul(factor, [0.5, 0.5])
+    for _ in range(_END_POWER[right]):
+        factor = legendre.legmul(factor, [0.5, -0.5])
+    deg = n - 1 + factor.size - 1
+    raw: np.ndarray = np.zeros((n, deg + 1))
+    for k in range(n):
+        unit = np.zeros(k + 1)
+        unit[k] = 1.0
+        prod = legendre.legmul(factor, unit)
+        raw[k, :prod.size] = prod
+    s, w = gauss_points()
+    vander = legendre.legvander(2.0 * s - 1.0, deg)
+    for _ in range(2):  # Gram-Schmidt by Cholesky, twice for orthonormality to rounding
+        V = raw @ vander.T
+        raw = np.linalg.solve(np.linalg.cholesky((V * w) @ V.T), raw)
+    raw.setflags(write=False)
+    return PolyBasis(left=left, right=right, coef=raw)
+
+
+def plate_bases(edges: str, nx: int, ny: int) -> tuple[BeamBasis | PolyBasis,
+                                                        BeamBasis | PolyBasis]:
+    """The Ritz bases along x and y: polynomials if an edge is free, else beam functions."""
+    kind = poly_basis if "F" in edges else beam_basis
+    return kind(*x_ends(edges), nx), kind(*y_ends(edges), ny)
+
+
+def _to_beam_terms(basis: BeamBasis | PolyBasis) -> np.ndarray:
+    """Matrix mapping coefficients on ``basis`` to those on as many beam functions.
+
+    Beam functions are orthonormal on [0, 1], so the projection is ``int phi_beam phi``.
+    It names a mode's dominant term (``m, n``) in beam-function indices whatever the
+    basis.
+    """
+    if isinstance(basis, BeamBasis):
+        return np.eye(len(basis))
+    s, w = gauss_points()
+    beams = beam_basis(basis.left, basis.right, len(basis)).evaluate(s)
+    return (beams * w) @ basis.evaluate(s).T
+
+
+def _gram(basis: BeamBasis | PolyBasis) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     s, w = gauss_points()
     p0 = basis.evaluate(s, 0)
     p1 = basis.evaluate(s, 1)
@@ -58,7 +172,7 @@ def _gram(basis: BeamBasis) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndar
     return e0, e1, e2, c, mean
 
 
-def _parities(basis: BeamBasis) -> np.ndarray:
+def _parities(basis: BeamBasis | PolyBasis) -> np.ndarray:
     """+1 / -1 for functions symmetric / antisymmetric about s = 1/2; 0 when the ends differ.
 
     Beam functions with equal end conditions are exactly (anti)symmetric, so the sign
@@ -81,16 +195,21 @@ def _solve_by_parity(K: np.ndarray, M: np.ndarray, px: np.ndarray,
     """
     import scipy.linalg
 
+    from threadpoolctl import threadpool_limits
+
     labels = [(a, b) for a in px for b in py]  # row-major order of the terms (i, j)
     n = K.shape[0]
     all_vals, all_vecs = [], []
-    for label in sorted(set(labels)):
-        idx = np.array([k for k, lab in enumerate(labels) if lab == label])
-        vals, vecs = scipy.linalg.eigh(K[np.ix_(idx, idx)], M[np.ix_(idx, idx)])
-        full = np.zeros((n, vals.size))
-        full[idx, :] = vecs
-        all_vals.append(vals)
-        all_vecs.append(full)
+    # One BLAS thread: these blocks (a few hundred unknowns) gain nothing from threads,
+    # and on a busy machine oversubscribed threads made them 100x slower.
+    with threadpool_limits(limits=1, user_api="blas"):
+        for label in sorted(set(labels)):
+            idx = np.array([k for k, lab in enumerate(labels) if lab == label])
+            vals, vecs = scipy.linalg.eigh(K[np.ix_(idx, idx)], M[np.ix_(idx, idx)])
+            full = np.zeros((n, vals.size))
+            full[idx, :] = vecs
+            all_vals.append(vals)
+            all_vecs.append(full)
     vals = np.concatenate(all_vals)
     vecs = np.concatenate(all_vecs, axis=1)
     order = np.argsort(vals, kind="stable")
@@ -132,7 +251,7 @@ def _rotate_degenerate(vals: np.ndarray, vecs: np.ndarray, weight: np.ndarray) -
     return vecs
 
 
-def _refine_max(c: np.ndarray, bx: BeamBasis, by: BeamBasis, xi0: float, eta0: float,
+def _refine_max(c: np.ndarray, bx: BeamBasis | PolyBasis, by: BeamBasis | PolyBasis, xi0: float, eta0: float,
                 sign: float) -> tuple[float, float, float]:
     """Local maximum of ``sign * W`` near (xi0, eta0); returns (xi, eta, W)."""
     from scipy.optimize import minimize
@@ -151,8 +270,66 @@ def _refine_max(c: np.ndarray, bx: BeamBasis, by: BeamBasis, xi0: float, eta0: f
     return float(res.x[0]), float(res.x[1]), -sign * float(res.fun)
 
 
+def _solve(r: float, edges: str, nu: float, nx: int, ny: int) -> tuple[
+        BeamBasis | PolyBasis, BeamBasis | PolyBasis, np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Assemble and solve the Ritz eigenproblem with ``nx`` x ``ny`` terms."""
+    bx, by = plate_bases(edges, nx, ny)
+    e0x, e1x, e2x, cx, mx = _gram(bx)
+    e0y, e1y, e2y, cy, my = _gram(by)
+    ra2 = (1.0 / r) ** 2
+    K = (np.kron(e2x, e0y) + ra2**2 * np.kron(e0x, e2y)
+         + nu * ra2 * (np.kron(cx, cy.T) + np.kron(cx.T, cy))
+         + 2.0 * (1.0 - nu) * ra2 * np.kron(e1x, e1y))
+    K = 0.5 * (K + K.T)
+    M = np.kron(e0x, e0y)
+    M = 0.5 * (M + M.T)
+    vals, vecs = _solve_by_parity(K, M, _parities(bx), _parities(by))
+    scale = max(float(np.max(np.abs(vals))), 1.0)
+    if vals[0] < -1e-9 * scale:
+        raise ConvergenceError(f"Ritz stiffness matrix is not positive semi-definite: eigenvalue {vals[0]:.3e}")
+    return bx, by, vals, vecs, mx, my, e0x, e0y
+
+
+def _converged_size(r: float, edges: str, nu: float, n_modes: int) -> tuple[int, int]:
+    """Smallest size (from DEFAULT_N_TERMS in steps of N_TERMS_STEP per direction) at which
+    the estimated error of the first ``n_modes`` lambda is at most CONVERGED_RTOL.
+
+    Ritz values decrease monotonically with the size.  From the last two changes
+    ``d_k``, ``d_(k+1)`` (relative to ``max(lambda, 1)``) with ratio ``q < 1`` the
+    remaining error is estimated as the geometric tail ``d_(k+1) q / (1 - q)``.
+    Exponential convergence (smooth edges) makes that an over-estimate; clamped-free
+    corners make the solution singular and the convergence algebraic (CFCF:
+    changes fall like N^-5), where the geometric tail under-estimates by a factor
+    of about two, well inside the factor ten between CONVERGED_RTOL and the 1e-4
+    target.
+    """
+    n = DEFAULT_N_TERMS
+
+    def lam(k: int) -> np.ndarray:
+        return np.sqrt(np.clip(_solve(r, edges, nu, k, k)[2][:n_modes], 0.0, None))
+
+    prev = lam(n)
+    d_prev: np.ndarray | None = None
+    while n + N_TERMS_STEP <= MAX_N_TERMS:
+        n += N_TERMS_STEP
+        cur = lam(n)
+        d = np.abs(cur - prev) / np.maximum(prev, 1.0)
+        if d_prev is not None:
+            q = d / np.maximum(d_prev, 1e-300)
+            # a change at the rounding level of the eigensolver (~1e-9 relative for
+            # these Gram matrices) is converged whatever its ratio
+            done = (d <= 1e-9) | ((q < 0.9) & (d * q / (1.0 - q) <= CONVERGED_RTOL))
+            if np.all(done):
+                return n, n
+        prev, d_prev = cur, d
+    raise ConvergenceError(
+        f"Ritz modes of {edges} (b/a = {r}) did not converge to {CONVERGED_RTOL:g} "
+        f"with {MAX_N_TERMS} terms per side; pass `n_terms` to choose the size")
+
+
 def ritz_modes(aspect_ratio: float, edges: str, *, nu: float = 0.3, n_modes: int = 6,
-               n_terms: int | tuple[int, int] = DEFAULT_N_TERMS, n_grid: int = 41) -> PlateModes:
+               n_terms: int | tuple[int, int] | None = None, n_grid: int = 41) -> PlateModes:
     """First modes of a thin rectangular plate by Rayleigh-Ritz with beam functions.
 
     Parameters
@@ -168,8 +345,12 @@ def ritz_modes(aspect_ratio: float, edges: str, *, nu: float = 0.3, n_modes: int
         free-edge values are for 0.3).
     n_modes : int
         Number of modes returned, 1 <= n_modes <= number of terms.
-    n_terms : int or (int, int)
-        Beam functions along x and along y (rigid-body modes of free ends included).
+    n_terms : int or (int, int) or None
+        Basis functions along x and along y (rigid-body modes of free ends
+        included): beam functions, or orthonormal polynomials along a direction
+        with a free end (module docstring).  None (default): chosen by the
+        convergence check (:data:`CONVERGED_RTOL`); the size used is
+        ``PlateModes.n_terms``.
     n_grid : int
         Points per side of the grid of :attr:`PlateModes.shapes`, >= 2.
 
@@ -199,33 +380,22 @@ def ritz_modes(aspect_ratio: float, edges: str, *, nu: float = 0.3, n_modes: int
     nu_f = float(nu)
     if not (-1.0 < nu_f < 0.5):
         raise ParameterError(f"`nu` must satisfy -1 < nu < 0.5, was {nu}")
-    nx, ny = _n_terms_pair(n_terms)
+    nx, ny = _n_terms_pair(DEFAULT_N_TERMS if n_terms is None else n_terms)
     n_modes = _check_count("n_modes", n_modes)
     if n_modes > nx * ny:
         raise ParameterError(f"`n_modes` must be <= n_terms_x * n_terms_y = {nx * ny}, was {n_modes}")
     n_grid = _check_count("n_grid", n_grid, minimum=2)
 
-    bx = beam_basis(*x_ends(edges), nx)
-    by = beam_basis(*y_ends(edges), ny)
-    e0x, e1x, e2x, cx, mx = _gram(bx)
-    e0y, e1y, e2y, cy, my = _gram(by)
-    ra2 = (1.0 / r) ** 2
-    K = (np.kron(e2x, e0y) + ra2**2 * np.kron(e0x, e2y)
-         + nu_f * ra2 * (np.kron(cx, cy.T) + np.kron(cx.T, cy))
-         + 2.0 * (1.0 - nu_f) * ra2 * np.kron(e1x, e1y))
-    K = 0.5 * (K + K.T)
-    M = np.kron(e0x, e0y)
-    M = 0.5 * (M + M.T)
-    vals, vecs = _solve_by_parity(K, M, _parities(bx), _parities(by))
-    scale = max(float(np.max(np.abs(vals))), 1.0)
-    if vals[0] < -1e-9 * scale:
-        raise ConvergenceError(f"Ritz stiffness matrix is not positive semi-definite: eigenvalue {vals[0]:.3e}")
+    if n_terms is None:
+        nx, ny = _converged_size(r, edges, nu_f, n_modes)
+    bx, by, vals, vecs, mx, my, e0x, e0y = _solve(r, edges, nu_f, nx, ny)
     weight = np.arange(nx * ny, dtype=float)
     vecs = _rotate_degenerate(vals, vecs, weight)
 
     # Rigid-body modes give lambda**2 = 0 to rounding (checked above); clip that rounding.
     lam = np.sqrt(np.clip(vals[:n_modes], 0.0, None))
 
+    to_bx, to_by = _to_beam_terms(bx), _to_beam_terms(by)
     xi = np.linspace(0.0, 1.0, n_grid)
     eta = np.linspace(0.0, 1.0, n_grid)
     gx = np.linspace(0.0, 1.0, _GRID_SEARCH)
@@ -253,7 +423,8 @@ def ritz_modes(aspect_ratio: float, edges: str, *, nu: float = 0.3, n_modes: int
         out_q2.append(r * float(np.sum(c * (e0x @ c @ e0y))))
         out_at_max.append(at_max)
         out_ref.append((ref_xi, ref_eta))
-        i_dom = np.unravel_index(int(np.argmax(np.abs(c))), c.shape)
+        c_beam = to_bx @ c @ to_by.T
+        i_dom = np.unravel_index(int(np.argmax(np.abs(c_beam))), c_beam.shape)
         out_dom.append((int(i_dom[0]) + 1, int(i_dom[1]) + 1))
         out_shapes.append(Yg.T @ c.T @ Xg)  # (eta, xi)
         out_coef.append(c)

@@ -82,8 +82,9 @@ class PlateModes:
     shapes : numpy.ndarray
         Normalised mode shapes ``W`` on the grid, shape (n_modes, n_eta, n_xi).
     coefficients : numpy.ndarray
-        Ritz coefficients of the normalised shapes, shape (n_modes, n_x, n_y), on the beam
-        functions of :func:`rattle_lab.plate._beam.beam_basis`.
+        Ritz coefficients of the normalised shapes, shape (n_modes, n_x, n_y), on the
+        basis of :func:`rattle_lab.plate._ritz.plate_bases` (beam functions, or
+        orthonormal polynomials for a plate with a free edge).
     """
 
     aspect_ratio: float
@@ -135,15 +136,13 @@ class PlateModes:
         ParameterError
             If a coordinate is outside [0, 1].
         """
-        from ._beam import beam_basis
-        from ._edges import x_ends, y_ends
+        from ._ritz import plate_bases
 
         xi_b, eta_b = np.broadcast_arrays(np.asarray(xi, dtype=float), np.asarray(eta, dtype=float))
         for name, v in (("xi", xi_b), ("eta", eta_b)):
             if np.any(~((v >= 0) & (v <= 1))):
                 raise ParameterError(f"`{name}` must lie in [0, 1], was {v[~((v >= 0) & (v <= 1))].flat[0]}")
-        bx = beam_basis(*x_ends(self.edges), self.n_terms[0])
-        by = beam_basis(*y_ends(self.edges), self.n_terms[1])
+        bx, by = plate_bases(self.edges, *self.n_terms)
         X = bx.evaluate(xi_b.ravel())
         Y = by.evaluate(eta_b.ravel())
         W = np.einsum("kij,ip,jp->kp", self.coefficients, X, Y)
@@ -230,17 +229,17 @@ class Plate:
         n_modes : int
             Number of modes, >= 1.
         n_terms : int or (int, int) or None
-            Beam functions along x and y; None for the solver's default.
+            Basis functions along x and y; None: chosen by the solver's convergence check.
 
         Returns
         -------
         PlateModes
             Nondimensional; use :meth:`frequency_hz` on ``lam`` for frequencies.
         """
-        from ._ritz import DEFAULT_N_TERMS, ritz_modes
+        from ._ritz import ritz_modes
 
         return ritz_modes(self.aspect_ratio, self.edges, nu=self.nu, n_modes=n_modes,
-                          n_terms=DEFAULT_N_TERMS if n_terms is None else n_terms)
+                          n_terms=n_terms)
 
     def omega_rad_s(self, lam: npt.ArrayLike) -> float | np.ndarray:
         """Angular frequency [rad/s] of a nondimensional ``lambda`` (eq. 2.25)."""

@@ -8,14 +8,18 @@ lazy, chunk-wise access to datasets.  Files are only ever opened with mode
 
 from __future__ import annotations
 
+import contextlib
 import os
+from collections.abc import Iterator
+from contextvars import ContextVar
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import h5py
 import numpy as np
 
-from ..exceptions import FileFormatError, SchemaError
+from ..exceptions import DataError, FileFormatError, SchemaError
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
@@ -24,6 +28,144 @@ MAX_ATTRIBUTE_BYTES = 1 << 20
 
 #: Deepest group nesting followed when building the tree.
 MAX_DEPTH = 12
+
+
+@dataclass
+class LinkPolicy:
+    """What may be followed out of an HDF5 input: external links, virtual datasets, external storage.
+
+    Attributes
+    ----------
+    allow : bool
+        False (default): any reference to another file is refused
+        (:class:`LinkError`).  True: references are resolved, but only to
+        existing files inside the input's own folder; the files reached are
+        collected in ``targets`` (so that ingest can hash them).
+    trusted : bool
+        The file is a store this package wrote: its virtual datasets (links
+        to ingested inputs, verified by hash elsewhere) are followed.
+    targets : set of Path
+        Files outside the input reached through references (resolved paths).
+    """
+
+    allow: bool = False
+    trusted: bool = False
+    targets: set[Path] = field(default_factory=set)
+
+
+class LinkError(FileFormatError):
+    """An HDF5 input refers to data in another file, and that is not allowed."""
+
+
+_POLICY: ContextVar[LinkPolicy] = ContextVar("rattle_lab_link_policy", default=LinkPolicy())  # noqa: B039 (see report)
+
+
+@contextlib.contextmanager
+def link_policy(policy: LinkPolicy) -> Iterator[LinkPolicy]:
+    """Apply ``policy`` to the HDF5 files opened (and their lazy sources made) in the block."""
+    token = _POLICY.set(policy)
+    try:
+        yield policy
+    finally:
+        _POLICY.reset(token)
+
+
+def current_link_policy() -> LinkPolicy:
+    """The policy in force (refuse every link unless a caller said otherwise)."""
+    return _POLICY.get()
+
+
+def _approve(policy: LinkPolicy, home: Path, target: Path, where: str, what: str) -> None:
+    """Refuse, or (``policy.allow``) accept a reference from ``home`` to ``target``."""
+    if target == home:
+        return
+    hint = ("; pass --allow-links (allow_links=True) to resolve references inside the "
+            "input's folder")
+    if not policy.allow:
+        raise LinkError(f"{where}: {what} refers to another file ({target}); references out of "
+                        f"an input are refused{hint}")
+    if home.parent not in target.parents:
+        raise LinkError(f"{where}: {what} refers to {target}, outside the input's folder "
+                        f"{home.parent}; refused even with --allow-links")
+    if not target.is_file():
+        raise LinkError(f"{where}: {what} refers to {target}, which does not exist")
+    policy.targets.add(target)
+
+
+def check_references(ds: h5py.Dataset, home: Path, where: str,
+                     policy: LinkPolicy | None = None) -> None:
+    """Check a dataset's virtual sources and external storage against the link policy."""
+    policy = policy if policy is not None else current_link_policy()
+    if policy.trusted:
+        return
+    reached = Path(ds.file.filename).resolve()
+    _approve(policy, home, reached, where, "the path (through an external link)")
+    if ds.is_virtual:
+        for vs in ds.virtual_sources():
+            name = vs.file_name
+            target = reached if name == "." else (reached.parent / name).resolve()
+            _approve(policy, home, target, where, f"virtual dataset source {vs.dset_name!r}")
+    external = ds.external
+    if external:
+        for name, _offset, _size in external:
+            # HDF5 reads external raw storage relative to the working folder
+            raw = name.decode() if isinstance(name, bytes) else str(name)
+            _approve(policy, home, Path(raw).resolve(), where, "external raw data storage")
+
+
+def available_memory_bytes() -> int:
+    """Memory available to a new allocation (Linux ``MemAvailable``; else the free pages)."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, AttributeError):
+        return 1 << 62
+
+
+def check_extent(ds: h5py.Dataset, where: str) -> None:
+    """Refuse a dataset that declares more samples than its file stores.
+
+    A contiguous dataset must have storage for every byte it declares, and a
+    chunked one every chunk (missing chunks would read as fill values: a file of
+    a few kB can declare 1e12 samples).  The storage must also fit in the file.
+    Costs a look at the chunk index, not a read.
+
+    Raises
+    ------
+    DataError
+        Naming the dataset, the declared and the stored extent.
+    """
+    if ds.is_virtual or ds.external or ds.size == 0:
+        return
+    nbytes = int(ds.size) * ds.dtype.itemsize
+    if ds.chunks is None:
+        stored = int(ds.id.get_storage_size())
+        if stored < nbytes:
+            raise DataError(f"{where}: dataset 'shape': declares {ds.shape} ({nbytes} bytes) but "
+                            f"stores only {stored} bytes (truncated or hostile file)")
+        offset = ds.id.get_offset()
+        try:
+            file_size = os.path.getsize(ds.file.filename)
+        except OSError:
+            file_size = None
+        if offset is not None and file_size is not None and offset + nbytes > file_size:
+            raise DataError(f"{where}: dataset 'shape': declares {nbytes} bytes at offset {offset}, "
+                            f"beyond the end of the file ({file_size} bytes): truncated file")
+        return
+    expected = 1
+    for n, c in zip(ds.shape, ds.chunks):
+        expected *= -(-int(n) // int(c))
+    stored_chunks = int(ds.id.get_num_chunks())
+    if stored_chunks < expected:
+        raise DataError(f"{where}: dataset 'shape': declares {ds.shape} in {expected} chunks but "
+                        f"the file stores {stored_chunks}; refusing a dataset whose samples are "
+                        "mostly not there (truncated or hostile file)")
 
 
 def hdf5_signature_offset(path: str | os.PathLike[str]) -> int | None:
@@ -115,7 +257,7 @@ def read_attrs(obj: h5py.HLObject, where: str) -> dict[str, Any]:
 
 
 def node_tree(obj: h5py.Group | h5py.Dataset, file_label: str, path: str = "/",
-              depth: int = 0) -> dict[str, Any]:
+              depth: int = 0, home: Path | None = None) -> dict[str, Any]:
     """The JSON-like node tree of an HDF5 group (see the schema's description).
 
     A group becomes ``{"kind": "group", "attrs": {...}, "members": {...}}``, a
@@ -123,14 +265,28 @@ def node_tree(obj: h5py.Group | h5py.Dataset, file_label: str, path: str = "/",
     ``path`` is the HDF5 path named in errors.
     """
     where = f"{file_label}: {path}"
+    if home is None:
+        home = Path(obj.file.filename).resolve()
     if depth > MAX_DEPTH:
         raise SchemaError(f"{where}: groups nested deeper than {MAX_DEPTH} levels")
     attrs = read_attrs(obj, where)
     if isinstance(obj, h5py.Dataset):
+        check_references(obj, home, where)
+        check_extent(obj, where)
         return {"kind": "dataset", "attrs": attrs, "dtype": obj.dtype.str, "shape": list(obj.shape)}
     members: dict[str, Any] = {}
     for name in obj:
         child_path = path.rstrip("/") + "/" + name
+        try:
+            link = obj.get(name, getlink=True)
+        except (KeyError, OSError):
+            link = None
+        if isinstance(link, h5py.ExternalLink):
+            policy = current_link_policy()
+            if not policy.trusted:
+                target = (home.parent / link.filename).resolve()
+                _approve(policy, home, target, f"{file_label}: {child_path}",
+                         f"external link to {link.filename}:{link.path}")
         try:
             child = obj.get(name)  # None for a dangling soft or external link
         except (KeyError, OSError):
@@ -140,7 +296,10 @@ def node_tree(obj: h5py.Group | h5py.Dataset, file_label: str, path: str = "/",
                                   "external link, or damaged file)")
         if isinstance(child, h5py.Datatype):
             raise SchemaError(f"{file_label}: {child_path}: named datatypes are not part of the layout")
-        members[name] = node_tree(child, file_label, child_path, depth + 1)
+        if not current_link_policy().trusted:
+            _approve(current_link_policy(), home, Path(child.file.filename).resolve(),
+                     f"{file_label}: {child_path}", "the path (through an external link)")
+        members[name] = node_tree(child, file_label, child_path, depth + 1, home)
     return {"kind": "group", "attrs": attrs, "members": members}
 
 
@@ -153,6 +312,8 @@ class H5Handle:
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = Path(path)
         self._file: h5py.File | None = None
+        #: The link policy in force when the handle was made (lazy reads come later).
+        self.policy = current_link_policy()
 
     def get(self) -> h5py.File:
         """The open file (opened with mode ``"r"`` if needed)."""
@@ -217,6 +378,9 @@ class H5Source:
         obj = self.handle.get().get(self.dataset_path)
         if not isinstance(obj, h5py.Dataset):
             raise SchemaError(f"{self.handle.path}: {self.dataset_path}: not a dataset")
+        where = f"{self.handle.path}: {self.dataset_path}"
+        check_references(obj, self.handle.path.resolve(), where, self.handle.policy)
+        check_extent(obj, where)
         self._ds: h5py.Dataset | None = obj
         return obj
 
@@ -230,6 +394,11 @@ class H5Source:
     def read(self, start: int, stop: int) -> np.ndarray:
         """Samples ``start:stop`` as a 1-D array of the stored dtype."""
         ds = self._dataset()
+        need = max(0, min(stop, self.n_samples) - start) * ds.dtype.itemsize
+        if need > (64 << 20) and need > available_memory_bytes():
+            raise DataError(f"{self.handle.path}: {self.dataset_path}: data 'samples {start}:{stop}'"
+                            f": {need} bytes do not fit in the memory available "
+                            f"({available_memory_bytes()} bytes)")
         try:
             if self.index is not None:
                 sel = np.s_[self.index, start:stop] if self.axis == 0 else np.s_[start:stop, self.index]

@@ -8,13 +8,11 @@ Only a missing file or a file that is not an ingest store raises.
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from ..exceptions import RattleLabError
@@ -64,7 +62,7 @@ class ReportData:
     records : tuple of RecordInfo
     provenance_log : list of dict
         The store's ``/provenance/log`` documents.
-    results : StoredResults or None
+    results : rattle_lab.store.StoredResults or None
         What ``rattle-lab fit`` wrote.
     missing : dict of str to str
         Section name -> why it is left out (filled while gathering and plotting).
@@ -89,7 +87,7 @@ def _s(value: Any) -> str:
 
 
 def _record_info(store: Path, key: str) -> RecordInfo:
-    from ..ingest import open_stored_record
+    from ..store import open_stored_record
 
     with open_stored_record(store, key) as record:
         rig = record.rig
@@ -126,18 +124,9 @@ def _record_info(store: Path, key: str) -> RecordInfo:
 
 
 def _provenance_log(store: Path) -> list[dict[str, Any]]:
-    out: list[dict[str, Any]] = []
-    with h5py.File(store, "r") as fh:
-        log = fh.get("provenance/log")
-        if log is None:
-            return out
-        items = log[()] if isinstance(log, h5py.Dataset) else [log[k][()] for k in sorted(log)]
-        for item in np.atleast_1d(items):
-            try:
-                out.append(json.loads(_s(item)))
-            except (TypeError, ValueError):
-                continue
-    return out
+    from ..store import provenance_log
+
+    return provenance_log(store)
 
 
 def gather(store: str | os.PathLike[str]) -> ReportData:
@@ -146,9 +135,10 @@ def gather(store: str | os.PathLike[str]) -> ReportData:
     Raises
     ------
     StoreError
-        If ``store`` does not exist or is not an ingest store.
+        If ``store`` does not exist or is not an ingest store, or an input it
+        reads samples from has changed or gone since it was ingested.
     """
-    from ..ingest import read_catalogue
+    from ..store import check_linked_inputs, read_catalogue
 
     store = Path(store)
     if not store.is_file():
@@ -156,6 +146,7 @@ def gather(store: str | os.PathLike[str]) -> ReportData:
     catalogue = read_catalogue(store)  # raises StoreError for a non-store
     missing: dict[str, str] = {}
     keys = list(dict.fromkeys(catalogue["input_key"]))
+    check_linked_inputs(store, keys)  # a changed input is an error, not a missing section
     records = []
     for key in keys:
         try:
@@ -168,7 +159,7 @@ def gather(store: str | os.PathLike[str]) -> ReportData:
         log, missing["provenance log"] = [], str(exc)
     results = None
     try:
-        from ..results import read_results
+        from ..store import read_results
 
         results = read_results(store)
     except ImportError as exc:

@@ -47,15 +47,39 @@ class NpySource:
         return np.array(self.array[start:stop, self.index])
 
 
+def _check_declared_size(path: Path) -> None:
+    """Refuse a .npy file whose header declares more bytes than the file holds."""
+    fmt = np.lib.format
+    try:
+        with open(path, "rb") as fh:
+            major, _minor = fmt.read_magic(fh)
+            read_header = {1: fmt.read_array_header_1_0, 2: fmt.read_array_header_2_0}.get(major)
+            if read_header is None:
+                return  # np.load reports versions it does not know
+            shape, _fortran, dtype = read_header(fh)
+            data_bytes = path.stat().st_size - fh.tell()
+    except (ValueError, OSError, EOFError, OverflowError, TypeError):
+        return  # np.load gives the error, below
+    n = 1
+    for d in shape:
+        n *= int(d)
+    declared = n * dtype.itemsize
+    if declared > data_bytes:
+        raise FileFormatError(f"{path}: not a readable .npy array: the header declares shape "
+                              f"{tuple(shape)} of {dtype} ({declared} bytes) but the file holds "
+                              f"{data_bytes} bytes of data (truncated?)")
+
+
 class NpyBackend:
     """Rows (or columns) of a ``.npy`` array, selected by ``index``."""
 
     format = FORMAT
 
     def __init__(self, path: Path) -> None:
+        _check_declared_size(path)
         try:
             self.array = np.load(path, mmap_mode="r", allow_pickle=False)
-        except (ValueError, OSError, EOFError) as exc:
+        except (ValueError, OSError, EOFError, OverflowError) as exc:
             raise FileFormatError(f"{path}: not a readable .npy array (truncated, or pickled "
                                   f"objects?): {' '.join(str(exc).split())}") from exc
         if self.array.ndim not in (1, 2) or self.array.dtype.kind not in "fiu":

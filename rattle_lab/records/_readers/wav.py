@@ -56,6 +56,38 @@ class WavSource:
         return np.ascontiguousarray(data[:, self.channel])
 
 
+#: A RIFF size field left at this value means "unknown" (a recorder that streamed the file).
+_STREAMING_SIZES = (0, 0xFFFFFFFF)
+
+
+def _data_chunk_problem(path: Path) -> str | None:
+    """Why the RIFF ``data`` chunk's declared size does not fit the file, or None.
+
+    libsndfile reads what the file holds; a size field that promises more (and is
+    not the streaming marker 0 or 0xFFFFFFFF) means a truncated or forged file.
+    """
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as fh:
+            head = fh.read(12)
+            if len(head) < 12 or head[:4] != b"RIFF" or head[8:12] != b"WAVE":
+                return None  # RF64, W64 ...: libsndfile's own checks apply
+            pos = 12
+            while pos + 8 <= size:
+                fh.seek(pos)
+                chunk = fh.read(8)
+                cid, n = chunk[:4], int.from_bytes(chunk[4:8], "little")
+                if cid == b"data":
+                    if n not in _STREAMING_SIZES and pos + 8 + n > size:
+                        return (f"chunk 'data' declares {n} bytes but the file holds "
+                                f"{size - pos - 8} (truncated?)")
+                    return None
+                pos += 8 + n + (n & 1)
+    except OSError:
+        return None
+    return None
+
+
 class WavBackend:
     """Channels of a WAV file, selected by ``index`` (default 0)."""
 
@@ -67,6 +99,10 @@ class WavBackend:
         except (sf.LibsndfileError, RuntimeError) as exc:
             raise FileFormatError(f"{path}: not a readable WAV file: {exc}") from exc
         self.path = path
+        problem = _data_chunk_problem(path)
+        if problem is not None:
+            self.handle.close()
+            raise FileFormatError(f"{path}: not a readable WAV file: {problem}")
         bits = PCM_BITS.get(self.handle.subtype)
         self.dtype = np.dtype("f8") if bits is None or bits > 24 else np.dtype("f4")
         if self.handle.subtype == "DOUBLE":

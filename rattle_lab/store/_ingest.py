@@ -3,8 +3,13 @@
 :func:`ingest` reads each input with :func:`rattle_lab.records.read` (format
 detected, schema validated, files opened read-only), streams every channel in
 chunks through the data-quality checks, works out the conversion to SI, and
-writes the store atomically (a temporary file renamed into place: an error
-leaves the previous store, or no store, behind).
+writes the store atomically under the store's writers' lock
+(:func:`rattle_lab.store.edit_store`: a temporary file renamed into place; an
+error, a signal or a crash leaves the previous store, or no store, behind, and
+concurrent ingests never lose each other's runs).  References out of an HDF5
+input (external links, virtual datasets, external storage) are refused unless
+``allow_links`` (then only inside the input's folder, hashed); a dataset that
+declares more samples than its file stores is refused before any read.
 
 Samples are kept as the input stores them (raw volts, ADC counts, or SI), with
 the exact factor to SI beside them, as NWB's ``conversion`` attribute does;
@@ -23,7 +28,8 @@ store gets SI values.  How the samples get into the store (``storage``):
 ``"copy"``
     Every sample is copied: the store stands alone.
 
-Store layout (``store_format = "rattle_store"``, ``store_version = 2``)::
+Store layout (``store_format = "rattle_store"``, ``store_version = 3``, see
+:mod:`rattle_lab.store._layout` for the versions and the writers' lock)::
 
     /                       attrs: store_format, store_version, created_iso, updated_iso,
                                    rattle_lab_version (of the last writer)
@@ -32,7 +38,8 @@ Store layout (``store_format = "rattle_store"``, ``store_version = 2``)::
                             ingest_input_size_bytes, ingest_input_mtime_ns, ingest_storage
                             ("link": some datasets are virtual, or "copy"), ingest_format,
                             ingest_mapping, ingest_mapping_sha256, ingest_time_iso,
-                            ingest_rattle_lab_version, ingest_skipped (JSON)
+                            ingest_rattle_lab_version, ingest_skipped (JSON),
+                            ingest_link_targets (JSON: file linked from the input -> hash)
         .../channels/{name} the input's samples and attributes (virtual or copied); attrs
                             add ingest_si_units, ingest_scale_to_si, ingest_flags
     /catalogue              one 1-D dataset per column, one row per channel;
@@ -55,7 +62,6 @@ import json
 import mmap
 import os
 import platform
-import shutil
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -67,28 +73,28 @@ import h5py
 import numpy as np
 import xxhash
 
-from ._atomic import atomic_path
-from ._progress import progress_bar
-from ._version import __version__
-from .exceptions import ParameterError
-from .records import read
-from .records._convert import record_to_tree
-from .records._errors import DuplicateRunError, StoreError
-from .records._model import DEFAULT_CHUNK_SAMPLES, ArraySource, Channel, Record, Skipped
-from .records._quality import ChannelChecker, Finding, QualityLimits, TimestampChecker
-from .records._read import detect_format
-from .records._readers.mapping import MappingSpec, load_mapping
-from .records._readers.native import load_group
-from .records._schema import validate_tree
-from .records._write import write_tree
+from .._progress import progress_bar
+from .._version import __version__
+from ..exceptions import ParameterError, RattleLabWarning
+from ..records import read
+from ..records._convert import record_to_tree
+from ..records._errors import DuplicateRunError, StoreError
+from ..records._h5 import LinkPolicy, link_policy
+from ..records._model import DEFAULT_CHUNK_SAMPLES, ArraySource, Channel, Record, Skipped
+from ..records._quality import ChannelChecker, Finding, QualityLimits, TimestampChecker
+from ..records._read import detect_format
+from ..records._readers.mapping import MappingSpec, load_mapping
+from ..records._readers.native import load_group
+from ..records._schema import validate_tree
+from ..records._write import write_tree
+from ._layout import (STORE_FORMAT, STORE_VERSION, edit_store, open_store,  # noqa: F401
+                      store_lock, text)
 
 Storage = Literal["link", "copy"]
 
 if TYPE_CHECKING:  # pandas is imported when a catalogue is built, not at import time
     import pandas as pd
 
-STORE_FORMAT = "rattle_store"
-STORE_VERSION = 2
 HASH_ALGORITHM = "xxh3_128"
 HASH_BLOCK_BYTES = 32 << 20  # a multiple of mmap.ALLOCATIONGRANULARITY
 
@@ -251,32 +257,8 @@ class _StoreIndex:
     runs: dict[tuple[str, str], tuple[str, str]] = field(default_factory=dict)
 
 
-def _check_store(fh: h5py.File, store: Path) -> None:
-    fmt = fh.attrs.get("store_format")
-    if isinstance(fmt, bytes):
-        fmt = fmt.decode("utf-8", "replace")
-    if fmt != STORE_FORMAT:
-        raise StoreError(f"{store}: exists and is not a rattle_lab ingest store (root attribute "
-                         f"'store_format' is {fmt!r}); refusing to overwrite it")
-    version = fh.attrs.get("store_version")
-    if version != STORE_VERSION:
-        shown = version.item() if isinstance(version, np.generic) else version
-        raise StoreError(f"{store}: /: attribute 'store_version': {shown!r} is not supported "
-                         f"(this is version {STORE_VERSION})")
-
-
 def _open_store(store: Path) -> h5py.File:
-    try:
-        fh = h5py.File(store, "r")
-    except OSError as exc:
-        raise StoreError(f"{store}: exists and is not a readable HDF5 ingest store; refusing to "
-                         f"overwrite it ({' '.join(str(exc).split())})") from exc
-    try:
-        _check_store(fh, store)
-    except BaseException:
-        fh.close()
-        raise
-    return fh
+    return open_store(store)
 
 
 def _read_columns(fh: h5py.File, store: Path) -> dict[str, np.ndarray]:
@@ -313,8 +295,12 @@ def _read_index(store: Path) -> _StoreIndex:
     return index
 
 
-def _text(value: Any) -> str:
-    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+_text = text
+
+
+#: What a message about a changed or moved input advises.
+REINGEST_ADVICE = ("ingest it again to re-link it (`rattle-lab ingest --replace FILE -o STORE`; "
+                   "or ingest with --copy for a store that stands alone)")
 
 
 def _link_problem(attrs: Any) -> str | None:
@@ -506,7 +492,7 @@ def _ingest_record(out: h5py.Group, record: Record, label: str, *, storage: Stor
 
 
 def _si_name(ch: Channel) -> str:
-    from .records._units import SI_UNITS
+    from ..records._units import SI_UNITS
 
     return SI_UNITS[ch.quantity]
 
@@ -589,8 +575,13 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
            storage: Storage = "link", allow_flagged: bool = False, quiet: bool = True,
            limits: QualityLimits = QualityLimits(),  # noqa: B008 (frozen, immutable)
            n_chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
-           on_warning: Callable[[Finding], None] | None = None) -> IngestReport:
+           on_warning: Callable[[Finding], None] | None = None, replace: bool = False,
+           allow_links: bool = False) -> IngestReport:
     """Ingest record files into an HDF5 store (created, or appended to).
+
+    The whole call runs under the store's writers' lock
+    (:func:`rattle_lab.store.store_lock`): concurrent ingests into one store
+    wait for each other, and each sees the runs the others added.
 
     Parameters
     ----------
@@ -620,6 +611,15 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
         Samples read at a time (memory stays bounded by a few chunks).
     on_warning : callable, optional
         Called with each finding to report instead of :func:`warnings.warn`.
+    replace : bool
+        A run already in the store from another input (e.g. the same file, changed
+        since it was ingested) is replaced: the stored input that holds it is
+        removed, with all its runs.  Without it, that is a DuplicateRunError.
+    allow_links : bool
+        Resolve HDF5 external links, virtual datasets and external storage of
+        the inputs, but only to files inside the input's own folder; those files
+        are hashed with the input (and their samples copied).  Default: refuse
+        any reference out of an input (:class:`~rattle_lab.records._h5.LinkError`).
 
     Returns
     -------
@@ -637,6 +637,11 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
         A ``(campaign_id, run_id)`` already in the store from another file, or twice in the call.
     StoreError
         ``store`` exists and is not an ingest store.
+    LinkError
+        An HDF5 input refers to another file (and ``allow_links`` is False, or the
+        file is outside the input's folder).
+    DataError
+        A dataset declares more samples than its file stores.
     OutputError
         The store cannot be written.  In every error case the store is left as it was.
     ParameterError
@@ -660,12 +665,30 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
     store_resolved = store.resolve()
     items = []
     for p in paths:
-        fmt = detect_format(p)
         if p.resolve() == store_resolved:
             raise ParameterError(f"the store {store} is also given as an input")
+        fmt = detect_format(p)
         st = p.stat()
         items.append(_Input(path=p, label=str(p), size=st.st_size, mtime_ns=st.st_mtime_ns,
                             format=fmt, foreign=fmt != "rattle_hdf5"))
+        if spec is not None and fmt == "rattle_hdf5":
+            warnings.warn(f"{p}: is a native rattle record; the mapping {spec.label} does not "
+                          "apply to it and is ignored", MappingIgnoredWarning, stacklevel=2)
+    with store_lock(store):
+        return _ingest_locked(store, items, spec, storage=storage, allow_flagged=allow_flagged,
+                              quiet=quiet, limits=limits, n_chunk_samples=n_chunk_samples,
+                              on_warning=on_warning, replace=replace, allow_links=allow_links)
+
+
+class MappingIgnoredWarning(RattleLabWarning):
+    """An option was given that does not apply to an input (e.g. a mapping with a native record)."""
+
+
+def _ingest_locked(store: Path, items: list[_Input], spec: MappingSpec | None, *,
+                   storage: Storage, allow_flagged: bool, quiet: bool, limits: QualityLimits,
+                   n_chunk_samples: int, on_warning: Callable[[Finding], None] | None,
+                   replace: bool, allow_links: bool) -> IngestReport:
+    """:func:`ingest` once the store's lock is held: read the store, add, write."""
     index = _read_index(store)
 
     def key_of(item: _Input) -> str:
@@ -700,9 +723,10 @@ def ingest(inputs: Iterable[str | os.PathLike[str]], store: str | os.PathLike[st
         columns: Mapping[str, Any] = index.columns
         if new:
             added, columns = _write_store(store, index, new, spec, key_of, storage=storage,
-                                 allow_flagged=allow_flagged, limits=limits,
-                                 n_chunk_samples=n_chunk_samples, quiet=quiet,
-                                 unchanged=[items[i] for i in results])
+                                          allow_flagged=allow_flagged, limits=limits,
+                                          n_chunk_samples=n_chunk_samples, quiet=quiet,
+                                          unchanged=[items[i] for i in results],
+                                          replace=replace, allow_links=allow_links)
             changed = True
             for item, result in added.items():
                 results[items.index(item)] = result
@@ -730,93 +754,100 @@ def _read_columns_from(store: Path) -> dict[str, np.ndarray]:
 def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: MappingSpec | None,
                  key_of: Callable[[_Input], str], *, storage: Storage, allow_flagged: bool,
                  limits: QualityLimits, n_chunk_samples: int, quiet: bool,
-                 unchanged: list[_Input]) -> tuple[dict[_Input, InputResult], dict[str, list[Any]]]:
+                 unchanged: list[_Input], replace: bool = False, allow_links: bool = False
+                 ) -> tuple[dict[_Input, InputResult], dict[str, list[Any]]]:
     """Write the new inputs into (a copy of) the store; return their results and the catalogue."""
     when = _now_iso()
     added: dict[_Input, InputResult] = {}
     rows: list[dict[str, Any]] = []
     replaced = {key_of(item) for item in new if item.replaces}
     runs = {run: where for run, where in index.runs.items() if where[1] not in replaced}
-    with atomic_path(store) as tmp:
-        if store.exists():
-            shutil.copyfile(store, tmp)
-            fh = h5py.File(tmp, "a")
-        else:
-            fh = h5py.File(tmp, "w", track_order=True)
-            fh.attrs["store_format"] = STORE_FORMAT
-            fh.attrs["store_version"] = STORE_VERSION
-            fh.attrs["created_iso"] = when
-        with fh:
-            records = fh.require_group("records")
-            for item in new:
-                with read(item.path, mapping=spec if item.foreign else None) as record:
-                    for run in record.runs:
-                        other = runs.get((record.campaign_id, run.run_id))
-                        if other is not None:
-                            raise DuplicateRunError(
-                                f"{item.label}: /runs/{run.run_id}: run id {run.run_id!r} of "
-                                f"campaign {record.campaign_id!r} is already ingested from {other[0]}")
-                        runs[(record.campaign_id, run.run_id)] = (item.label, "")
-                    pending = records.create_group("_pending", track_order=True)
-                    findings, stats, linked = _ingest_record(
-                        pending, record, item.label, storage=storage, limits=limits,
-                        n_chunk_samples=n_chunk_samples, quiet=quiet)
-                    fatal = [f for f in findings if f.fatal]
-                    if fatal and not allow_flagged:
-                        more = (f" (and {len(fatal) - 1} more fatal findings)" if len(fatal) > 1
-                                else "")
-                        err = fatal[0].error()
-                        err.args = (err.args[0] + more + "; use --allow-flagged (allow_flagged=True) "
-                                    "to ingest with flags",)
-                        raise err
-                    content_hash = item.digest()
-                    key = key_of(item)
-                    if key in records:  # an outdated link, ingested again in its place
-                        del records[key]
-                    records.move("_pending", key)
-                    group = records[key]
-                    skipped = record.origin.skipped if record.origin else ()
-                    kept: Storage = "link" if linked else "copy"
-                    group.attrs.update({
-                        "ingest_input_path": str(item.path.resolve()),
-                        "ingest_input_hash": content_hash,
-                        "ingest_input_size_bytes": item.size,
-                        "ingest_input_mtime_ns": item.mtime_ns,
-                        "ingest_storage": kept,
-                        "ingest_format": item.format,
-                        "ingest_mapping": spec.label if (spec and item.foreign) else "",
-                        "ingest_mapping_sha256": spec.sha256 if (spec and item.foreign) else "",
-                        "ingest_time_iso": when,
-                        "ingest_rattle_lab_version": __version__,
-                        "ingest_skipped": json.dumps([[s.source, s.reason] for s in skipped]),
-                    })
-                    rows.extend(_catalogue_rows(record, key, str(item.path.resolve()), content_hash,
-                                                item.format, stats, when, kept))
-                    added[item] = InputResult(item.path, content_hash, key,
-                                              "updated" if item.replaces else "added", item.format,
-                                              tuple(skipped), tuple(findings))
-            keep = [i for i, key in enumerate(index.columns.get("input_key", []))
-                    if str(key) not in replaced]
-            columns = {name: [index.columns[name][i] for i in keep] if name in index.columns else []
-                       for name, _ in CATALOGUE_COLUMNS}
-            for row in rows:
-                for name, _ in CATALOGUE_COLUMNS:
-                    columns[name].append(row[name])
-            _write_catalogue(fh, columns)
-            fh.attrs["updated_iso"] = when
-            fh.attrs["rattle_lab_version"] = __version__
-            _append_log(fh, {
-                "command": "ingest", "time_iso": when, "rattle_lab_version": __version__,
-                "python": platform.python_version(), "numpy": np.__version__,
-                "h5py": h5py.__version__, "hdf5": h5py.version.hdf5_version,
-                "allow_flagged": allow_flagged, "storage": storage,
-                "mapping": {"path": spec.label, "sha256": spec.sha256} if spec else None,
-                "inputs": [{"path": str(i.path.resolve()), "hash": r.file_hash,
-                            "input_key": r.input_key, "format": i.format, "status": r.status}
-                           for i, r in added.items()]
-                + [{"path": str(i.path.resolve()), "hash": i.digest(), "input_key": key_of(i),
-                    "format": i.format, "status": "unchanged"} for i in unchanged],
-            })
+    with edit_store(store, create=when, what="write the store") as fh:
+        records = fh.require_group("records")
+        for item in new:
+            policy = LinkPolicy(allow=allow_links)
+            with link_policy(policy), read(item.path,
+                                           mapping=spec if item.foreign else None) as record:
+                for run in record.runs:
+                    other = runs.get((record.campaign_id, run.run_id))
+                    if other is not None and replace and other[1] and other[1] in records:
+                        # --replace: the stored input holding this run goes (all its runs)
+                        replaced.add(other[1])
+                        del records[other[1]]
+                        runs = {r: w for r, w in runs.items() if w[1] != other[1]}
+                        other = None
+                    if other is not None:
+                        raise DuplicateRunError(
+                            f"{item.label}: /runs/{run.run_id}: run id {run.run_id!r} of "
+                            f"campaign {record.campaign_id!r} is already ingested from "
+                            f"{other[0]}; use `ingest --replace` (replace=True) to replace "
+                            "the stored input that holds it")
+                    runs[(record.campaign_id, run.run_id)] = (item.label, "")
+                pending = records.create_group("_pending", track_order=True)
+                # samples reached through references are copied (the store links inputs
+                # only, and only by their own datasets)
+                findings, stats, linked = _ingest_record(
+                    pending, record, item.label,
+                    storage="copy" if policy.targets else storage, limits=limits,
+                    n_chunk_samples=n_chunk_samples, quiet=quiet)
+                fatal = [f for f in findings if f.fatal]
+                if fatal and not allow_flagged:
+                    more = (f" (and {len(fatal) - 1} more fatal findings)" if len(fatal) > 1
+                            else "")
+                    err = fatal[0].error()
+                    err.args = (err.args[0] + more + "; use --allow-flagged (allow_flagged=True) "
+                                "to ingest with flags",)
+                    raise err
+                content_hash = item.digest()
+                key = key_of(item)
+                if key in records:  # an outdated link, ingested again in its place
+                    del records[key]
+                records.move("_pending", key)
+                group = records[key]
+                skipped = record.origin.skipped if record.origin else ()
+                kept: Storage = "link" if linked else "copy"
+                group.attrs.update({
+                    "ingest_input_path": str(item.path.resolve()),
+                    "ingest_input_hash": content_hash,
+                    "ingest_input_size_bytes": item.size,
+                    "ingest_input_mtime_ns": item.mtime_ns,
+                    "ingest_storage": kept,
+                    "ingest_format": item.format,
+                    "ingest_mapping": spec.label if (spec and item.foreign) else "",
+                    "ingest_mapping_sha256": spec.sha256 if (spec and item.foreign) else "",
+                    "ingest_time_iso": when,
+                    "ingest_rattle_lab_version": __version__,
+                    "ingest_skipped": json.dumps([[s.source, s.reason] for s in skipped]),
+                    "ingest_link_targets": json.dumps(
+                        {str(t): file_hash(t) for t in sorted(policy.targets)}),
+                })
+                rows.extend(_catalogue_rows(record, key, str(item.path.resolve()), content_hash,
+                                            item.format, stats, when, kept))
+                added[item] = InputResult(item.path, content_hash, key,
+                                          "updated" if item.replaces else "added", item.format,
+                                          tuple(skipped), tuple(findings))
+        keep = [i for i, key in enumerate(index.columns.get("input_key", []))
+                if str(key) not in replaced]
+        columns = {name: [index.columns[name][i] for i in keep] if name in index.columns else []
+                   for name, _ in CATALOGUE_COLUMNS}
+        for row in rows:
+            for name, _ in CATALOGUE_COLUMNS:
+                columns[name].append(row[name])
+        _write_catalogue(fh, columns)
+        fh.attrs["updated_iso"] = when
+        fh.attrs["rattle_lab_version"] = __version__
+        _append_log(fh, {
+            "command": "ingest", "time_iso": when, "rattle_lab_version": __version__,
+            "python": platform.python_version(), "numpy": np.__version__,
+            "h5py": h5py.__version__, "hdf5": h5py.version.hdf5_version,
+            "allow_flagged": allow_flagged, "storage": storage,
+            "mapping": {"path": spec.label, "sha256": spec.sha256} if spec else None,
+            "inputs": [{"path": str(i.path.resolve()), "hash": r.file_hash,
+                        "input_key": r.input_key, "format": i.format, "status": r.status}
+                       for i, r in added.items()]
+            + [{"path": str(i.path.resolve()), "hash": i.digest(), "input_key": key_of(i),
+                "format": i.format, "status": "unchanged"} for i in unchanged],
+        })
     return added, columns
 
 
@@ -893,8 +924,8 @@ def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
         input is linked (``storage="link"``) and its file has moved or changed
         since it was ingested.
     """
-    from .records._convert import record_from_tree
-    from .records._model import Origin
+    from ..records._convert import record_from_tree
+    from ..records._model import Origin
 
     store = Path(store)
     with _open_store(store) as fh:
@@ -905,9 +936,9 @@ def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
             problem = _link_problem(group.attrs)
             if problem is not None:
                 raise StoreError(f"{store}: /records/{input_key}: attribute 'ingest_input_path': "
-                                 f"{problem}; ingest it again to re-link it (or ingest with "
-                                 "--copy for a store that stands alone)")
-    raw = load_group(store, f"/records/{input_key}")
+                                 f"{problem}; {REINGEST_ADVICE}")
+    with link_policy(LinkPolicy(trusted=True)):  # the store's own links, to ingested inputs
+        raw = load_group(store, f"/records/{input_key}")
     label = f"{store}: /records/{input_key}"
     try:
         validate_tree(raw.tree, label)

@@ -1,0 +1,143 @@
+"""Speed goals of issue 13, each measured as a ratio or a time in one run and printed PASS/FAIL.
+
+Run ``python benchmarks/speed_goals.py [--quick]``.  All quantities are
+nondimensional; times are wall clock, best of several repeats after an
+untimed warm-up.  On a shared (loaded) machine the absolute times move by a
+factor of two between runs; the ratios are measured back to back in one run.
+
+Goals (issue 13):
+
+1. ``per impact``: the compiled exact kernel on the stable 1/1 orbit
+   (F = 0.2, omega = 1.1, zeta = 0.05, e = 0.6), started on the orbit
+   (closed form), 1e5 forcing periods: run time / impacts <= 1 us.
+2. ``fixed cost``: one ``simulate()`` call of 0.01 forcing periods (no
+   impact): <= 5 us.
+3. ``sweep``: the Fig. 4-3 sweep (F = 0.2, zeta = 0.05, e = 0.6, 100 periods
+   per value, 70 discarded), up and down, against a pure-Python exact
+   event-driven simulator: the same kernel source run by the Python
+   interpreter (``method="exact-python"``), driven by the same loop.  To keep
+   the reference's run short both use every 5th value of the thesis grid
+   (0.85 to 1.3 in steps of 0.005; 91 values, ``--quick``: steps of 0.025).
+   Both without Lyapunov exponents and without running unsettled matches
+   longer (``settle_cycles=0``); the labels of the two must agree.  Goal >= 150x.
+4. ``--version``: ``rattle-lab --version`` in a fresh process <= 0.3 s.
+5. ``cold first run``: a fresh process that imports ``rattle_lab.sdf`` and
+   runs one ``simulate()`` (numba's on-disk cache already written, as after
+   the first use following an install) <= 5 s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import shutil
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+if str(ROOT) not in sys.path:  # run from a checkout without installing
+    sys.path.insert(0, str(ROOT))
+
+from rattle_lab.analysis import one_over_n_orbits
+from rattle_lab.analysis.sweep import classify_settled, sweep_up_down, sweep_values
+from rattle_lab.sdf import SDFParams, SDFState, simulate
+
+BASE = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6)
+
+
+def _best(func: Callable[[], Any], repeat: int) -> tuple[float, Any]:
+    func()  # warm-up (numba cache load)
+    best, out = math.inf, None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = func()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def _reference_sweep(values: np.ndarray, method: str) -> list[str]:
+    """The sweep loop (state carried, 70 + 30 periods per value, up then down)."""
+    labels = []
+    state = SDFState()
+    for order in (values, values[::-1]):
+        for w in order:
+            p = BASE.replace(omega=float(w))
+            state = simulate(p, cycles=70, state=state, method=method).state
+            t0 = state.t
+            res = simulate(p, cycles=30, state=state, crossings=True, method=method)
+            state = res.state
+            regime, _ = classify_settled(p, res.impacts.t, res.impacts.v_in, t_start=t0,
+                                         end_state=state, n_max=12, settle_cycles=0)
+            labels.append(regime.label)
+    return labels
+
+
+def _fresh(code: list[str], repeat: int) -> float:
+    best = math.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        subprocess.run(code, check=True, capture_output=True)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="fewer values and repeats")
+    args = ap.parse_args(argv)
+    repeat = 2 if args.quick else 5
+    rows: list[tuple[str, str, str, bool]] = []
+
+    p = SDFParams(F=0.2, omega=1.1, zeta=0.05, e=0.6)
+    orbit = one_over_n_orbits(p, 1)[1]
+    on_orbit = SDFState(x=1.0, v=-p.e * orbit.v_im, theta=orbit.phase)
+    periods = 2e4 if args.quick else 1e5
+    t_run, res = _best(lambda: simulate(p, state=on_orbit, cycles=periods), repeat)
+    per_impact_us = t_run / res.impacts.t.size * 1e6
+    rows.append(("per impact, 1/1 orbit", f"{per_impact_us:.2f} us", "<= 1 us", per_impact_us <= 1.0))
+
+    n_calls = 2000
+    t_calls, _ = _best(lambda: [simulate(p, state=on_orbit, cycles=0.01) for _ in range(n_calls)],
+                       repeat)
+    fixed_us = t_calls / n_calls * 1e6
+    rows.append(("fixed cost per simulate()", f"{fixed_us:.1f} us", "<= 5 us", fixed_us <= 5.0))
+
+    step = 0.025 if args.quick else 0.005
+    values = sweep_values(0.85, 1.3, step)
+    t_fast, (up, down) = _best(lambda: sweep_up_down("omega", values, base=BASE, lyapunov="none",
+                                                     settle_cycles=0), repeat)
+    t0 = time.perf_counter()
+    ref_labels = _reference_sweep(values, "exact-python")
+    t_ref = time.perf_counter() - t0
+    same = ref_labels == up.labels + down.labels
+    ratio = t_ref / t_fast
+    rows.append((f"Fig. 4-3 sweep up+down, {values.size} values",
+                 f"{t_fast:.3f} s vs {t_ref:.1f} s pure Python = {ratio:.0f}x (labels equal: {same})",
+                 ">= 150x", ratio >= 150 and same))
+
+    exe = Path(sys.executable).parent / "rattle-lab"
+    exe_s = str(exe) if exe.exists() else (shutil.which("rattle-lab") or "rattle-lab")
+    t_version = _fresh([exe_s, "--version"], repeat)
+    rows.append(("rattle-lab --version", f"{t_version:.2f} s", "<= 0.3 s", t_version <= 0.3))
+
+    cold = [sys.executable, "-c",
+            "from rattle_lab.sdf import SDFParams, simulate; "
+            "simulate(SDFParams(F=0.2, omega=1.1, zeta=0.05, e=0.6), cycles=10)"]
+    t_cold = _fresh(cold, repeat)
+    rows.append(("first simulate() in a fresh process", f"{t_cold:.2f} s", "<= 5 s", t_cold <= 5.0))
+
+    print("Speed goals of issue 13 (one run; machine shared with other jobs, so absolute times vary)")
+    w = max(len(r[0]) for r in rows)
+    for name, value, goal, ok in rows:
+        print(f"{'PASS' if ok else 'FAIL'}  {name:<{w}}  {value}  (goal {goal})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
