@@ -26,6 +26,11 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     parser.add_argument("--pipeline", metavar="FILE.toml",
                         help="parameters from a pipeline TOML: [detect] and [fit] tables of "
                              "keyword parameters")
+    parser.add_argument("--participation", type=float, default=None, metavar="Q",
+                        help="modal participation factor Q1/Q2 at the measurement point "
+                             "(thesis eq. 2.27); overrides the pipeline's and the records' "
+                             "(rig modal_participation, or the plate model from the rig's "
+                             "geometry); without any, 1.0 is assumed and flagged")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_run)
@@ -35,7 +40,12 @@ def _run(args: argparse.Namespace) -> int:
     from ..fit import fit_store, load_pipeline
 
     params = load_pipeline(args.pipeline)
-    result = fit_store(args.store, detect=params["detect"], fit=params["fit"], quiet=args.quiet)
+    source = "pipeline"
+    if args.participation is not None:
+        params["fit"]["participation"] = args.participation
+        source = "command line"
+    result = fit_store(args.store, detect=params["detect"], fit=params["fit"], quiet=args.quiet,
+                       participation_source=source)
     if args.json:
         print(json.dumps(result.summary, indent=2, allow_nan=False))
     else:
@@ -79,6 +89,11 @@ def as_table(summary: dict[str, Any]) -> str:
             rows.append((f"spl_law_{name}.db_offset", law["db"]["c_db"], None, "dB re 20 uPa @1 m/s"))
     for label, value, err, unit in rows:
         lines.append(f"{label:<32}  {_num(value):<13}  {_num(err):<13}  {unit}")
+    part = summary.get("participation")
+    if part:
+        lines.append(f"participation Q1/Q2 = {_num(part['value'])} ({part['source']})")
+    for flag in summary.get("data_quality", []):
+        lines.append(f"data-quality flag: {flag}")
     for note in fits.get("grazing", {}).get("unidentifiable", []):
         lines.append(f"note: {note}")
     for key in ("damping_ramp", "restitution_down"):

@@ -29,6 +29,7 @@ from ..detect import (ImpactParams, cross_correlation_delay, detect_impacts, imp
                       impulse_train, rms_spl_db, sound_peaks)
 from ..exceptions import ParameterError, RattleLabError
 from ..ingest import open_stored_record, read_catalogue
+from ..records._chain import Participation, resolve_participation
 from ..results import RunResult, StoreFit, write_results
 from ..thresholds import Threshold, ramp_threshold, tabulate_thresholds
 from ._grazing import GrazingFit, fit_grazing
@@ -37,7 +38,7 @@ from ._restitution import METHODS, fit_restitution_down, restitution_from_ratios
 from ._spl_law import fit_db_law, fit_linear_law, law_dict
 
 SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01}
-FIT_KEYS = {"participation": 1.0, "vary_participation": False, "outlier_k": 5.0,
+FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0,
             "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3,
             "restitution_method": "ramp", "level_hold_periods": 1}
 _QUANTITIES = ("plate_velocity", "plate_acceleration", "sound_pressure", "base_acceleration")
@@ -48,7 +49,8 @@ def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, An
 
     ``[detect]`` takes the fields of :class:`~rattle_lab.detect.ImpactParams` and
     ``window_s``, ``first_fraction``, ``max_lag_s``; ``[fit]`` takes
-    ``participation``, ``vary_participation``, ``outlier_k``, ``conf_interval``,
+    ``participation`` (``Q1/Q2``; absent: from the records' rig metadata, see
+    :func:`store_participation`), ``vary_participation``, ``outlier_k``, ``conf_interval``,
     ``speed_of_sound_m_s``, ``n_confirm``, ``restitution_method`` (``"ramp"``, the
     default, or ``"quasi-static"``: see :func:`~rattle_lab.fit.fit_restitution_down`),
     ``level_hold_periods`` (forcing periods the drive holds each level of a ramp: 1 for
@@ -222,9 +224,30 @@ def json_ready(obj: Any) -> Any:
     return obj
 
 
+def store_participation(store: str | os.PathLike[str], given: float | None,
+                        source: str = "pipeline") -> Participation:
+    """The modal participation ``Q1/Q2`` for a fit of ``store``, and where it came from.
+
+    ``given`` (a pipeline's or the command line's ``participation``) wins; else the
+    records' rig metadata (``modal_participation``, or the plate geometry through the plate
+    model); else 1.0, with the data-quality flag ``participation_assumed``.  See
+    :func:`rattle_lab.records._chain.resolve_participation`.
+    """
+    rigs = []
+    if given is None:
+        catalogue = read_catalogue(store, level="runs")
+        for key in dict.fromkeys(catalogue["input_key"]):
+            record = open_stored_record(store, key)
+            try:
+                rigs.append(record.rig)
+            finally:
+                record.close()
+    return resolve_participation(rigs, given, source)
+
+
 def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None = None,
               fit: Mapping[str, Any] | None = None, write: bool = True,
-              quiet: bool = True) -> StoreFit:
+              quiet: bool = True, participation_source: str = "pipeline") -> StoreFit:
     """Detect and fit everything in an ingest store; write ``/results`` (see :mod:`rattle_lab.results`).
 
     Parameters
@@ -237,6 +260,9 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
         Write ``/results`` into the store (atomically).
     quiet : bool
         No progress bar over the runs (one is drawn on a terminal otherwise).
+    participation_source : str
+        Where ``fit["participation"]`` came from, when given (``"pipeline"``,
+        ``"command line"``); named in the summary's ``participation`` entry.
 
     Raises
     ------
@@ -259,6 +285,7 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     with h5py.File(store, "r") as fh:
         for key in keys:
             inputs[key] = str(fh[f"records/{key}"].attrs.get("ingest_input_hash", ""))
+    participation = store_participation(store, fit.get("participation"), participation_source)
     with progress_bar(int(catalogue.shape[0]), desc="detect", unit="run", quiet=quiet) as bar:
         for key in keys:
             record = open_stored_record(store, key)
@@ -270,7 +297,7 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
             finally:
                 record.close()
     curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
-    summary = summarise_fits(runs, curve, fit)
+    summary = summarise_fits(runs, curve, fit, participation=participation)
     provenance = {"function": "rattle_lab.fit.fit_store", "rattle_lab_version": __version__,
                   "python": sys.version.split()[0], "parameters": {"detect": detect, "fit": fit},
                   "inputs": inputs}
@@ -353,7 +380,8 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
     return fits, missing
 
 
-def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) -> dict[str, Any]:
+def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
+                   participation: Participation | None = None) -> dict[str, Any]:
     """Fit the store-level models to per-run detections; the summary ``/results`` stores.
 
     From the per-run results of :func:`analyse_run` and the threshold table of
@@ -372,6 +400,9 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
     fit : mapping
         Fit parameters: every key of ``FIT_KEYS`` (``participation``,
         ``vary_participation``, ``outlier_k``, ``conf_interval``, ...).
+    participation : Participation, optional
+        The participation and its source (:func:`store_participation`); without it,
+        ``fit["participation"]``, or 1.0 flagged ``participation_assumed`` when that is None.
 
     Returns
     -------
@@ -383,7 +414,8 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
         95 % ci, vary, plus correlation; ``restitution_ratio``: value, stderr, unit, n;
         ``restitution_down`` and ``damping_ramp``: see :func:`restitution_down_summary`;
         ``spl_law_first|max|rms``: linear and dB laws) and
-        ``not_fitted`` (fit name -> reason).  May hold NumPy scalars and NaN: pass it
+        ``not_fitted`` (fit name -> reason); ``participation`` (value, source) and
+        ``data_quality`` (named flags, e.g. ``participation_assumed``).  May hold NumPy scalars and NaN: pass it
         through :func:`json_ready` before writing JSON.
 
     Raises
@@ -391,8 +423,13 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
     KeyError
         If ``fit`` lacks a key of ``FIT_KEYS`` the fits need.
     """
+    if participation is None:
+        participation = resolve_participation([], fit.get("participation"), "pipeline")
+    fit = {**fit, "participation": participation.value}
     ok = [r for r in runs if r.status == "ok"]
     summary: dict[str, Any] = {
+        "participation": {"value": participation.value, "source": participation.source},
+        "data_quality": list(participation.flags),
         "n_runs": len(runs), "n_ok": len(ok),
         "skipped": [{"input_key": r.input_key, "run_id": r.run_id, "reason": r.reason}
                     for r in runs if r.status == "skipped"],
@@ -463,4 +500,4 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
 
 
 __all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "restitution_down_summary",
-           "summarise_fits"]
+           "store_participation", "summarise_fits"]

@@ -27,6 +27,10 @@ SCHEMA_RESOURCE = ("rattle_lab", "data/schema/rattle_record.v1.schema.json")
 #: dtypes (numpy kind + item size) a channel may have.
 CHANNEL_DTYPES = frozenset({"f4", "f8", "i1", "i2", "i4", "i8", "u1", "u2", "u4"})
 
+#: Attributes that layout version 2 adds (the measurement chain), by group.
+V2_RIG_ATTRS = ("modal_participation", "plate_poisson_ratio")
+V2_CHANNEL_ATTRS = ("measurand", "sign_convention", "group_delay_s")
+
 
 @functools.lru_cache(maxsize=1)
 def load_schema() -> dict[str, Any]:
@@ -155,7 +159,24 @@ def _members(node: dict[str, Any]) -> dict[str, Any]:
     return node.get("members", {})
 
 
+def _check_version(tree: dict[str, Any], label: str) -> None:
+    """Version-2 attributes in a file that says version 1 are refused (a v1 reader ignores them)."""
+    if tree["attrs"].get("schema_version") != 1:
+        return
+    members = _members(tree)
+    found = [("/rig", k) for k in V2_RIG_ATTRS if k in members["rig"]["attrs"]]
+    for run_id, run in _members(members["runs"]).items():
+        for name, channel in _members(_members(run)["channels"]).items():
+            found += [(f"/runs/{run_id}/channels/{name}", k) for k in V2_CHANNEL_ATTRS
+                      if k in channel["attrs"]]
+    if found:
+        path, key = found[0]
+        raise SchemaError(f"{label}: {path}: attribute {key!r}: needs schema_version 2 "
+                          "(the file says 1)")
+
+
 def _check_in_code(tree: dict[str, Any], label: str) -> None:
+    _check_version(tree, label)
     members = _members(tree)
     sensors = set(_members(_members(members["rig"]).get("sensors", {"members": {}})))
     runs = _members(members["runs"])
@@ -182,6 +203,9 @@ def _check_in_code(tree: dict[str, Any], label: str) -> None:
                     raise SchemaError(f"{label}: {path}: attribute 'timestamps': "
                                       f"{run_path}/timestamps/{ts_name} has shape "
                                       f"{timestamps[ts_name]['shape']}, the channel {channel['shape']}")
+            if "measurand" in attrs and attrs.get("quantity") != "plate_velocity":
+                raise SchemaError(f"{label}: {path}: attribute 'measurand': only a plate_velocity "
+                                  f"channel has one (this is {attrs.get('quantity')!r})")
             sensor_id = attrs.get("sensor_id")
             if sensor_id is not None and sensor_id not in sensors:
                 raise SchemaError(f"{label}: {path}: attribute 'sensor_id': no sensor "

@@ -111,11 +111,11 @@ def resolve_modal(scene: Scene) -> tuple[Modal, tuple[float, ...]]:
     return Modal(f_s_hz=f_s, zeta=m.zeta, participation=part, gap_m=m.gap_m, e=m.e), tuple(ring or ())
 
 
-def _rig(scene: Scene) -> Rig:
+def _rig(scene: Scene, participation: float) -> Rig:
     p = scene.plate
     if p is None:
         return Rig("other", description="synthetic rig from direct modal parameters (no plate)",
-                   mic_distance_m=scene.mic_distance_m)
+                   mic_distance_m=scene.mic_distance_m, modal_participation=participation)
     cx, cy = p.length_m / 2, p.width_m / 2
     where = {"base": ((cx, cy, -0.02), "base"), "plate": ((cx, cy, 0.0), "plate"),
              "velocity": ((cx, cy, 0.5), "stand"), "mic": ((cx, cy, scene.mic_distance_m), "stand")}
@@ -123,7 +123,8 @@ def _rig(scene: Scene) -> Rig:
                     for s in scene.sensors if s.name in where)
     return Rig("plate_striker", plate_length_m=p.length_m, plate_width_m=p.width_m,
                plate_thickness_m=p.thickness_m, plate_material=p.material, edge_conditions=p.edges,
-               striker_x_m=cx, striker_y_m=cy, mic_distance_m=scene.mic_distance_m, sensors=sensors)
+               striker_x_m=cx, striker_y_m=cy, mic_distance_m=scene.mic_distance_m,
+               modal_participation=participation, plate_poisson_ratio=p.nu, sensors=sensors)
 
 
 def _rng(seed: int, run_index: int, stream: int) -> np.random.Generator:
@@ -234,7 +235,7 @@ def synthesize(scene: Scene | str | os.PathLike[str], *, seed: int | None = None
     runs, summaries, impacts = [], [], {}
     onsets: dict[float, list[float]] = {}
     gones: dict[float, list[float]] = {}
-    rig = _rig(scene)
+    rig = _rig(scene, modal.participation)
     for i, spec in enumerate(progress(scene.runs, total=len(scene.runs), desc="simulate",
                                       quiet=quiet, unit="run")):
         fs_hz = spec.sample_rate_hz or scene.sample_rate_hz

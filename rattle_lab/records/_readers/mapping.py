@@ -60,7 +60,7 @@ import numpy as np
 
 from ...exceptions import FileFormatError
 from .._convert import (CHANNEL_FIELDS, RIG_FIELDS, ROOT_FIELDS, RUN_FIELDS, SCHEMA_NAME,
-                        SCHEMA_VERSION)
+                        SCHEMA_VERSION, SCHEMA_VERSION_CHAIN)
 from .._errors import DuplicateRunError, MappingError
 from .._h5 import H5Handle, H5Source, decode_attr_value, hdf5_signature_offset
 from .._model import ArraySource, Skipped
@@ -326,6 +326,8 @@ def build_raw(path: Path, spec: MappingSpec, backend: Backend) -> RawRecord:
         raise
     tree = {"kind": "group", "attrs": root_attrs,
             "members": {"rig": rig, "runs": {"kind": "group", "attrs": {}, "members": runs}}}
+    if _uses_chain_attrs(rig, runs):
+        root_attrs["schema_version"] = SCHEMA_VERSION_CHAIN
     return RawRecord(tree=tree, sources=sources, format=backend.format, skipped=skipped,
                      closer=backend.close)
 
@@ -455,3 +457,13 @@ def load(path: Path, mapping: MappingSpec | None) -> RawRecord:
                               "(--mapping FILE.toml) to read a foreign layout")
     return build_raw(path, mapping, HDF5Backend(path))
 
+
+
+def _uses_chain_attrs(rig: Mapping[str, Any], runs: Mapping[str, Any]) -> bool:
+    """True when a mapped record carries an attribute of schema version 2 (the chain)."""
+    from .._schema import V2_CHANNEL_ATTRS, V2_RIG_ATTRS
+
+    if any(k in rig["attrs"] for k in V2_RIG_ATTRS):
+        return True
+    return any(k in ch["attrs"] for run in runs.values()
+               for ch in run["members"]["channels"]["members"].values() for k in V2_CHANNEL_ATTRS)
