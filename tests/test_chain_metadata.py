@@ -170,7 +170,9 @@ def test_fit_takes_the_participation_from_the_record(stores):
     assert proc.returncode == 0, proc.stderr
     res = json.loads(proc.stdout)
     assert res["participation"] == {"value": 1.2, "source": "rig modal_participation"}
-    assert res["data_quality"] == []
+    # (the hand-built record does not say what its vibrometer measures: flagged per run)
+    assert not [f for f in res["data_quality"] if "participation" in f]
+    assert all(f.endswith(": velocity_measurand_undeclared") for f in res["data_quality"])
     # the synthetic thresholds follow eq. 3.4 with 1 % noise: the gap to 2 % (issue target)
     assert res["fits"]["grazing"]["gap_m"]["value"] == pytest.approx(truth.gap_m, rel=0.02)
 
@@ -183,14 +185,15 @@ def test_fit_without_participation_assumes_one_and_flags_it(stores):
     assert re.search(r"participation Q1/Q2 = 1 \(assumed\)", proc.stdout)
     res = json.loads(run_cli("fit", str(out["bare"]), "--pipeline", str(pipeline),
                              "--json").stdout)
-    assert res["data_quality"] == [FLAG_PARTICIPATION_ASSUMED]
+    assert res["data_quality"][0] == FLAG_PARTICIPATION_ASSUMED
+    assert not [f for f in res["data_quality"][1:] if "participation" in f]
     # what the flag warns of: only gap/participation is identified, the gap is 1/1.2 of truth
     assert res["fits"]["grazing"]["gap_m"]["value"] == pytest.approx(truth.gap_m / 1.2, rel=0.02)
     # the command line overrides and removes the flag
     over = json.loads(run_cli("fit", str(out["bare"]), "--pipeline", str(pipeline),
                               "--participation", "1.2", "--json").stdout)
     assert over["participation"] == {"value": 1.2, "source": "command line"}
-    assert over["data_quality"] == []
+    assert not [f for f in over["data_quality"] if "participation" in f]
     assert over["fits"]["grazing"]["gap_m"]["value"] == pytest.approx(truth.gap_m, rel=0.02)
 
 

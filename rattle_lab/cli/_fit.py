@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "run of an ingest store; fit the grazing curve (eq. 3.4), the coefficient of "
                     "restitution and the SPL law; write them under /results of the store "
                     "(atomically, with provenance). Runs lacking a channel are reported as "
-                    "skipped.")
+                    "skipped; when every run is skipped the exit status is 2, with the reasons.")
     parser.add_argument("store", metavar="STORE", help="an ingest store (.h5)")
     parser.add_argument("--pipeline", metavar="FILE.toml",
                         help="parameters from a pipeline TOML: [detect] and [fit] tables of "
@@ -50,7 +50,25 @@ def _run(args: argparse.Namespace) -> int:
         print(json.dumps(result.summary, indent=2, allow_nan=False))
     else:
         print(as_table(result.summary))
-    return 0
+    return _all_skipped_status(result.summary)
+
+
+def _all_skipped_status(summary: dict[str, Any]) -> int:
+    """2, with the reasons on stderr, when runs exist and every one was skipped; else 0."""
+    import sys
+
+    skipped = summary.get("skipped", [])
+    if summary.get("n_ok", 0) or not skipped:
+        return 0
+    reasons: dict[str, list[str]] = {}
+    for s in skipped:
+        reasons.setdefault(str(s["reason"]), []).append(f"{s['input_key']}/{s['run_id']}")
+    text = "; ".join(f"{why} ({len(runs)} run{'s' if len(runs) > 1 else ''}: "
+                     f"{', '.join(runs[:3])}{', ...' if len(runs) > 3 else ''})"
+                     for why, runs in reasons.items())
+    print(f"rattle-lab: error: nothing to fit: every run ({len(skipped)}) was skipped: {text}",
+          file=sys.stderr)
+    return 2
 
 
 def _num(x: Any, fmt: str = ".6g") -> str:

@@ -29,7 +29,9 @@ from ..detect import (ImpactParams, cross_correlation_delay, detect_impacts, imp
                       impulse_train, rms_spl_db, sound_peaks)
 from ..exceptions import ParameterError, RattleLabError
 from ..ingest import open_stored_record, read_catalogue
-from ..records._chain import Participation, resolve_participation
+from ..records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED, Participation,
+                              channel_time_offset_s, resolve_participation)
+from ..detect._pairing import base_velocity_at, onto_grid
 from ..results import RunResult, StoreFit, write_results
 from ..thresholds import Threshold, ramp_threshold, tabulate_thresholds
 from ._grazing import GrazingFit, fit_grazing
@@ -111,6 +113,81 @@ def _start_of(run: Any, ch: Any) -> float:
     return 0.0
 
 
+def _t0_of(run: Any, ch: Any) -> float:
+    """Physical time of a channel's first sample: start time less the filters' group delay."""
+    return _start_of(run, ch) + channel_time_offset_s(ch)
+
+
+def paired_plate_channels(run: Any, vel: Any, acc: Any
+                          ) -> tuple[float, float, np.ndarray | None, np.ndarray | None]:
+    """``(fs_hz, t0_s, velocity, acceleration)`` on one time base (SI; either may be None).
+
+    Each channel's samples are placed at their physical times (``start_time_s`` less
+    ``group_delay_s``).  With both channels, the slower (or, at equal rates, the
+    acceleration) is resampled onto the other's grid (:func:`~rattle_lab.detect._pairing.onto_grid`)
+    and both are cut to the span they share.
+    """
+    if vel is None or acc is None:
+        ch = vel if vel is not None else acc
+        data = ch.read()
+        out = (data, None) if vel is not None else (None, data)
+        return _fs_of(run, ch), _t0_of(run, ch), out[0], out[1]
+    fs_v, fs_a = _fs_of(run, vel), _fs_of(run, acc)
+    t0_v, t0_a = _t0_of(run, vel), _t0_of(run, acc)
+    v, a = vel.read(), acc.read()
+    same = abs(fs_v - fs_a) <= 1e-9 * fs_v and abs(t0_v - t0_a) * fs_v < 1e-6
+    if same:
+        n = min(v.size, a.size)
+        return fs_v, t0_v, v[:n], a[:n]
+    if fs_a > fs_v * (1 + 1e-9):
+        fs, t0 = fs_a, t0_a
+        v = onto_grid(v, fs_v, t0_v, fs, t0, a.size)
+    else:
+        fs, t0 = fs_v, t0_v
+        a = onto_grid(a, fs_a, t0_a, fs, t0, v.size)
+    n = min(v.size, a.size)
+    v, a = v[:n], a[:n]
+    ok = np.isfinite(v) & np.isfinite(a)
+    idx = np.flatnonzero(ok)
+    if idx.size == 0:
+        raise ParameterError(f"run {run.run_id!r}: channels {vel.name!r} and {acc.name!r} do not "
+                             "overlap in time")
+    lo, hi = int(idx[0]), int(idx[-1]) + 1
+    return fs, t0 + lo / fs, np.asarray(v[lo:hi]), np.asarray(a[lo:hi])
+
+
+def relative_to_striker(run: Any, log: Any, base: Any, freq_hz: float | None) -> Any:
+    """``log`` with the base velocity taken off ``v_in``/``v_out`` (an absolute vibrometer).
+
+    The striker sits on the shaker base: the impact velocities of the SDF model are the
+    panel's relative to it.  Without a base accelerometer or a constant excitation
+    frequency the log is returned unchanged (and :func:`run_chain_flags` says so).
+    """
+    if base is None or freq_hz is None or log.n_impacts == 0:
+        return log
+    vb = base_velocity_at(base.read(), _fs_of(run, base), _t0_of(run, base), freq_hz, log.t_s)
+    vin, vout = log.v_in_m_s - vb, log.v_out_m_s - vb
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e = np.where(vin != 0, -vout / vin, np.nan)
+    return dataclasses.replace(log, v_in_m_s=vin, v_out_m_s=vout, e=e)
+
+
+def run_chain_flags(run: Any) -> list[str]:
+    """Named data-quality flags of a run's measurement chain (schema v2 metadata)."""
+    flags = []
+    vel = next((c for c in run.channels if c.quantity == "plate_velocity"), None)
+    if vel is not None:
+        measurand = getattr(vel, "measurand", None)
+        if measurand is None:
+            flags.append(FLAG_MEASURAND_UNDECLARED)
+        elif measurand == "panel_absolute":
+            has_base = any(c.quantity == "base_acceleration" for c in run.channels)
+            f_end = getattr(run, "freq_end_hz", None)
+            if not has_base or not run.excitation_freq_hz or (f_end and f_end != run.excitation_freq_hz):
+                flags.append(FLAG_MEASURAND_ABSOLUTE)
+    return flags
+
+
 def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Mapping[str, Any],
                 mic_distance_m: float | None = None) -> RunResult:
     """Detection results of one :class:`~rattle_lab.records.Run`."""
@@ -124,21 +201,20 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
         return RunResult(status="skipped", reason="no plate_velocity or plate_acceleration channel",
                          **base)
     used = [c for c in (vel, acc) if c is not None]
-    fs = _fs_of(run, used[0])
-    if any(abs(_fs_of(run, c) - fs) > 1e-9 * fs or c.n_samples != used[0].n_samples for c in used):
-        used = used[:1]
-        vel, acc = (used[0], None) if used[0] is vel else (None, used[0])
-    t0 = _start_of(run, used[0])
+    # issue 15: each channel's time base less its declared filter delay; two channels at
+    # different rates or offsets are brought onto the grid of the faster one before pairing
+    fs, t0, v_si, a_si = paired_plate_channels(run, vel, acc)
     params = ImpactParams(**{k: v for k, v in detect.items() if k not in SOUND_KEYS})
     # a constant excitation frequency lets the velocity fits use the forced-mode basis
     f_end = getattr(run, "freq_end_hz", None)
     f_fit = freq if (math.isfinite(freq) and 0 < freq < fs / 2
                      and (f_end is None or f_end == freq)) else None
-    log = detect_impacts(fs, velocity_m_s=vel.read() if vel is not None else None,
-                         accel_ms2=acc.read() if acc is not None else None, params=params,
+    log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=params,
                          start_time_s=t0, excitation_freq_hz=f_fit)
+    if vel is not None and getattr(vel, "measurand", None) == "panel_absolute":
+        log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
     names = tuple(c.name for c in used)
-    duration = used[0].n_samples / fs
+    duration = (v_si if v_si is not None else a_si).size / fs
     pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)
     if math.isfinite(freq) and freq > 0 and duration * freq >= 1:
         lo, hi = t0, t0 + duration
@@ -154,7 +230,7 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     if mic is not None:
         fs_mic = _fs_of(run, mic)
         p = mic.read()
-        t0_mic = _start_of(run, mic)
+        t0_mic = _t0_of(run, mic)
         names = names + (mic.name,)
         peaks = sound_peaks(p, fs_mic, log.t_s, window_s=sk["window_s"],
                             first_fraction=sk["first_fraction"], start_time_s=t0_mic,
@@ -173,7 +249,7 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
         if b is not None:
             threshold = ramp_threshold(run.run_id, b.read(), _fs_of(run, b), freq, log.t_s,
                                        "up" if run.protocol.endswith("up") else "down",
-                                       start_time_s=_start_of(run, b),
+                                       start_time_s=_t0_of(run, b),
                                        n_confirm=int(fit.get("n_confirm", 3)))
             names = names + (b.name,)
     return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
@@ -286,6 +362,7 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
         for key in keys:
             inputs[key] = str(fh[f"records/{key}"].attrs.get("ingest_input_hash", ""))
     participation = store_participation(store, fit.get("participation"), participation_source)
+    chain_flags: list[str] = []
     with progress_bar(int(catalogue.shape[0]), desc="detect", unit="run", quiet=quiet) as bar:
         for key in keys:
             record = open_stored_record(store, key)
@@ -293,11 +370,12 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
                 for run in record.runs:
                     runs.append(analyse_run(key, run, detect=detect, fit=fit,
                                             mic_distance_m=record.rig.mic_distance_m))
+                    chain_flags += [f"{key}/{run.run_id}: {f}" for f in run_chain_flags(run)]
                     bar.update()
             finally:
                 record.close()
     curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
-    summary = summarise_fits(runs, curve, fit, participation=participation)
+    summary = summarise_fits(runs, curve, fit, participation=participation, flags=chain_flags)
     provenance = {"function": "rattle_lab.fit.fit_store", "rattle_lab_version": __version__,
                   "python": sys.version.split()[0], "parameters": {"detect": detect, "fit": fit},
                   "inputs": inputs}
@@ -381,7 +459,8 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
 
 
 def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
-                   participation: Participation | None = None) -> dict[str, Any]:
+                   participation: Participation | None = None,
+                   flags: list[str] | None = None) -> dict[str, Any]:
     """Fit the store-level models to per-run detections; the summary ``/results`` stores.
 
     From the per-run results of :func:`analyse_run` and the threshold table of
@@ -403,6 +482,8 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     participation : Participation, optional
         The participation and its source (:func:`store_participation`); without it,
         ``fit["participation"]``, or 1.0 flagged ``participation_assumed`` when that is None.
+    flags : list of str, optional
+        Further data-quality flags (``"input_key/run_id: flag"``, see :func:`run_chain_flags`).
 
     Returns
     -------
@@ -429,7 +510,7 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     ok = [r for r in runs if r.status == "ok"]
     summary: dict[str, Any] = {
         "participation": {"value": participation.value, "source": participation.source},
-        "data_quality": list(participation.flags),
+        "data_quality": list(participation.flags) + list(flags or []),
         "n_runs": len(runs), "n_ok": len(ok),
         "skipped": [{"input_key": r.input_key, "run_id": r.run_id, "reason": r.reason}
                     for r in runs if r.status == "skipped"],
@@ -499,5 +580,6 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     return summary
 
 
-__all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "restitution_down_summary",
+__all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "paired_plate_channels",
+           "relative_to_striker", "restitution_down_summary", "run_chain_flags",
            "store_participation", "summarise_fits"]

@@ -181,6 +181,9 @@ def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz:
             si = -sensor.volts_per_m_s2 * motion.level_m_s2 * np.cos(motion.theta)
         assert si is not None
         chan = _store(sensor, si, noise, fs_hz, with_ids and sensor.name != "drive")
+        if sensor.name == "velocity":   # a differential vibrometer (reference beam on the base)
+            chan = dataclasses.replace(chan, measurand="panel_relative_to_striker",
+                                       sign_convention="toward_striker_positive")
         if sensor.name == "mic" and art.dropout_s > 0:
             data = chan.data.read(0, chan.n_samples).copy()
             lo = data.size // 2
