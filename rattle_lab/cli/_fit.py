@@ -31,6 +31,11 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                              "(thesis eq. 2.27); overrides the pipeline's and the records' "
                              "(rig modal_participation, or the plate model from the rig's "
                              "geometry); without any, 1.0 is assumed and flagged")
+    parser.add_argument("--detect-channel", metavar="NAME", default=None,
+                        help="the channel to detect events on, in every run (overrides the "
+                             "pipeline's [detect] channel and the records' detect_channel; by "
+                             "default chosen by what each channel measures: a transient run's "
+                             "cause is its force, else its base)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_run)
@@ -41,6 +46,8 @@ def _run(args: argparse.Namespace) -> int:
 
     params = load_pipeline(args.pipeline)
     source = "pipeline"
+    if args.detect_channel is not None:
+        params["detect"]["channel"] = args.detect_channel
     if args.participation is not None:
         params["fit"]["participation"] = args.participation
         source = "command line"
@@ -108,7 +115,7 @@ def as_table(summary: dict[str, Any]) -> str:
     for label, value, err, unit in rows:
         lines.append(f"{label:<32}  {_num(value):<13}  {_num(err):<13}  {unit}")
     part = summary.get("participation")
-    if part:
+    if part and not all(r["protocol"] == "transient" for r in summary["runs"]):
         lines.append(f"participation Q1/Q2 = {_num(part['value'])} ({part['source']})")
     for flag in summary.get("data_quality", []):
         lines.append(f"data-quality flag: {flag}")
@@ -117,13 +124,33 @@ def as_table(summary: dict[str, Any]) -> str:
     for key in ("damping_ramp", "restitution_down"):
         for note in fits.get(key, {}).get("notes", []):
             lines.append(f"note: {key}: {note}")
-    for key, why in summary["not_fitted"].items():
-        lines.append(f"not fitted: {key}: {why}")
+    shocks_only = bool(summary["runs"]) and all(r["protocol"] == "transient"
+                                                for r in summary["runs"])
+    if shocks_only:
+        lines.append("transient records only (single shocks): no rattle fits (the grazing "
+                     "curve, restitution and SPL laws need shaker runs)")
+    else:
+        for key, why in summary["not_fitted"].items():
+            lines.append(f"not fitted: {key}: {why}")
     lines.append("")
     lines.append(f"runs: {summary['n_ok']} analysed, {len(summary['skipped'])} skipped")
     for r in summary["runs"]:
+        if r["protocol"] == "transient":
+            lines.append(f"  {r['input_key']}/{r['run_id']}: transient, {r['n_impacts']} shock"
+                         f"{'' if r['n_impacts'] == 1 else 's'}")
+            continue
         lines.append(f"  {r['input_key']}/{r['run_id']}: {r['n_impacts']} impacts, "
                      f"pattern {r['pattern'] or '-'}, threshold {_num(r['threshold_accel_ms2'])} m/s^2")
     for s in summary["skipped"]:
         lines.append(f"  skipped {s['input_key']}/{s['run_id']}: {s['reason']}")
+    for tr in summary.get("transients", []):
+        lines.append(f"  transient {tr['input_key']}/{tr['run_id']}: one shock per channel")
+        for c in tr["channels"]:
+            if not c["found"]:
+                lines.append(f"    {c['role']:<8} {c['channel']}: no shock above the noise")
+                continue
+            delay = (f", {1e3 * c['delay_s']:+.3f} ms after the cause"
+                     if c.get("delay_s") is not None else "")
+            lines.append(f"    {c['role']:<8} {c['channel']} ({c['quantity']}): onset "
+                         f"{1e3 * c['onset_s']:.3f} ms, peak {1e3 * c['peak_s']:.3f} ms{delay}")
     return "\n".join(lines)

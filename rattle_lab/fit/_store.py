@@ -25,8 +25,9 @@ import numpy as np
 
 from .._progress import progress_bar
 from .._version import __version__
-from ..detect import (ImpactParams, cross_correlation_delay, detect_impacts, impact_pattern,
-                      impulse_train, rms_spl_db, sound_peaks)
+from ..detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
+                      impact_pattern, impulse_train, rms_spl_db, sound_peaks)
+from ..detect._shock import detect_shock
 from ..exceptions import ParameterError, RattleLabError
 from ..ingest import open_stored_record, read_catalogue
 from ..records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED, Participation,
@@ -39,7 +40,12 @@ from ._damping import fit_zeta_ramp
 from ._restitution import METHODS, fit_restitution_down, restitution_from_ratios
 from ._spl_law import fit_db_law, fit_linear_law, law_dict
 
-SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01}
+SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01, "channel": None}
+#: Quantities that cause a shock (the hammer's force, the drop table or shaker base), in the
+#: order a transient record's cause is chosen; the other channels are its responses.
+CAUSE_QUANTITIES = ("excitation_force", "base_acceleration", "drive_signal")
+#: Quantities a transient record's shock is looked for in.
+SHOCK_QUANTITIES = CAUSE_QUANTITIES + ("plate_acceleration", "plate_velocity", "sound_pressure")
 FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0,
             "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3,
             "restitution_method": "ramp", "level_hold_periods": 1}
@@ -49,8 +55,9 @@ _QUANTITIES = ("plate_velocity", "plate_acceleration", "sound_pressure", "base_a
 def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, Any]]:
     """Keyword parameters ``{"detect": {...}, "fit": {...}}`` from a pipeline TOML (or defaults).
 
-    ``[detect]`` takes the fields of :class:`~rattle_lab.detect.ImpactParams` and
-    ``window_s``, ``first_fraction``, ``max_lag_s``; ``[fit]`` takes
+    ``[detect]`` takes the fields of :class:`~rattle_lab.detect.ImpactParams`,
+    ``window_s``, ``first_fraction``, ``max_lag_s`` and ``channel`` (the channel to detect
+    on; default: chosen by what each channel measures); ``[fit]`` takes
     ``participation`` (``Q1/Q2``; absent: from the records' rig metadata, see
     :func:`store_participation`), ``vary_participation``, ``outlier_k``, ``conf_interval``,
     ``speed_of_sound_m_s``, ``n_confirm``, ``restitution_method`` (``"ramp"``, the
@@ -188,6 +195,70 @@ def run_chain_flags(run: Any) -> list[str]:
     return flags
 
 
+def transient_shocks(run: Any, *, on: float = 12.0, channel: str | None = None
+                     ) -> list[dict[str, Any]]:
+    """The shock in each channel of a transient run, the cause first, responses paired to it.
+
+    The cause is ``channel`` (or the run's ``detect_channel``) when given, else the first
+    channel measuring a quantity of :data:`CAUSE_QUANTITIES` (force before base before
+    drive), else the first channel with a shock.  Each row: ``channel``, ``quantity``,
+    ``role`` (``"cause"``/``"response"``), ``found``, ``onset_s``, ``peak_s`` (physical
+    times: ``start_time_s`` less ``group_delay_s``), ``peak_value`` (SI), ``strength``
+    (noise units) and, for responses, ``delay_s`` = response onset - cause onset.
+
+    Raises
+    ------
+    ParameterError
+        If ``channel`` names no channel of the run.
+    """
+    wanted = channel or getattr(run, "detect_channel", None)
+    chans = [c for c in run.channels if c.quantity in SHOCK_QUANTITIES]
+    if wanted is not None:
+        if wanted not in {c.name for c in run.channels}:
+            raise ParameterError(f"run {run.run_id!r}: no channel {wanted!r} to detect on "
+                                 f"(has: {', '.join(c.name for c in run.channels)})")
+        chans = [c for c in run.channels if c.name == wanted] + \
+            [c for c in chans if c.name != wanted]
+    rows = []
+    for c in chans:
+        shock = detect_shock(c.read(), _fs_of(run, c), start_time_s=_t0_of(run, c), on=on)
+        rows.append({"channel": c.name, "quantity": c.quantity, "found": shock.found,
+                     "onset_s": shock.onset_s, "peak_s": shock.peak_s,
+                     "peak_value": shock.peak_value, "strength": shock.strength})
+    if not rows:
+        return rows
+    if wanted is None:
+        rank = [next((i for i, q in enumerate(CAUSE_QUANTITIES) if r["quantity"] == q),
+                     len(CAUSE_QUANTITIES) + (0 if r["found"] else 1)) for r in rows]
+        rows.insert(0, rows.pop(int(np.argmin(rank))))
+    cause = rows[0]
+    cause["role"] = "cause"
+    for r in rows[1:]:
+        r["role"] = "response"
+        r["delay_s"] = (r["onset_s"] - cause["onset_s"]) if r["found"] and cause["found"] \
+            else float("nan")
+    return rows
+
+
+def _analyse_transient(run: Any, detect: Mapping[str, Any], base: dict[str, Any]) -> RunResult:
+    """One event per transient run: the shock on the cause channel (see :func:`transient_shocks`)."""
+    rows = transient_shocks(run, on=float(detect.get("on", ImpactParams.on)),
+                            channel=detect.get("channel"))
+    if not rows:
+        return RunResult(status="skipped", reason="transient run without a channel to find its "
+                         "shock in (" + ", ".join(SHOCK_QUANTITIES) + ")", **base)
+    cause = rows[0]
+    ch = run.channel(cause["channel"])
+    t = np.array([cause["onset_s"]]) if cause["found"] else np.zeros(0)
+    nan = np.full(t.size, np.nan)
+    log = ImpactLog(t_s=t, onset_s=t.copy(), v_in_m_s=nan, v_out_m_s=nan.copy(), e=nan.copy(),
+                    strength=np.array([cause["strength"]])[:t.size], channels=(ch.name,),
+                    fs_hz=_fs_of(run, ch))
+    return RunResult(status="ok", channels_used=tuple(r["channel"] for r in rows), impacts=log,
+                     pattern="single shock" if t.size else "no shock", pattern_n=int(t.size),
+                     **base)
+
+
 def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Mapping[str, Any],
                 mic_distance_m: float | None = None) -> RunResult:
     """Detection results of one :class:`~rattle_lab.records.Run`."""
@@ -197,6 +268,19 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     freq = float(run.excitation_freq_hz) if run.excitation_freq_hz else float("nan")
     vel, acc = by_q.get("plate_velocity"), by_q.get("plate_acceleration")
     base = dict(input_key=input_key, run_id=run.run_id, protocol=run.protocol, freq_hz=freq)
+    if run.protocol == "transient":
+        return _analyse_transient(run, detect, base)
+    wanted = detect.get("channel") or getattr(run, "detect_channel", None)
+    if wanted is not None:
+        named = next((c for c in run.channels if c.name == wanted), None)
+        if named is None:
+            return RunResult(status="skipped", reason=f"no channel {wanted!r} to detect on",
+                             **base)
+        if named.quantity not in ("plate_velocity", "plate_acceleration"):
+            return RunResult(status="skipped", reason=f"channel {wanted!r} measures "
+                             f"{named.quantity}: impacts are detected on a plate_velocity or "
+                             "plate_acceleration", **base)
+        vel, acc = (named, None) if named.quantity == "plate_velocity" else (None, named)
     if vel is None and acc is None:
         return RunResult(status="skipped", reason="no plate_velocity or plate_acceleration channel",
                          **base)
@@ -363,6 +447,7 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
             inputs[key] = str(fh[f"records/{key}"].attrs.get("ingest_input_hash", ""))
     participation = store_participation(store, fit.get("participation"), participation_source)
     chain_flags: list[str] = []
+    transients: list[dict[str, Any]] = []
     with progress_bar(int(catalogue.shape[0]), desc="detect", unit="run", quiet=quiet) as bar:
         for key in keys:
             record = open_stored_record(store, key)
@@ -371,11 +456,18 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
                     runs.append(analyse_run(key, run, detect=detect, fit=fit,
                                             mic_distance_m=record.rig.mic_distance_m))
                     chain_flags += [f"{key}/{run.run_id}: {f}" for f in run_chain_flags(run)]
+                    if run.protocol == "transient" and runs[-1].status == "ok":
+                        transients.append({"input_key": key, "run_id": run.run_id,
+                                           "channels": transient_shocks(
+                                               run, on=float(detect.get("on", ImpactParams.on)),
+                                               channel=detect.get("channel"))})
                     bar.update()
             finally:
                 record.close()
     curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
     summary = summarise_fits(runs, curve, fit, participation=participation, flags=chain_flags)
+    if transients:
+        summary["transients"] = transients
     provenance = {"function": "rattle_lab.fit.fit_store", "rattle_lab_version": __version__,
                   "python": sys.version.split()[0], "parameters": {"detect": detect, "fit": fit},
                   "inputs": inputs}
@@ -510,7 +602,9 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     ok = [r for r in runs if r.status == "ok"]
     summary: dict[str, Any] = {
         "participation": {"value": participation.value, "source": participation.source},
-        "data_quality": list(participation.flags) + list(flags or []),
+        # (a store of single shocks fits no modal law: the participation does not enter)
+        "data_quality": (list(participation.flags) if any(r.protocol != "transient" for r in ok)
+                         else []) + list(flags or []),
         "n_runs": len(runs), "n_ok": len(ok),
         "skipped": [{"input_key": r.input_key, "run_id": r.run_id, "reason": r.reason}
                     for r in runs if r.status == "skipped"],
@@ -582,4 +676,4 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
 
 __all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "paired_plate_channels",
            "relative_to_striker", "restitution_down_summary", "run_chain_flags",
-           "store_participation", "summarise_fits"]
+           "store_participation", "summarise_fits", "transient_shocks"]

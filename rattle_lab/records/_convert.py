@@ -21,7 +21,7 @@ RIG_FIELDS = ("apparatus", "description", "plate_length_m", "plate_width_m", "pl
               "plate_material", "edge_conditions", "striker_x_m", "striker_y_m", "gap_m",
               "mic_distance_m", "modal_participation", "plate_poisson_ratio")
 RUN_FIELDS = ("protocol", "excitation_freq_hz", "freq_end_hz", "freq_step_hz", "nominal_level",
-              "level_end", "nominal_level_units", "start_time_iso", "notes")
+              "level_end", "nominal_level_units", "start_time_iso", "notes", "detect_channel")
 CHANNEL_FIELDS = ("quantity", "units", "sample_rate_hz", "start_time_s", "timestamps",
                   "sensitivity", "sensitivity_units", "sensor_id", "sensor_model", "sensor_serial",
                   "calibration_date", "range_min", "range_max", "units_assumed", "description",
@@ -39,6 +39,8 @@ def schema_version_of(record: Record) -> int:
     if rig.modal_participation is not None or rig.plate_poisson_ratio is not None:
         return SCHEMA_VERSION_CHAIN
     for run in record.runs:
+        if run.detect_channel is not None:
+            return SCHEMA_VERSION_CHAIN
         for ch in run.channels:
             if ch.measurand is not None or ch.sign_convention is not None or \
                     ch.group_delay_s is not None:

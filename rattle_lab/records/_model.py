@@ -327,6 +327,9 @@ class Run:
         Start of the run, ISO 8601 (local time unless it carries an offset).
     notes : str
         Free text.
+    detect_channel : str or None
+        The channel events are detected on, when the record says (schema v2); else
+        chosen by what each channel measures.
     timestamps : mapping of str to ArraySource
         Explicit time bases referenced by channels, in s.  Not compared by ``==``.
     """
@@ -342,6 +345,7 @@ class Run:
     nominal_level_units: str | None = None
     start_time_iso: str | None = None
     notes: str = ""
+    detect_channel: str | None = None
     timestamps: Mapping[str, ArraySource] = field(default_factory=dict, compare=False, repr=False)
     extra: Mapping[str, Any] = field(default_factory=dict)
 

@@ -30,6 +30,7 @@ CHANNEL_DTYPES = frozenset({"f4", "f8", "i1", "i2", "i4", "i8", "u1", "u2", "u4"
 #: Attributes that layout version 2 adds (the measurement chain), by group.
 V2_RIG_ATTRS = ("modal_participation", "plate_poisson_ratio")
 V2_CHANNEL_ATTRS = ("measurand", "sign_convention", "group_delay_s")
+V2_RUN_ATTRS = ("detect_channel",)
 
 
 @functools.lru_cache(maxsize=1)
@@ -166,6 +167,7 @@ def _check_version(tree: dict[str, Any], label: str) -> None:
     members = _members(tree)
     found = [("/rig", k) for k in V2_RIG_ATTRS if k in members["rig"]["attrs"]]
     for run_id, run in _members(members["runs"]).items():
+        found += [(f"/runs/{run_id}", k) for k in V2_RUN_ATTRS if k in run["attrs"]]
         for name, channel in _members(_members(run)["channels"]).items():
             found += [(f"/runs/{run_id}/channels/{name}", k) for k in V2_CHANNEL_ATTRS
                       if k in channel["attrs"]]
@@ -217,6 +219,10 @@ def _check_in_code(tree: dict[str, Any], label: str) -> None:
             if lo is not None and not lo < hi:
                 raise SchemaError(f"{label}: {path}: attribute 'range_max': must be > range_min "
                                   f"({lo}), was {hi}")
+        detect_channel = run["attrs"].get("detect_channel")
+        if detect_channel is not None and detect_channel not in channels:
+            raise SchemaError(f"{label}: {run_path}: attribute 'detect_channel': no channel "
+                              f"{detect_channel!r} (has: {', '.join(sorted(channels))})")
         _check_finite(run["attrs"], label, run_path)
     _check_finite(members["rig"]["attrs"], label, "/rig")
     truth = members.get("truth")

@@ -461,9 +461,11 @@ def load(path: Path, mapping: MappingSpec | None) -> RawRecord:
 
 def _uses_chain_attrs(rig: Mapping[str, Any], runs: Mapping[str, Any]) -> bool:
     """True when a mapped record carries an attribute of schema version 2 (the chain)."""
-    from .._schema import V2_CHANNEL_ATTRS, V2_RIG_ATTRS
+    from .._schema import V2_CHANNEL_ATTRS, V2_RIG_ATTRS, V2_RUN_ATTRS
 
     if any(k in rig["attrs"] for k in V2_RIG_ATTRS):
+        return True
+    if any(k in run["attrs"] for run in runs.values() for k in V2_RUN_ATTRS):
         return True
     return any(k in ch["attrs"] for run in runs.values()
                for ch in run["members"]["channels"]["members"].values() for k in V2_CHANNEL_ATTRS)
