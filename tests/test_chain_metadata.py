@@ -202,3 +202,41 @@ def test_fit_rejects_a_bad_participation_on_the_command_line(stores):
     proc = run_cli("fit", str(out["bare"]), "--participation", "0")
     assert proc.returncode == 2
     assert "participation" in proc.stderr and "Traceback" not in proc.stderr
+
+
+# ----------------------------------------------------------------------------- bad metadata
+def test_group_delay_longer_than_a_forcing_period_is_refused(tmp_path):
+    path = write_record(tmp_path / "v1.h5", make_record())
+    with h5py.File(path, "r+") as fh:
+        fh.attrs["schema_version"] = 2
+        vel = next(n for n, d in fh["runs/dwell_094/channels"].items()
+                   if d.attrs["quantity"] == "plate_velocity")
+        fh[f"runs/dwell_094/channels/{vel}"].attrs["group_delay_s"] = 0.018   # 18 ms, not us
+    with pytest.raises(SchemaError, match=r"attribute 'group_delay_s': 0\.018 s is not less than "
+                                          r"a forcing period of the run \(0\.0106383 s\)"):
+        read(path)
+    proc = run_cli("ingest", str(path), "-o", str(tmp_path / "s.h5"))
+    assert proc.returncode == 2 and "group_delay_s" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_sample_rate_contradicting_the_time_vector_is_refused(tmp_path):
+    import numpy as np
+
+    from rattle_lab.records._errors import MappingError
+
+    t = np.arange(1000) / 25600.0
+    np.save(tmp_path / "rec.npy", np.vstack([t, np.sin(2 * np.pi * 100 * t)]))
+    mapping = tmp_path / "m.toml"
+    mapping.write_text(
+        '[mapping]\nversion = 1\nformat = "npy"\n\n[campaign]\ncampaign_id = "c-{stem}"\n'
+        'source = "measured"\n\n[rig]\napparatus = "other"\ndescription = "x"\n\n'
+        '[[runs]]\nrun_id = "r"\nprotocol = "transient"\n\n[runs.timestamps.t]\nindex = 0\n\n'
+        '[[runs.channels]]\nname = "a"\nindex = 1\nquantity = "plate_acceleration"\n'
+        'units = "m/s^2"\ntimestamps = "t"\nsample_rate_hz = 51200.0\n')
+    with pytest.raises(MappingError, match=r"sample_rate_hz 51200 Hz contradicts the channel's "
+                                           r"time vector \(median step 3\.90625e-05 s = 25600 Hz\)"):
+        read(tmp_path / "rec.npy", mapping=mapping)
+    # agreeing to 1e-3: accepted
+    mapping.write_text(mapping.read_text().replace("51200.0", "25600.0"))
+    assert read(tmp_path / "rec.npy", mapping=mapping).runs[0].channel("a").n_samples == 1000

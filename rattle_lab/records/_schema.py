@@ -205,6 +205,15 @@ def _check_in_code(tree: dict[str, Any], label: str) -> None:
                     raise SchemaError(f"{label}: {path}: attribute 'timestamps': "
                                       f"{run_path}/timestamps/{ts_name} has shape "
                                       f"{timestamps[ts_name]['shape']}, the channel {channel['shape']}")
+            delay = attrs.get("group_delay_s")
+            f_exc = run["attrs"].get("excitation_freq_hz")
+            if delay is not None and f_exc and delay * max(f_exc, run["attrs"].get(
+                    "freq_end_hz") or f_exc) >= 1.0:
+                raise SchemaError(f"{label}: {path}: attribute 'group_delay_s': {delay!r} s is "
+                                  f"not less than a forcing period of the run "
+                                  f"({1.0 / max(f_exc, run['attrs'].get('freq_end_hz') or f_exc):.6g} s); "
+                                  "a filter delay is microseconds to milliseconds (was it given "
+                                  "in another unit?)")
             if "measurand" in attrs and attrs.get("quantity") != "plate_velocity":
                 raise SchemaError(f"{label}: {path}: attribute 'measurand': only a plate_velocity "
                                   f"channel has one (this is {attrs.get('quantity')!r})")

@@ -296,8 +296,10 @@ def build_raw(path: Path, spec: MappingSpec, backend: Backend) -> RawRecord:
                                              if k not in SELECTOR_KEYS and k != "name"},
                                   label, cwhere, " + ".join(used_label))
                 if "timestamps" in ch_attrs:
-                    ch_attrs.pop("sample_rate_hz", None)
+                    declared_fs = ch_attrs.pop("sample_rate_hz", None)
                     ch_attrs.pop("start_time_s", None)
+                    ts_src = sources.get(f"/runs/{run_id}/timestamps/{ch_attrs['timestamps']}")
+                    _check_rate_against_time(declared_fs, ts_src, f"{label}: {cwhere}")
                 sources[f"/runs/{run_id}/channels/{ch['name']}"] = src
                 channels[ch["name"]] = {"kind": "dataset", "attrs": ch_attrs,
                                         "dtype": np.dtype(src.dtype).str, "shape": [src.n_samples]}
@@ -469,3 +471,21 @@ def _uses_chain_attrs(rig: Mapping[str, Any], runs: Mapping[str, Any]) -> bool:
         return True
     return any(k in ch["attrs"] for run in runs.values()
                for ch in run["members"]["channels"]["members"].values() for k in V2_CHANNEL_ATTRS)
+
+
+#: Relative disagreement between a declared sample rate and a time vector that is refused.
+RATE_TOLERANCE = 1e-3
+
+
+def _check_rate_against_time(fs_hz: Any, ts: Any, where: str) -> None:
+    """Refuse a declared sample rate that contradicts the channel's own time vector."""
+    if fs_hz is None or ts is None or ts.n_samples < 3:
+        return
+    t = np.asarray(ts.read(0, min(ts.n_samples, 100_000)), dtype=np.float64)
+    dt = float(np.median(np.diff(t)))
+    if not dt > 0:
+        return
+    if abs(1.0 / dt - float(fs_hz)) > RATE_TOLERANCE * float(fs_hz):
+        raise MappingError(f"{where}: sample_rate_hz {float(fs_hz):.6g} Hz contradicts the "
+                           f"channel's time vector (median step {dt:.6g} s = {1.0 / dt:.6g} Hz); "
+                           "give one of the two")
