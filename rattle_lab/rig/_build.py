@@ -18,6 +18,7 @@ from ..exceptions import OutputError
 from ..plate import Plate
 from ..records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable, Truth,
                        scale_to_si, write_record)
+from . import _chain as cc
 from . import _channels as ch
 from ._counter import StageCounter
 from ._motion import Modal, RunMotion, simulate_run, thresholds
@@ -151,6 +152,7 @@ def _store(sensor: SensorSpec, si: np.ndarray, noise_rng: np.random.Generator, f
 def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz: float,
               ring: tuple[float, ...], counter: StageCounter, with_ids: bool) -> list[Channel]:
     art = scene.artefacts
+    chain = scene.chain
     fan_phase = float(_rng(seed, run_index, 200).uniform(0.0, 2.0 * math.pi))
     a_base = None
     out: list[Channel] = []
@@ -169,20 +171,40 @@ def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz:
         elif sensor.name == "velocity":
             counter.add("velocity")
             si = ch.vibrometer_velocity(motion, sensor.band_hz, fs_hz, scene.model.contact_s)
+            if chain is not None:
+                si = si + cc.velocity_ringing(motion, scene.model, ring,
+                                              chain.ring_velocity_per_m_s, si.size, fs_hz)
+                if chain.vibrometer == "absolute":
+                    si = si + cc.base_velocity(motion, fs_hz)
         elif sensor.name == "mic":
             counter.add("mic")
             counter.add("acoustic")
             assert scene.acoustic is not None
             si, _ = ch.sound_pressure(motion, scene.acoustic, art, fs_hz, _rng(seed, run_index, 100),
                                       fan_phase)
+            if chain is not None:
+                si = cc.floor_reflection(si, chain, scene.acoustic.c_m_s, fs_hz)
         else:
             counter.add("drive")
             assert motion.theta is not None and motion.level_m_s2 is not None
             si = -sensor.volts_per_m_s2 * motion.level_m_s2 * np.cos(motion.theta)
         assert si is not None
+        if chain is not None:
+            si = cc.hum_and_offset(si, sensor.name, chain, fs_hz)
         chan = _store(sensor, si, noise, fs_hz, with_ids and sensor.name != "drive")
-        if sensor.name == "velocity":   # a differential vibrometer (reference beam on the base)
-            chan = dataclasses.replace(chan, measurand="panel_relative_to_striker",
+        if chain is not None and sensor.name == "velocity" and chain.decoder_delay_s:
+            data = cc.fractional_delay(chan.data.read(0, chan.n_samples).astype(np.float64),
+                                       fs_hz, chain.decoder_delay_s)
+            chan = dataclasses.replace(chan, data=data.astype(np.float32),
+                                       group_delay_s=chain.decoder_delay_s)
+        if chain is not None and chain.adc_bits:
+            data = cc.quantise(chan.data.read(0, chan.n_samples).astype(np.float64),
+                               sensor.range, chain.adc_bits)
+            chan = dataclasses.replace(chan, data=data.astype(np.float64 if chain.adc_bits > 16
+                                                              else np.float32))
+        if sensor.name == "velocity":   # what the vibrometer measures, declared (schema v2)
+            chan = dataclasses.replace(chan, measurand=chain.measurand if chain is not None
+                                       else "panel_relative_to_striker",
                                        sign_convention="toward_striker_positive")
         if sensor.name == "mic" and art.dropout_s > 0:
             data = chan.data.read(0, chan.n_samples).copy()
