@@ -316,7 +316,10 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
         p = mic.read()
         t0_mic = _t0_of(run, mic)
         names = names + (mic.name,)
-        peaks = sound_peaks(p, fs_mic, log.t_s, window_s=sk["window_s"],
+        # issue 15: each sound paired with its impact through the declared propagation delay
+        d_prop = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0)) \
+            if mic_distance_m else 0.0
+        peaks = sound_peaks(p, fs_mic, log.t_s, window_s=sk["window_s"], delay_s=d_prop,
                             first_fraction=sk["first_fraction"], start_time_s=t0_mic,
                             excitation_freq_hz=f_fit if f_fit is not None and f_fit < fs_mic / 2
                             else None)
