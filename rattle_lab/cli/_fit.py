@@ -121,6 +121,9 @@ def as_table(summary: dict[str, Any]) -> str:
         lines.append(f"data-quality flag: {flag}")
     for note in fits.get("grazing", {}).get("unidentifiable", []):
         lines.append(f"note: {note}")
+    zeta_note = fits.get("grazing", {}).get("zeta", {}).get("bias_note")
+    if zeta_note:
+        lines.append(f"note: grazing.zeta: {zeta_note}")
     for key in ("damping_ramp", "restitution_down"):
         for note in fits.get(key, {}).get("notes", []):
             lines.append(f"note: {key}: {note}")

@@ -659,6 +659,15 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
             e_guess=st.mean if st.n else 0.6)
         fits.update(fits_down)
         missing.update(missing_down)
+        ramp = fits.get("damping_ramp")
+        if ramp is not None and "grazing" in fits and ramp["value"] > 0:
+            # issue 15: name the bias of eq. (3.4)'s zeta, whose interval leaves it out
+            z = fits["grazing"]["zeta"]
+            bias = z["value"] / ramp["value"] - 1.0
+            z["bias_rel"] = bias
+            z["bias_note"] = (f"eq. (3.4) reads the ramp lag as damping: zeta is "
+                              f"{100 * bias:+.1f} % against the ramp replay (damping_ramp), "
+                              "which corrects it; this interval does not include the lag")
     else:
         missing["restitution_down"] = "needs a grazing fit and downward thresholds"
     v = np.concatenate([np.abs(r.impacts.v_in_m_s) for r in ok if r.peaks is not None
