@@ -11,7 +11,7 @@ ratios: mean +- 1.96 standard errors.  (The rig's exact-dynamics scenes carry a 
 that eq. 3.4 leaves out: there zeta from eq. 3.4 is biased high, and ``rattle-lab fit``
 names that bias and gives the ramp replay's zeta, ``damping_ramp``, which corrects it.)
 
-Usage: ``python benchmarks/coverage.py [--n 50] [--noise 0.01]``.  Timings under load.
+Usage: ``python benchmarks/interval_coverage.py [--n 50] [--noise 0.01]``.  Timings under load.
 """
 
 from __future__ import annotations
