@@ -44,6 +44,7 @@ from rattle_lab.detect import ImpactParams, cross_correlation_delay, detect_impa
 from rattle_lab.detect._synthetic import synthetic_campaign
 from rattle_lab.fit import (analyse_run, fit_grazing, fit_linear_law, fit_restitution_down,
                             fit_zeta_ramp, restitution_from_ratios)
+from rattle_lab.fit._store import _crossing_curve
 from rattle_lab.rig import load_scene, synthesize
 from rattle_lab.thresholds import tabulate_thresholds
 
@@ -149,7 +150,8 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
     t0 = time.perf_counter()
     nan = float("nan")
     try:
-        g = fit_grazing(curve.freq_hz, curve.up_ms2, participation=q)
+        g = fit_grazing(curve.freq_hz, _crossing_curve(
+            [r.threshold for r in runs if r.threshold is not None], curve.freq_hz), participation=q)
         p = g.params
         out.update(gap_err_rel=abs(p["gap_m"].value / truth.gap_m - 1),
                    f_s_err_rel=abs(p["f_s_hz"].value / truth.f_s_hz - 1),
@@ -241,7 +243,9 @@ def run_scene(noise_rel: float, quick: bool, seed: int = 0) -> dict[str, float]:
     thr_err = [abs(a / up_true[f] - 1) for f, a in zip(curve.freq_hz, curve.up_ms2)
                if f in up_true and np.isfinite(a)]
     t0 = time.perf_counter()
-    g = fit_grazing(curve.freq_hz, curve.up_ms2, participation=truth.participation)
+    g = fit_grazing(curve.freq_hz, _crossing_curve(
+        [r.threshold for r in runs if r.threshold is not None], curve.freq_hz),
+        participation=truth.participation)
     times["grazing_fit_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     e_ratio = restitution_from_ratios(np.concatenate([r.impacts.e for r in runs if r.impacts is not None]))

@@ -79,3 +79,24 @@ def test_sound_paired_with_its_impact_through_the_propagation_delay():
     # without the delay each window holds the sound of the impact before: off by one
     wrong = sound_peaks(p, fs, ti, window_s=5e-3)
     assert wrong.p_max_pa[1:] == pytest.approx(amp[:-1], rel=0.09)
+
+
+def test_crossing_level_is_half_a_period_before_the_first_impact():
+    # Impacts at most once a forcing period: a ramp crossing its threshold A_c at a uniform
+    # instant of a period shows its first impact at the end of that period.  The level at
+    # the first impact is then A_c + U(0, 1) rate/f; crossing_level_ms2 takes off rate/(2f).
+    from rattle_lab.thresholds import Threshold, crossing_level_ms2
+
+    f, rate, a_c = 96.0, 20.0, 10.0           # m/s^2 per s: 0.21 m/s^2 per period
+    rng = np.random.default_rng(1)
+    phase = rng.uniform(0, 1, 4000)
+    raw = a_c + (1 - phase) * rate / f        # level at the first impact after the crossing
+    ths = [Threshold("r", f, "up", float(x), 0.0, ramp_start_ms2=5.0, ramp_end_ms2=25.0,
+                     ramp_duration_s=1.0) for x in raw]
+    est = np.array([crossing_level_ms2(t) for t in ths])
+    assert np.mean(raw) - a_c == pytest.approx(0.5 * rate / f, rel=0.05)       # the bias
+    assert abs(np.mean(est) - a_c) < 0.02 * rate / f                            # removed
+    down = Threshold("r", f, "down", 10.0, 0.0, ramp_start_ms2=25.0, ramp_end_ms2=5.0,
+                     ramp_duration_s=1.0)
+    assert crossing_level_ms2(down) == pytest.approx(10.0 - 0.5 * rate / f, rel=1e-12)
+    assert np.isnan(crossing_level_ms2(Threshold("r", f, "up", 10.0, 0.0)))

@@ -34,7 +34,7 @@ from ..records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED
                               channel_time_offset_s, resolve_participation)
 from ..detect._pairing import base_velocity_at, onto_grid
 from ..results import RunResult, StoreFit, write_results
-from ..thresholds import Threshold, ramp_threshold, tabulate_thresholds
+from ..thresholds import Threshold, crossing_level_ms2, ramp_threshold, tabulate_thresholds
 from ._grazing import GrazingFit, fit_grazing
 from ._damping import fit_zeta_ramp
 from ._restitution import METHODS, fit_restitution_down, restitution_from_ratios
@@ -553,6 +553,29 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
     return fits, missing
 
 
+def runs_thresholds(runs: list[RunResult]) -> list[Threshold]:
+    """The measured ramp thresholds of ``runs``."""
+    return [r.threshold for r in runs if r.threshold is not None]
+
+
+def _crossing_curve(thresholds: list[Threshold], freq_hz: np.ndarray) -> np.ndarray:
+    """Upward crossing levels (:func:`~rattle_lab.thresholds.crossing_level_ms2`) per frequency.
+
+    Mean over the runs at each frequency, as :func:`~rattle_lab.thresholds.tabulate_thresholds`;
+    a threshold without a measured ramp keeps its impact level.
+    """
+    out = np.full(freq_hz.size, np.nan)
+    for i, f in enumerate(freq_hz):
+        vals = []
+        for t in thresholds:
+            if t.freq_hz == f and t.direction == "up" and np.isfinite(t.accel_ms2):
+                c = crossing_level_ms2(t)
+                vals.append(c if np.isfinite(c) else t.accel_ms2)
+        if vals:
+            out[i] = float(np.mean(vals))
+    return out
+
+
 def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                    participation: Participation | None = None,
                    flags: list[str] | None = None) -> dict[str, Any]:
@@ -629,7 +652,10 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     n_up = int(np.isfinite(curve.up_ms2).sum())
     if n_up >= 4:
         try:
-            grazing = fit_grazing(curve.freq_hz, curve.up_ms2, participation=fit["participation"],
+            # eq. (3.4) models the level where the response reaches the gap: the crossing,
+            # half a forcing period before the first impact on average (issue 15)
+            up_crossing = _crossing_curve(runs_thresholds(ok), curve.freq_hz)
+            grazing = fit_grazing(curve.freq_hz, up_crossing, participation=fit["participation"],
                                   vary_participation=fit["vary_participation"],
                                   outlier_k=fit["outlier_k"], conf_interval=fit["conf_interval"])
             units = {"gap_m": "m", "f_s_hz": "Hz", "zeta": "1", "participation": "1"}
