@@ -30,8 +30,8 @@ from ..detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_i
 from ..detect._shock import detect_shock
 from ..exceptions import ParameterError, RattleLabError
 from ..ingest import open_stored_record, read_catalogue
-from ..records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
-                              Participation, channel_time_offset_s, resolve_participation)
+from ..records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED, Participation,
+                              channel_time_offset_s, resolve_participation)
 from ..detect._pairing import base_velocity_at, onto_grid
 from ..results import RunResult, StoreFit, write_results
 from ..thresholds import Threshold, crossing_level_ms2, ramp_threshold, tabulate_thresholds
@@ -161,23 +161,6 @@ def paired_plate_channels(run: Any, vel: Any, acc: Any
                              "overlap in time")
     lo, hi = int(idx[0]), int(idx[-1]) + 1
     return fs, t0 + lo / fs, np.asarray(v[lo:hi]), np.asarray(a[lo:hi])
-
-
-def without_velocity_offset(v: np.ndarray, fs_hz: float, freq_hz: float | None) -> np.ndarray:
-    """The velocity less its mean over the most whole forcing periods the record holds.
-
-    The plate's displacement is bounded, so its velocity averages to zero over whole
-    periods; what does not is the vibrometer's DC offset, which would otherwise enter
-    ``v_in`` and ``v_out`` alike and bias ``e = -v_out / v_in``.  Without a frequency the
-    whole record's mean is taken.
-    """
-    n = v.size
-    if freq_hz is not None and freq_hz > 0:
-        per = fs_hz / freq_hz
-        k = int(np.floor(n / per))
-        if k >= 1:
-            n = int(round(k * per))
-    return v - float(np.mean(v[:n]))
 
 
 def relative_to_striker(run: Any, log: Any, base: Any, freq_hz: float | None) -> Any:
@@ -310,8 +293,6 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     f_end = getattr(run, "freq_end_hz", None)
     f_fit = freq if (math.isfinite(freq) and 0 < freq < fs / 2
                      and (f_end is None or f_end == freq)) else None
-    if v_si is not None:
-        v_si = without_velocity_offset(v_si, fs, f_fit)
     log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=params,
                          start_time_s=t0, excitation_freq_hz=f_fit)
     if vel is not None and getattr(vel, "measurand", None) == "panel_absolute":
@@ -732,6 +713,5 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
 
 
 __all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "paired_plate_channels",
-           "relative_to_striker", "restitution_down_summary",
-           "run_chain_flags", "without_velocity_offset",
+           "relative_to_striker", "restitution_down_summary", "run_chain_flags",
            "store_participation", "summarise_fits", "transient_shocks"]
