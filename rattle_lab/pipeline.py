@@ -386,6 +386,7 @@ def _detect_all(store: Path, detect: Mapping[str, Any], fit: Mapping[str, Any],
 def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipeline) -> None:
     # The fits of rattle_lab.fit.fit_store on the cached detections (no refitting logic here).
     from .fit import json_ready, summarise_fits
+    from .fit._store import store_participation
     from .results import StoreFit, write_results
 
     fit = pipeline.params["fit"]
@@ -395,7 +396,9 @@ def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipel
                   "python": sys.version.split()[0],
                   "parameters": {"detect": pipeline.params["detect"], "fit": fit},
                   "inputs": inputs}
-    summary = summarise_fits(list(runs), curve, fit)
+    # issue 15 hook: the participation from the pipeline, else from the records' rig metadata
+    summary = summarise_fits(list(runs), curve, fit, participation=store_participation(
+        store, fit.get("participation"), "pipeline"))
     write_results(store, StoreFit(tuple(runs), curve, json_ready(summary),
                                   json_ready(provenance)))
 

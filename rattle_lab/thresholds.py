@@ -270,6 +270,25 @@ class ThresholdCurve:
     hysteresis_ms2: np.ndarray
 
 
+def crossing_level_ms2(th: Threshold) -> float:
+    """The level at which a ramp crossed its threshold, from the impact that showed it.
+
+    Impacts come at most once a forcing period: the first impact of an upward ramp shows
+    that the threshold was crossed at some instant of the period before it, and the last
+    impact of a downward ramp that it is crossed in the period after it.  Without more
+    information that instant is uniform over the period, so its expected level is half a
+    period's ramp change before (up) or after (down) the impact's: ``accel_ms2 -+ rate /
+    (2 f)``.  The impact's own level is biased by that much (up to a few % on a fast ramp).
+    NaN without a measured ramp.
+    """
+    if not (np.isfinite(th.accel_ms2) and np.isfinite(th.ramp_start_ms2)
+            and np.isfinite(th.ramp_end_ms2) and th.ramp_duration_s > 0 and th.freq_hz > 0):
+        return float("nan")
+    rate = (th.ramp_end_ms2 - th.ramp_start_ms2) / th.ramp_duration_s
+    sign = -1.0 if th.direction == "up" else 1.0
+    return float(th.accel_ms2 + sign * 0.5 * rate / th.freq_hz)
+
+
 def tabulate_thresholds(thresholds: Sequence[Threshold]) -> ThresholdCurve:
     """Collect ramp thresholds into a curve against frequency."""
     freqs = np.unique([t.freq_hz for t in thresholds]) if thresholds else np.zeros(0)

@@ -283,9 +283,9 @@ CASES: dict[str, tuple[Callable[[Path], tuple[list[Path], Path | None]], type[Ra
                          r"/runs: invalid name 'l\u00e4uf_1' \(names and ids are 1-64 ASCII"),
     "unicode_campaign_id": (_edit(_attr("/", campaign_id="kampagne_\u00e4")), SchemaError,
                             r"/: attribute 'campaign_id': 'kampagne_\u00e4' does not match"),
-    "schema_version_2": (_edit(_attr("/", schema_version=2)), SchemaError,
-                         r"/: attribute 'schema_version': 1 was expected \(this reader knows layout "
-                         r"version 1 only\)"),
+    "schema_version_3": (_edit(_attr("/", schema_version=3)), SchemaError,
+                         r"/: attribute 'schema_version': 3 is not one of \[1, 2\] \(this reader "
+                         r"knows layout versions 1 and 2"),
     "synthetic_without_truth": (_edit(_attr("/", source="synthetic")), SchemaError,
                                 r"/: missing group or dataset 'truth' \(a synthetic record needs a "
                                 r"/truth group\)"),

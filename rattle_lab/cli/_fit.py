@@ -21,11 +21,21 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "run of an ingest store; fit the grazing curve (eq. 3.4), the coefficient of "
                     "restitution and the SPL law; write them under /results of the store "
                     "(atomically, with provenance). Runs lacking a channel are reported as "
-                    "skipped.")
+                    "skipped; when every run is skipped the exit status is 2, with the reasons.")
     parser.add_argument("store", metavar="STORE", help="an ingest store (.h5)")
     parser.add_argument("--pipeline", metavar="FILE.toml",
                         help="parameters from a pipeline TOML: [detect] and [fit] tables of "
                              "keyword parameters")
+    parser.add_argument("--participation", type=float, default=None, metavar="Q",
+                        help="modal participation factor Q1/Q2 at the measurement point "
+                             "(thesis eq. 2.27); overrides the pipeline's and the records' "
+                             "(rig modal_participation, or the plate model from the rig's "
+                             "geometry); without any, 1.0 is assumed and flagged")
+    parser.add_argument("--detect-channel", metavar="NAME", default=None,
+                        help="the channel to detect events on, in every run (overrides the "
+                             "pipeline's [detect] channel and the records' detect_channel; by "
+                             "default chosen by what each channel measures: a transient run's "
+                             "cause is its force, else its base)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_run)
@@ -35,12 +45,37 @@ def _run(args: argparse.Namespace) -> int:
     from ..fit import fit_store, load_pipeline
 
     params = load_pipeline(args.pipeline)
-    result = fit_store(args.store, detect=params["detect"], fit=params["fit"], quiet=args.quiet)
+    source = "pipeline"
+    if args.detect_channel is not None:
+        params["detect"]["channel"] = args.detect_channel
+    if args.participation is not None:
+        params["fit"]["participation"] = args.participation
+        source = "command line"
+    result = fit_store(args.store, detect=params["detect"], fit=params["fit"], quiet=args.quiet,
+                       participation_source=source)
     if args.json:
         print(json.dumps(result.summary, indent=2, allow_nan=False))
     else:
         print(as_table(result.summary))
-    return 0
+    return _all_skipped_status(result.summary)
+
+
+def _all_skipped_status(summary: dict[str, Any]) -> int:
+    """2, with the reasons on stderr, when runs exist and every one was skipped; else 0."""
+    import sys
+
+    skipped = summary.get("skipped", [])
+    if summary.get("n_ok", 0) or not skipped:
+        return 0
+    reasons: dict[str, list[str]] = {}
+    for s in skipped:
+        reasons.setdefault(str(s["reason"]), []).append(f"{s['input_key']}/{s['run_id']}")
+    text = "; ".join(f"{why} ({len(runs)} run{'s' if len(runs) > 1 else ''}: "
+                     f"{', '.join(runs[:3])}{', ...' if len(runs) > 3 else ''})"
+                     for why, runs in reasons.items())
+    print(f"rattle-lab: error: nothing to fit: every run ({len(skipped)}) was skipped: {text}",
+          file=sys.stderr)
+    return 2
 
 
 def _num(x: Any, fmt: str = ".6g") -> str:
@@ -79,18 +114,46 @@ def as_table(summary: dict[str, Any]) -> str:
             rows.append((f"spl_law_{name}.db_offset", law["db"]["c_db"], None, "dB re 20 uPa @1 m/s"))
     for label, value, err, unit in rows:
         lines.append(f"{label:<32}  {_num(value):<13}  {_num(err):<13}  {unit}")
+    part = summary.get("participation")
+    if part and not all(r["protocol"] == "transient" for r in summary["runs"]):
+        lines.append(f"participation Q1/Q2 = {_num(part['value'])} ({part['source']})")
+    for flag in summary.get("data_quality", []):
+        lines.append(f"data-quality flag: {flag}")
     for note in fits.get("grazing", {}).get("unidentifiable", []):
         lines.append(f"note: {note}")
+    zeta_note = fits.get("grazing", {}).get("zeta", {}).get("bias_note")
+    if zeta_note:
+        lines.append(f"note: grazing.zeta: {zeta_note}")
     for key in ("damping_ramp", "restitution_down"):
         for note in fits.get(key, {}).get("notes", []):
             lines.append(f"note: {key}: {note}")
-    for key, why in summary["not_fitted"].items():
-        lines.append(f"not fitted: {key}: {why}")
+    shocks_only = bool(summary["runs"]) and all(r["protocol"] == "transient"
+                                                for r in summary["runs"])
+    if shocks_only:
+        lines.append("transient records only (single shocks): no rattle fits (the grazing "
+                     "curve, restitution and SPL laws need shaker runs)")
+    else:
+        for key, why in summary["not_fitted"].items():
+            lines.append(f"not fitted: {key}: {why}")
     lines.append("")
     lines.append(f"runs: {summary['n_ok']} analysed, {len(summary['skipped'])} skipped")
     for r in summary["runs"]:
+        if r["protocol"] == "transient":
+            lines.append(f"  {r['input_key']}/{r['run_id']}: transient, {r['n_impacts']} shock"
+                         f"{'' if r['n_impacts'] == 1 else 's'}")
+            continue
         lines.append(f"  {r['input_key']}/{r['run_id']}: {r['n_impacts']} impacts, "
                      f"pattern {r['pattern'] or '-'}, threshold {_num(r['threshold_accel_ms2'])} m/s^2")
     for s in summary["skipped"]:
         lines.append(f"  skipped {s['input_key']}/{s['run_id']}: {s['reason']}")
+    for tr in summary.get("transients", []):
+        lines.append(f"  transient {tr['input_key']}/{tr['run_id']}: one shock per channel")
+        for c in tr["channels"]:
+            if not c["found"]:
+                lines.append(f"    {c['role']:<8} {c['channel']}: no shock above the noise")
+                continue
+            delay = (f", {1e3 * c['delay_s']:+.3f} ms after the cause"
+                     if c.get("delay_s") is not None else "")
+            lines.append(f"    {c['role']:<8} {c['channel']} ({c['quantity']}): onset "
+                         f"{1e3 * c['onset_s']:.3f} ms, peak {1e3 * c['peak_s']:.3f} ms{delay}")
     return "\n".join(lines)

@@ -12,6 +12,13 @@
 4. Sub-sample time: the centroid of the velocity jump, from the normalised step
    between the fits either side (5.); with a plate accelerometer, the centroid of its
    contact pulse (less noisy).  Without velocity: the centroid of the spike.
+6. Physics (with a velocity): an impact reverses the plate's velocity.  A trigger whose
+   velocity jump does not take back at least ``min_reversal`` of the approach velocity
+   (``-(v_out - v_in) / v_in < 1 + e`` for an impact; ``0`` for no impact, ``1`` for a
+   plastic one, ``2`` for an elastic one) is ringing, hum or a glitch, not an impact, and
+   so is one that approaches from the side opposite the striker (the side most triggers
+   that do reverse approach from).  This, not a longer dead time, keeps the plate's
+   ringing from re-triggering the detector.
 5. Incoming and rebound velocities: fits to the velocity over a window before and
    after the jump, clear of it by its half-height width plus a guard (a finite contact
    and a band-limited vibrometer spread a jump over several samples), each evaluated at
@@ -68,6 +75,11 @@ class ImpactParams:
         Extra time left out between the jump's half-height region and each forced-mode fit
         window, s: a band-limited vibrometer rings for a few periods of its band around a
         jump (0.3 ms covers a zero-phase 4th-order Butterworth at 5 kHz).
+    min_reversal : float
+        With a velocity: the least velocity change, as a fraction of the approach velocity
+        and opposite to it, that an impact makes (``1 + e``: 1 for a plastic impact, 2 for
+        an elastic one; 0 without an impact).  The default 0.5 lies halfway between no
+        impact and the most plastic one.  0 keeps every trigger.
     """
 
     on: float = 12.0
@@ -82,6 +94,7 @@ class ImpactParams:
     sine_window_s: float = 3e-3
     sine_degree: int = 1
     sine_guard_s: float = 3e-4
+    min_reversal: float = 0.5
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.off) and self.off > 0):
@@ -89,7 +102,7 @@ class ImpactParams:
         if not (np.isfinite(self.on) and self.on > self.off):
             raise ParameterError(f"`on` must be > `off` ({self.off}), was {self.on}")
         for name in ("min_separation_s", "detrend_window_s", "fit_window_s", "guard_s",
-                     "sigma_floor_rel", "sine_window_s", "sine_guard_s"):
+                     "sigma_floor_rel", "sine_window_s", "sine_guard_s", "min_reversal"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"`{name}` must be >= 0, was {value}")
@@ -452,7 +465,26 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     vout = np.asarray(v_out, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         e = np.where(vin != 0, -vout / vin, np.nan)
-    return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float) / fs_hz,
-                     onset_s=start_time_s + np.asarray(onsets, dtype=float) / fs_hz,
-                     v_in_m_s=vin, v_out_m_s=vout, e=e, strength=np.asarray(strength, dtype=float),
+    keep = _reverses(vin, vout, params.min_reversal) if v is not None else np.ones(vin.size, bool)
+    return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,
+                     onset_s=start_time_s + np.asarray(onsets, dtype=float)[keep] / fs_hz,
+                     v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],
+                     strength=np.asarray(strength, dtype=float)[keep],
                      channels=tuple(names), params=params, fs_hz=float(fs_hz))
+
+
+def _reverses(vin: np.ndarray, vout: np.ndarray, min_reversal: float) -> np.ndarray:
+    """Triggers that are impacts by their velocities (see step 6 of the module docstring).
+
+    Kept: a jump ``v_out - v_in`` opposite to ``v_in`` of at least ``min_reversal |v_in|``,
+    approaching from the striker's side (the sign of most such ``v_in``).  A trigger whose
+    velocities could not be fitted (record edge: NaN) is kept.
+    """
+    if min_reversal == 0.0 or vin.size == 0:
+        return np.ones(vin.size, dtype=bool)
+    with np.errstate(invalid="ignore"):
+        reversal = -(vout - vin) * np.sign(vin) >= min_reversal * np.abs(vin)
+        unknown = ~(np.isfinite(vin) & np.isfinite(vout))
+        side = np.sign(np.sum(np.sign(vin[reversal & ~unknown])))
+        toward = (np.sign(vin) == side) if side != 0 else np.ones(vin.size, dtype=bool)
+    return unknown | (reversal & toward)

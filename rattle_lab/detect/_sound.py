@@ -62,8 +62,15 @@ def _refined(y: np.ndarray, k: int) -> tuple[float, float]:
 
 def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window_s: float = 5e-3,
                 first_fraction: float = 0.5, start_time_s: float = 0.0,
-                excitation_freq_hz: float | None = None, baseline_s: float = 3e-3) -> SoundPeaks:
+                excitation_freq_hz: float | None = None, baseline_s: float = 3e-3,
+                delay_s: float = 0.0) -> SoundPeaks:
     """First and largest pressure peaks in a bounded window after each impact.
+
+    Each window opens ``delay_s`` after its impact (the declared propagation delay,
+    microphone distance over the speed of sound) and closes ``window_s`` later or when the
+    next impact's sound can arrive: each sound is paired with its own impact even when it
+    arrives after the next impact (a distant microphone).  Peak times and delays are from
+    the impact.
 
     With ``excitation_freq_hz``, the pressure over ``baseline_s`` before each impact
     (cut at the previous impact's window) is fitted by a forced-mode sinusoid at that
@@ -94,11 +101,13 @@ def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window
         raise ParameterError(f"`first_fraction` must be in (0, 1], was {first_fraction}")
     n_win = n_samples_of(window_s, fs_hz, name="window_s")
     out = {k: np.full(t_imp.size, np.nan) for k in ("tf", "tm", "pf", "pm", "rms")}
+    if not (np.isfinite(delay_s) and delay_s >= 0):
+        raise ParameterError(f"`delay_s` must be >= 0, was {delay_s}")
     for i, t in enumerate(t_imp):
-        lo = int(np.ceil((t - start_time_s) * fs_hz - 1e-9))
+        lo = int(np.ceil((t + delay_s - start_time_s) * fs_hz - 1e-9))
         hi = lo + n_win
         if i + 1 < t_imp.size:
-            hi = min(hi, int(np.ceil((t_imp[i + 1] - start_time_s) * fs_hz - 1e-9)))
+            hi = min(hi, int(np.ceil((t_imp[i + 1] + delay_s - start_time_s) * fs_hz - 1e-9)))
         lo, hi = max(lo, 0), min(hi, p.size)
         if hi - lo < 1:
             continue

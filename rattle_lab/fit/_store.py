@@ -24,20 +24,24 @@ import numpy as np
 
 from .._progress import progress_bar
 from .._version import __version__
-from ..detect import (ImpactParams, cross_correlation_delay, detect_impacts, impact_pattern,
-                      impulse_train, rms_spl_db, sound_peaks)
+from ..detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
+                      impact_pattern, impulse_train, rms_spl_db, sound_peaks)
 from ..exceptions import ParameterError, RattleLabError
+from ..records._chain import Participation, resolve_participation
 from ..results import RunResult, StoreFit
 from ..store import (check_linked_inputs, input_hashes, open_stored_record, read_catalogue,
                      write_results)
 from ..thresholds import Threshold, ramp_threshold, tabulate_thresholds
+from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
+                     paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
+                     transient_shocks)
 from ._grazing import GrazingFit, fit_grazing
 from ._damping import fit_zeta_ramp
 from ._restitution import METHODS, fit_restitution_down, restitution_from_ratios
 from ._spl_law import fit_db_law, fit_linear_law, law_dict
 
-SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01}
-FIT_KEYS = {"participation": 1.0, "vary_participation": False, "outlier_k": 5.0,
+SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01, "channel": None}
+FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0,
             "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3,
             "restitution_method": "ramp", "level_hold_periods": 1}
 _QUANTITIES = ("plate_velocity", "plate_acceleration", "sound_pressure", "base_acceleration")
@@ -46,9 +50,11 @@ _QUANTITIES = ("plate_velocity", "plate_acceleration", "sound_pressure", "base_a
 def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, Any]]:
     """Keyword parameters ``{"detect": {...}, "fit": {...}}`` from a pipeline TOML (or defaults).
 
-    ``[detect]`` takes the fields of :class:`~rattle_lab.detect.ImpactParams` and
-    ``window_s``, ``first_fraction``, ``max_lag_s``; ``[fit]`` takes
-    ``participation``, ``vary_participation``, ``outlier_k``, ``conf_interval``,
+    ``[detect]`` takes the fields of :class:`~rattle_lab.detect.ImpactParams`,
+    ``window_s``, ``first_fraction``, ``max_lag_s`` and ``channel`` (the channel to detect
+    on; default: chosen by what each channel measures); ``[fit]`` takes
+    ``participation`` (``Q1/Q2``; absent: from the records' rig metadata, see
+    :func:`store_participation`), ``vary_participation``, ``outlier_k``, ``conf_interval``,
     ``speed_of_sound_m_s``, ``n_confirm``, ``restitution_method`` (``"ramp"``, the
     default, or ``"quasi-static"``: see :func:`~rattle_lab.fit.fit_restitution_down`),
     ``level_hold_periods`` (forcing periods the drive holds each level of a ramp: 1 for
@@ -94,19 +100,23 @@ def _check_fit_values(fit: Mapping[str, Any], where: str = "") -> None:
         raise ParameterError(f"{where}`level_hold_periods` must be an integer >= 1, was {hold!r}")
 
 
-def _fs_of(run: Any, ch: Any) -> float:
-    if ch.sample_rate_hz is not None:
-        return float(ch.sample_rate_hz)
-    t = run.timestamps[ch.timestamps].read(0, min(ch.n_samples, 10000))
-    return float(1.0 / np.median(np.diff(t)))
-
-
-def _start_of(run: Any, ch: Any) -> float:
-    if ch.start_time_s is not None:
-        return float(ch.start_time_s)
-    if ch.timestamps is not None:
-        return float(run.timestamps[ch.timestamps].read(0, 1)[0])
-    return 0.0
+def _analyse_transient(run: Any, detect: Mapping[str, Any], base: dict[str, Any]) -> RunResult:
+    """One event per transient run: the shock on the cause channel (see :func:`transient_shocks`)."""
+    rows = transient_shocks(run, on=float(detect.get("on", ImpactParams.on)),
+                            channel=detect.get("channel"))
+    if not rows:
+        return RunResult(status="skipped", reason="transient run without a channel to find its "
+                         "shock in (" + ", ".join(SHOCK_QUANTITIES) + ")", **base)
+    cause = rows[0]
+    ch = run.channel(cause["channel"])
+    t = np.array([cause["onset_s"]]) if cause["found"] else np.zeros(0)
+    nan = np.full(t.size, np.nan)
+    log = ImpactLog(t_s=t, onset_s=t.copy(), v_in_m_s=nan, v_out_m_s=nan.copy(), e=nan.copy(),
+                    strength=np.array([cause["strength"]])[:t.size], channels=(ch.name,),
+                    fs_hz=_fs_of(run, ch))
+    return RunResult(status="ok", channels_used=tuple(r["channel"] for r in rows), impacts=log,
+                     pattern="single shock" if t.size else "no shock", pattern_n=int(t.size),
+                     **base)
 
 
 def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Mapping[str, Any],
@@ -118,25 +128,37 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     freq = float(run.excitation_freq_hz) if run.excitation_freq_hz else float("nan")
     vel, acc = by_q.get("plate_velocity"), by_q.get("plate_acceleration")
     base = dict(input_key=input_key, run_id=run.run_id, protocol=run.protocol, freq_hz=freq)
+    if run.protocol == "transient":
+        return _analyse_transient(run, detect, base)
+    wanted = detect.get("channel") or getattr(run, "detect_channel", None)
+    if wanted is not None:
+        named = next((c for c in run.channels if c.name == wanted), None)
+        if named is None:
+            return RunResult(status="skipped", reason=f"no channel {wanted!r} to detect on",
+                             **base)
+        if named.quantity not in ("plate_velocity", "plate_acceleration"):
+            return RunResult(status="skipped", reason=f"channel {wanted!r} measures "
+                             f"{named.quantity}: impacts are detected on a plate_velocity or "
+                             "plate_acceleration", **base)
+        vel, acc = (named, None) if named.quantity == "plate_velocity" else (None, named)
     if vel is None and acc is None:
         return RunResult(status="skipped", reason="no plate_velocity or plate_acceleration channel",
                          **base)
     used = [c for c in (vel, acc) if c is not None]
-    fs = _fs_of(run, used[0])
-    if any(abs(_fs_of(run, c) - fs) > 1e-9 * fs or c.n_samples != used[0].n_samples for c in used):
-        used = used[:1]
-        vel, acc = (used[0], None) if used[0] is vel else (None, used[0])
-    t0 = _start_of(run, used[0])
+    # issue 15: each channel's time base less its declared filter delay; two channels at
+    # different rates or offsets are brought onto the grid of the faster one before pairing
+    fs, t0, v_si, a_si = paired_plate_channels(run, vel, acc)
     params = ImpactParams(**{k: v for k, v in detect.items() if k not in SOUND_KEYS})
     # a constant excitation frequency lets the velocity fits use the forced-mode basis
     f_end = getattr(run, "freq_end_hz", None)
     f_fit = freq if (math.isfinite(freq) and 0 < freq < fs / 2
                      and (f_end is None or f_end == freq)) else None
-    log = detect_impacts(fs, velocity_m_s=vel.read() if vel is not None else None,
-                         accel_ms2=acc.read() if acc is not None else None, params=params,
+    log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=params,
                          start_time_s=t0, excitation_freq_hz=f_fit)
+    if vel is not None and getattr(vel, "measurand", None) == "panel_absolute":
+        log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
     names = tuple(c.name for c in used)
-    duration = used[0].n_samples / fs
+    duration = (v_si if v_si is not None else a_si).size / fs  # type: ignore[union-attr]
     pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)
     if math.isfinite(freq) and freq > 0 and duration * freq >= 1:
         lo, hi = t0, t0 + duration
@@ -152,9 +174,12 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     if mic is not None:
         fs_mic = _fs_of(run, mic)
         p = mic.read()
-        t0_mic = _start_of(run, mic)
+        t0_mic = _t0_of(run, mic)
         names = names + (mic.name,)
-        peaks = sound_peaks(p, fs_mic, log.t_s, window_s=sk["window_s"],
+        # issue 15: each sound paired with its impact through the declared propagation delay
+        d_prop = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0)) \
+            if mic_distance_m else 0.0
+        peaks = sound_peaks(p, fs_mic, log.t_s, window_s=sk["window_s"], delay_s=d_prop,
                             first_fraction=sk["first_fraction"], start_time_s=t0_mic,
                             excitation_freq_hz=f_fit if f_fit is not None and f_fit < fs_mic / 2
                             else None)
@@ -171,7 +196,7 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
         if b is not None:
             threshold = ramp_threshold(run.run_id, b.read(), _fs_of(run, b), freq, log.t_s,
                                        "up" if run.protocol.endswith("up") else "down",
-                                       start_time_s=_start_of(run, b),
+                                       start_time_s=_t0_of(run, b),
                                        n_confirm=int(fit.get("n_confirm", 3)))
             names = names + (b.name,)
     return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
@@ -222,9 +247,30 @@ def json_ready(obj: Any) -> Any:
     return obj
 
 
+def store_participation(store: str | os.PathLike[str], given: float | None,
+                        source: str = "pipeline") -> Participation:
+    """The modal participation ``Q1/Q2`` for a fit of ``store``, and where it came from.
+
+    ``given`` (a pipeline's or the command line's ``participation``) wins; else the
+    records' rig metadata (``modal_participation``, or the plate geometry through the plate
+    model); else 1.0, with the data-quality flag ``participation_assumed``.  See
+    :func:`rattle_lab.records._chain.resolve_participation`.
+    """
+    rigs = []
+    if given is None:
+        catalogue = read_catalogue(store, level="runs")
+        for key in dict.fromkeys(catalogue["input_key"]):
+            record = open_stored_record(store, key)
+            try:
+                rigs.append(record.rig)
+            finally:
+                record.close()
+    return resolve_participation(rigs, given, source)
+
+
 def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None = None,
               fit: Mapping[str, Any] | None = None, write: bool = True,
-              quiet: bool = True) -> StoreFit:
+              quiet: bool = True, participation_source: str = "pipeline") -> StoreFit:
     """Detect and fit everything in an ingest store; write ``/results`` (see :mod:`rattle_lab.results`).
 
     Parameters
@@ -237,6 +283,9 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
         Write ``/results`` into the store (atomically).
     quiet : bool
         No progress bar over the runs (one is drawn on a terminal otherwise).
+    participation_source : str
+        Where ``fit["participation"]`` came from, when given (``"pipeline"``,
+        ``"command line"``); named in the summary's ``participation`` entry.
 
     Raises
     ------
@@ -257,6 +306,9 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     runs: list[RunResult] = []
     check_linked_inputs(store, keys)  # the bytes read are those ingested (full re-hash)
     inputs = input_hashes(store, keys)
+    participation = store_participation(store, fit.get("participation"), participation_source)
+    chain_flags: list[str] = []
+    transients: list[dict[str, Any]] = []
     with progress_bar(int(catalogue.shape[0]), desc="detect", unit="run", quiet=quiet) as bar:
         for key in keys:
             record = open_stored_record(store, key)
@@ -264,11 +316,19 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
                 for run in record.runs:
                     runs.append(analyse_run(key, run, detect=detect, fit=fit,
                                             mic_distance_m=record.rig.mic_distance_m))
+                    chain_flags += [f"{key}/{run.run_id}: {f}" for f in run_chain_flags(run)]
+                    if run.protocol == "transient" and runs[-1].status == "ok":
+                        transients.append({"input_key": key, "run_id": run.run_id,
+                                           "channels": transient_shocks(
+                                               run, on=float(detect.get("on", ImpactParams.on)),
+                                               channel=detect.get("channel"))})
                     bar.update()
             finally:
                 record.close()
     curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
-    summary = summarise_fits(runs, curve, fit)
+    summary = summarise_fits(runs, curve, fit, participation=participation, flags=chain_flags)
+    if transients:
+        summary["transients"] = transients
     provenance = {"function": "rattle_lab.fit.fit_store", "rattle_lab_version": __version__,
                   "python": sys.version.split()[0], "parameters": {"detect": detect, "fit": fit},
                   "inputs": inputs}
@@ -351,7 +411,9 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
     return fits, missing
 
 
-def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) -> dict[str, Any]:
+def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
+                   participation: Participation | None = None,
+                   flags: list[str] | None = None) -> dict[str, Any]:
     """Fit the store-level models to per-run detections; the summary ``/results`` stores.
 
     From the per-run results of :func:`analyse_run` and the threshold table of
@@ -370,6 +432,11 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
     fit : mapping
         Fit parameters: every key of ``FIT_KEYS`` (``participation``,
         ``vary_participation``, ``outlier_k``, ``conf_interval``, ...).
+    participation : Participation, optional
+        The participation and its source (:func:`store_participation`); without it,
+        ``fit["participation"]``, or 1.0 flagged ``participation_assumed`` when that is None.
+    flags : list of str, optional
+        Further data-quality flags (``"input_key/run_id: flag"``, see :func:`run_chain_flags`).
 
     Returns
     -------
@@ -381,7 +448,8 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
         95 % ci, vary, plus correlation; ``restitution_ratio``: value, stderr, unit, n;
         ``restitution_down`` and ``damping_ramp``: see :func:`restitution_down_summary`;
         ``spl_law_first|max|rms``: linear and dB laws) and
-        ``not_fitted`` (fit name -> reason).  May hold NumPy scalars and NaN: pass it
+        ``not_fitted`` (fit name -> reason); ``participation`` (value, source) and
+        ``data_quality`` (named flags, e.g. ``participation_assumed``).  May hold NumPy scalars and NaN: pass it
         through :func:`json_ready` before writing JSON.
 
     Raises
@@ -389,8 +457,15 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
     KeyError
         If ``fit`` lacks a key of ``FIT_KEYS`` the fits need.
     """
+    if participation is None:
+        participation = resolve_participation([], fit.get("participation"), "pipeline")
+    fit = {**fit, "participation": participation.value}
     ok = [r for r in runs if r.status == "ok"]
     summary: dict[str, Any] = {
+        "participation": {"value": participation.value, "source": participation.source},
+        # (a store of single shocks fits no modal law: the participation does not enter)
+        "data_quality": (list(participation.flags) if any(r.protocol != "transient" for r in ok)
+                         else []) + list(flags or []),
         "n_runs": len(runs), "n_ok": len(ok),
         "skipped": [{"input_key": r.input_key, "run_id": r.run_id, "reason": r.reason}
                     for r in runs if r.status == "skipped"],
@@ -412,7 +487,10 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
     n_up = int(np.isfinite(curve.up_ms2).sum())
     if n_up >= 4:
         try:
-            grazing = fit_grazing(curve.freq_hz, curve.up_ms2, participation=fit["participation"],
+            # eq. (3.4) models the level where the response reaches the gap: the crossing,
+            # half a forcing period before the first impact on average (issue 15)
+            up_crossing = _crossing_curve(runs_thresholds(ok), curve.freq_hz)
+            grazing = fit_grazing(curve.freq_hz, up_crossing, participation=fit["participation"],
                                   vary_participation=fit["vary_participation"],
                                   outlier_k=fit["outlier_k"], conf_interval=fit["conf_interval"])
             units = {"gap_m": "m", "f_s_hz": "Hz", "zeta": "1", "participation": "1"}
@@ -442,6 +520,15 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
             e_guess=st.mean if st.n else 0.6)
         fits.update(fits_down)
         missing.update(missing_down)
+        ramp = fits.get("damping_ramp")
+        if ramp is not None and "grazing" in fits and ramp["value"] > 0:
+            # issue 15: name the bias of eq. (3.4)'s zeta, whose interval leaves it out
+            z = fits["grazing"]["zeta"]
+            bias = z["value"] / ramp["value"] - 1.0
+            z["bias_rel"] = bias
+            z["bias_note"] = (f"eq. (3.4) reads the ramp lag as damping: zeta is "
+                              f"{100 * bias:+.1f} % against the ramp replay (damping_ramp), "
+                              "which corrects it; this interval does not include the lag")
     else:
         missing["restitution_down"] = "needs a grazing fit and downward thresholds"
     v = np.concatenate([np.abs(r.impacts.v_in_m_s) for r in ok if r.peaks is not None
@@ -460,5 +547,6 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any]) ->
     return summary
 
 
-__all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "restitution_down_summary",
-           "summarise_fits"]
+__all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "paired_plate_channels",
+           "relative_to_striker", "restitution_down_summary", "run_chain_flags",
+           "store_participation", "summarise_fits", "transient_shocks"]

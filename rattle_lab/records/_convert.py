@@ -19,15 +19,33 @@ from ._model import (ArraySource, Channel, ImpactTable, Origin, Record, Rig, Run
 ROOT_FIELDS = ("campaign_id", "source", "description", "operator", "created_iso", "writer")
 RIG_FIELDS = ("apparatus", "description", "plate_length_m", "plate_width_m", "plate_thickness_m",
               "plate_material", "edge_conditions", "striker_x_m", "striker_y_m", "gap_m",
-              "mic_distance_m")
+              "mic_distance_m", "modal_participation", "plate_poisson_ratio")
 RUN_FIELDS = ("protocol", "excitation_freq_hz", "freq_end_hz", "freq_step_hz", "nominal_level",
-              "level_end", "nominal_level_units", "start_time_iso", "notes")
+              "level_end", "nominal_level_units", "start_time_iso", "notes", "detect_channel")
 CHANNEL_FIELDS = ("quantity", "units", "sample_rate_hz", "start_time_s", "timestamps",
                   "sensitivity", "sensitivity_units", "sensor_id", "sensor_model", "sensor_serial",
-                  "calibration_date", "range_min", "range_max", "units_assumed", "description")
+                  "calibration_date", "range_min", "range_max", "units_assumed", "description",
+                  "measurand", "sign_convention", "group_delay_s")
 TRUTH_FIELDS = ("gap_m", "f_s_hz", "zeta", "e", "participation", "acoustic_law")
 SCHEMA_NAME = "rattle_record"
 SCHEMA_VERSION = 1
+#: Layout version written when a record uses the measurement-chain attributes of version 2.
+SCHEMA_VERSION_CHAIN = 2
+
+
+def schema_version_of(record: Record) -> int:
+    """1, or 2 when ``record`` uses an attribute that layout version 2 adds."""
+    rig = record.rig
+    if rig.modal_participation is not None or rig.plate_poisson_ratio is not None:
+        return SCHEMA_VERSION_CHAIN
+    for run in record.runs:
+        if run.detect_channel is not None:
+            return SCHEMA_VERSION_CHAIN
+        for ch in run.channels:
+            if ch.measurand is not None or ch.sign_convention is not None or \
+                    ch.group_delay_s is not None:
+                return SCHEMA_VERSION_CHAIN
+    return SCHEMA_VERSION
 
 
 def _split(attrs: Mapping[str, Any], fields: tuple[str, ...]) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -127,7 +145,7 @@ def record_to_tree(record: Record) -> tuple[dict[str, Any], dict[str, ArraySourc
     from ._model import ArrayData
 
     sources: dict[str, ArraySource] = {}
-    root_attrs = {"schema": SCHEMA_NAME, "schema_version": SCHEMA_VERSION,
+    root_attrs = {"schema": SCHEMA_NAME, "schema_version": schema_version_of(record),
                   **_attrs(record, ROOT_FIELDS, record.extra)}
     sensors = {s.sensor_id: {"kind": "group", "members": {},
                              "attrs": _attrs(s, ("position_m", "mounted_on", "description"), s.extra)}

@@ -142,13 +142,20 @@ class Rig:
     plate_material : str
         E.g. ``"aluminium 6061"``.
     edge_conditions : str
-        Four letters C/S/F for the edges x=0, y=0, x=length, y=width (``"CFCF"``).
+        Four letters C/S/F for the edges y=0, x=length, y=width, x=0 (the order of
+        :data:`rattle_lab.plate.EDGE_ORDER`; ``"CFCF"`` clamps the two edges of length
+        ``plate_length_m``, the thesis plate).
     striker_x_m, striker_y_m : float
         Striker position in plate coordinates, m.
     gap_m : float or None
         Measured static gap between plate and striker, m, when known.
     mic_distance_m : float
         Microphone distance from the plate, m.
+    modal_participation : float or None
+        Modal participation factor ``Q1/Q2`` of the fitted mode at the measurement point
+        (thesis eq. 2.27), when known (schema v2).
+    plate_poisson_ratio : float or None
+        Poisson's ratio of the plate, for the plate model's ``Q1/Q2`` (schema v2).
     sensors : tuple of Sensor
         Sensor positions.
     """
@@ -164,6 +171,8 @@ class Rig:
     striker_y_m: float | None = None
     gap_m: float | None = None
     mic_distance_m: float | None = None
+    modal_participation: float | None = None
+    plate_poisson_ratio: float | None = None
     sensors: tuple[Sensor, ...] = ()
     extra: Mapping[str, Any] = field(default_factory=dict)
 
@@ -198,6 +207,14 @@ class Channel:
         True when the units were not stated by the source but assumed.
     description : str
         Free text.
+    measurand : str or None
+        Plate velocity only (schema v2): ``"panel_absolute"`` (the panel alone) or
+        ``"panel_relative_to_striker"`` (differential vibrometer, two beams subtracted).
+    sign_convention : str or None
+        ``"toward_striker_positive"`` or ``"away_from_striker_positive"`` (schema v2).
+    group_delay_s : float or None
+        Known group delay of the channel's filters (vibrometer decoder, anti-alias), s:
+        an event shows ``group_delay_s`` late; compensated before channels are paired.
     """
 
     name: str
@@ -217,6 +234,9 @@ class Channel:
     range_max: float | None = None
     units_assumed: bool = False
     description: str = ""
+    measurand: str | None = None
+    sign_convention: str | None = None
+    group_delay_s: float | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -307,6 +327,9 @@ class Run:
         Start of the run, ISO 8601 (local time unless it carries an offset).
     notes : str
         Free text.
+    detect_channel : str or None
+        The channel events are detected on, when the record says (schema v2); else
+        chosen by what each channel measures.
     timestamps : mapping of str to ArraySource
         Explicit time bases referenced by channels, in s.  Not compared by ``==``.
     """
@@ -322,6 +345,7 @@ class Run:
     nominal_level_units: str | None = None
     start_time_iso: str | None = None
     notes: str = ""
+    detect_channel: str | None = None
     timestamps: Mapping[str, ArraySource] = field(default_factory=dict, compare=False, repr=False)
     extra: Mapping[str, Any] = field(default_factory=dict)
 

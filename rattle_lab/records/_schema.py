@@ -27,6 +27,11 @@ SCHEMA_RESOURCE = ("rattle_lab", "data/schema/rattle_record.v1.schema.json")
 #: dtypes (numpy kind + item size) a channel may have.
 CHANNEL_DTYPES = frozenset({"f4", "f8", "i1", "i2", "i4", "i8", "u1", "u2", "u4"})
 
+#: Attributes that layout version 2 adds (the measurement chain), by group.
+V2_RIG_ATTRS = ("modal_participation", "plate_poisson_ratio")
+V2_CHANNEL_ATTRS = ("measurand", "sign_convention", "group_delay_s")
+V2_RUN_ATTRS = ("detect_channel",)
+
 
 @functools.lru_cache(maxsize=1)
 def load_schema() -> dict[str, Any]:
@@ -155,7 +160,25 @@ def _members(node: dict[str, Any]) -> dict[str, Any]:
     return node.get("members", {})
 
 
+def _check_version(tree: dict[str, Any], label: str) -> None:
+    """Version-2 attributes in a file that says version 1 are refused (a v1 reader ignores them)."""
+    if tree["attrs"].get("schema_version") != 1:
+        return
+    members = _members(tree)
+    found = [("/rig", k) for k in V2_RIG_ATTRS if k in members["rig"]["attrs"]]
+    for run_id, run in _members(members["runs"]).items():
+        found += [(f"/runs/{run_id}", k) for k in V2_RUN_ATTRS if k in run["attrs"]]
+        for name, channel in _members(_members(run)["channels"]).items():
+            found += [(f"/runs/{run_id}/channels/{name}", k) for k in V2_CHANNEL_ATTRS
+                      if k in channel["attrs"]]
+    if found:
+        path, key = found[0]
+        raise SchemaError(f"{label}: {path}: attribute {key!r}: needs schema_version 2 "
+                          "(the file says 1)")
+
+
 def _check_in_code(tree: dict[str, Any], label: str) -> None:
+    _check_version(tree, label)
     members = _members(tree)
     sensors = set(_members(_members(members["rig"]).get("sensors", {"members": {}})))
     runs = _members(members["runs"])
@@ -182,6 +205,18 @@ def _check_in_code(tree: dict[str, Any], label: str) -> None:
                     raise SchemaError(f"{label}: {path}: attribute 'timestamps': "
                                       f"{run_path}/timestamps/{ts_name} has shape "
                                       f"{timestamps[ts_name]['shape']}, the channel {channel['shape']}")
+            delay = attrs.get("group_delay_s")
+            f_exc = run["attrs"].get("excitation_freq_hz")
+            if delay is not None and f_exc and delay * max(f_exc, run["attrs"].get(
+                    "freq_end_hz") or f_exc) >= 1.0:
+                raise SchemaError(f"{label}: {path}: attribute 'group_delay_s': {delay!r} s is "
+                                  f"not less than a forcing period of the run "
+                                  f"({1.0 / max(f_exc, run['attrs'].get('freq_end_hz') or f_exc):.6g} s); "
+                                  "a filter delay is microseconds to milliseconds (was it given "
+                                  "in another unit?)")
+            if "measurand" in attrs and attrs.get("quantity") != "plate_velocity":
+                raise SchemaError(f"{label}: {path}: attribute 'measurand': only a plate_velocity "
+                                  f"channel has one (this is {attrs.get('quantity')!r})")
             sensor_id = attrs.get("sensor_id")
             if sensor_id is not None and sensor_id not in sensors:
                 raise SchemaError(f"{label}: {path}: attribute 'sensor_id': no sensor "
@@ -193,6 +228,10 @@ def _check_in_code(tree: dict[str, Any], label: str) -> None:
             if lo is not None and not lo < hi:
                 raise SchemaError(f"{label}: {path}: attribute 'range_max': must be > range_min "
                                   f"({lo}), was {hi}")
+        detect_channel = run["attrs"].get("detect_channel")
+        if detect_channel is not None and detect_channel not in channels:
+            raise SchemaError(f"{label}: {run_path}: attribute 'detect_channel': no channel "
+                              f"{detect_channel!r} (has: {', '.join(sorted(channels))})")
         _check_finite(run["attrs"], label, run_path)
     _check_finite(members["rig"]["attrs"], label, "/rig")
     truth = members.get("truth")

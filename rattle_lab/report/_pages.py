@@ -217,6 +217,12 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
         lines.append(f"  {row['input_key']}/{row['run_id']}/{row['channel']}: {row['flags']}")
     if len(flagged) > 12:
         lines.append(f"  ... and {len(flagged) - 12} more flagged channels")
+    if data.results is not None:  # issue 15: the fit's own flags (e.g. participation_assumed)
+        part = data.results.summary.get("participation") or {}
+        for flag in data.results.summary.get("data_quality", []):
+            lines.append(f"  fit: {flag} (participation {part.get('value')} from "
+                         f"{part.get('source', '?')})" if flag.startswith("participation")
+                         else f"  fit: {flag}")
     skipped = data.results.summary.get("skipped", []) if data.results is not None else []
     for item in skipped[:6]:
         lines.append(f"  run skipped by the fit: {item.get('input_key')}/{item.get('run_id')}: "

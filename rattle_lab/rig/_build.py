@@ -19,6 +19,7 @@ from ..plate import Plate
 from ..records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable, Truth,
                        scale_to_si, write_record)
 from ..records._model import as_source
+from . import _chain as cc
 from . import _channels as ch
 from ._counter import StageCounter
 from ._motion import Modal, RunMotion, simulate_run, thresholds
@@ -112,11 +113,11 @@ def resolve_modal(scene: Scene) -> tuple[Modal, tuple[float, ...]]:
     return Modal(f_s_hz=f_s, zeta=m.zeta, participation=part, gap_m=m.gap_m, e=m.e), tuple(ring or ())
 
 
-def _rig(scene: Scene) -> Rig:
+def _rig(scene: Scene, participation: float) -> Rig:
     p = scene.plate
     if p is None:
         return Rig("other", description="synthetic rig from direct modal parameters (no plate)",
-                   mic_distance_m=scene.mic_distance_m)
+                   mic_distance_m=scene.mic_distance_m, modal_participation=participation)
     cx, cy = p.length_m / 2, p.width_m / 2
     where = {"base": ((cx, cy, -0.02), "base"), "plate": ((cx, cy, 0.0), "plate"),
              "velocity": ((cx, cy, 0.5), "stand"), "mic": ((cx, cy, scene.mic_distance_m), "stand")}
@@ -124,7 +125,8 @@ def _rig(scene: Scene) -> Rig:
                     for s in scene.sensors if s.name in where)
     return Rig("plate_striker", plate_length_m=p.length_m, plate_width_m=p.width_m,
                plate_thickness_m=p.thickness_m, plate_material=p.material, edge_conditions=p.edges,
-               striker_x_m=cx, striker_y_m=cy, mic_distance_m=scene.mic_distance_m, sensors=sensors)
+               striker_x_m=cx, striker_y_m=cy, mic_distance_m=scene.mic_distance_m,
+               modal_participation=participation, plate_poisson_ratio=p.nu, sensors=sensors)
 
 
 def _rng(seed: int, run_index: int, stream: int) -> np.random.Generator:
@@ -151,6 +153,7 @@ def _store(sensor: SensorSpec, si: np.ndarray, noise_rng: np.random.Generator, f
 def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz: float,
               ring: tuple[float, ...], counter: StageCounter, with_ids: bool) -> list[Channel]:
     art = scene.artefacts
+    chain = scene.chain
     fan_phase = float(_rng(seed, run_index, 200).uniform(0.0, 2.0 * math.pi))
     a_base = None
     out: list[Channel] = []
@@ -169,18 +172,41 @@ def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz:
         elif sensor.name == "velocity":
             counter.add("velocity")
             si = ch.vibrometer_velocity(motion, sensor.band_hz, fs_hz, scene.model.contact_s)
+            if chain is not None:
+                si = si + cc.velocity_ringing(motion, scene.model, ring,
+                                              chain.ring_velocity_per_m_s, si.size, fs_hz)
+                if chain.vibrometer == "absolute":
+                    si = si + cc.base_velocity(motion, fs_hz)
         elif sensor.name == "mic":
             counter.add("mic")
             counter.add("acoustic")
             assert scene.acoustic is not None
             si, _ = ch.sound_pressure(motion, scene.acoustic, art, fs_hz, _rng(seed, run_index, 100),
                                       fan_phase)
+            if chain is not None:
+                si = cc.floor_reflection(si, chain, scene.acoustic.c_m_s, fs_hz)
         else:
             counter.add("drive")
             assert motion.theta is not None and motion.level_m_s2 is not None
             si = -sensor.volts_per_m_s2 * motion.level_m_s2 * np.cos(motion.theta)
         assert si is not None
+        if chain is not None:
+            si = cc.hum_and_offset(si, sensor.name, chain, fs_hz)
         chan = _store(sensor, si, noise, fs_hz, with_ids and sensor.name != "drive")
+        if chain is not None and sensor.name == "velocity" and chain.decoder_delay_s:
+            data = cc.fractional_delay(chan.data.read(0, chan.n_samples).astype(np.float64),
+                                       fs_hz, chain.decoder_delay_s)
+            chan = dataclasses.replace(chan, data=as_source(data.astype(np.float32)),
+                                       group_delay_s=chain.decoder_delay_s)
+        if chain is not None and chain.adc_bits:
+            data = cc.quantise(chan.data.read(0, chan.n_samples).astype(np.float64),
+                               sensor.range, chain.adc_bits)
+            chan = dataclasses.replace(chan, data=as_source(
+                data.astype(np.float64 if chain.adc_bits > 16 else np.float32)))
+        if sensor.name == "velocity":   # what the vibrometer measures, declared (schema v2)
+            chan = dataclasses.replace(chan, measurand=chain.measurand if chain is not None
+                                       else "panel_relative_to_striker",
+                                       sign_convention="toward_striker_positive")
         if sensor.name == "mic" and art.dropout_s > 0:
             data = chan.data.read(0, chan.n_samples).copy()
             lo = data.size // 2
@@ -235,7 +261,7 @@ def synthesize(scene: Scene | str | os.PathLike[str], *, seed: int | None = None
     runs, summaries, impacts = [], [], {}
     onsets: dict[float, list[float]] = {}
     gones: dict[float, list[float]] = {}
-    rig = _rig(scene)
+    rig = _rig(scene, modal.participation)
     for i, spec in enumerate(progress(scene.runs, total=len(scene.runs), desc="simulate",
                                       quiet=quiet, unit="run")):
         fs_hz = spec.sample_rate_hz or scene.sample_rate_hz

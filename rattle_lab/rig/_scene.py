@@ -212,6 +212,7 @@ class Scene:
     simulation: SimulationSpec = field(default_factory=SimulationSpec)
     mic_distance_m: float = 0.3
     source: str = "<scene>"
+    chain: Any = None    # rig._chain.ChainSpec (the measurement chain, [chain]); None: ideal
 
     def sensor(self, name: str) -> SensorSpec | None:
         """The sensor called ``name``, or None when the scene does not record it."""
@@ -438,6 +439,11 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
             tr.fail(tr.key("harmonics_impact"), list(art.harmonics_impact),
                     f"must have as many entries as `harmonics` ({len(art.harmonics)})")
         tr.done()
+    chain = None
+    cr = top.sub("chain")
+    if cr is not None:
+        from ._chain import parse_chain
+        chain = parse_chain(cr)
     sim = SimulationSpec()
     smr = top.sub("simulation")
     if smr is not None:
@@ -448,7 +454,7 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
     return Scene(campaign_id=campaign_id, description=description, seed=seed, start_iso=start_iso,
                  sample_rate_hz=sample_rate_hz, model=model, runs=tuple(runs), sensors=tuple(sensors),
                  plate=plate, acoustic=acoustic, artefacts=art, simulation=sim,
-                 mic_distance_m=mic_distance_m, source=source)
+                 mic_distance_m=mic_distance_m, source=source, chain=chain)
 
 
 def load_scene(scene: str | os.PathLike[str]) -> Scene:

@@ -14,7 +14,12 @@ The parser honours the header rather than guessing:
   column is printed with fewer digits, and LabVIEW guarantees it for the first
   channel only), its unit from ``Y_Unit_Label``;
 * a channel shorter than the others has empty fields at the end of its column;
-  its value count must equal the header's ``Samples``.
+  its value count must equal the header's ``Samples``;
+* ``X_Columns No``: LabVIEW still writes the ``X_Value`` heading and an empty first
+  field on every row; that column is dropped (not taken for the first channel), or
+  kept as the X values when it holds numbers;
+* header fields the LabVIEW format does not define are reported with an
+  :class:`LvmHeaderWarning` (they are kept in the parsed header, never used).
 
 The whole text is parsed at once: LVM files are text and small by nature
 (a 1 s, 51.2 kHz record is 1.6 MB); use HDF5 or TDMS for long records.
@@ -24,6 +29,7 @@ from __future__ import annotations
 
 import itertools
 import re
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
@@ -32,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from ...exceptions import FileFormatError
+from ...exceptions import FileFormatError, RattleLabWarning
 from .._errors import MappingError
 from .._model import ArrayData, ArraySource
 from . import RawRecord
@@ -41,6 +47,22 @@ from .mapping import MappingSpec, build_raw, known_unit
 FORMAT = "lvm"
 END = "***End_of_Header***"
 SEPARATORS = {"tab": "\t", "comma": ",", "semicolon": ";"}
+
+#: File-header fields of the LabVIEW Measurement format (LabVIEW's LVM file specification).
+FILE_HEADER_FIELDS = frozenset({
+    "Writer_Version", "Reader_Version", "Separator", "Decimal_Separator", "Multi_Headings",
+    "X_Columns", "Time_Pref", "Operator", "Description", "Date", "Time", "Project",
+    "Test_Name", "Test_Numbers", "Test Series", "UUT_Name", "UUT_Model", "UUT_Serial_Number",
+    "Hardware", "Software", "Notes"})
+#: Segment-header fields of the format.
+SEGMENT_HEADER_FIELDS = frozenset({
+    "Channels", "Samples", "Date", "Time", "Y_Unit_Label", "X_Dimension", "X0", "Delta_X",
+    "Notes", "Test_Name", "Test_Numbers", "Test Series", "UUT_Name", "UUT_Model",
+    "UUT_Serial_Number", "Operator", "Description"})
+
+
+class LvmHeaderWarning(RattleLabWarning):
+    """An LVM header carries a field the LabVIEW Measurement format does not define."""
 
 
 @dataclass(frozen=True)
@@ -122,6 +144,7 @@ def parse_lvm(path: str | Path) -> LvmFile:
         i += 1
     if i >= len(lines):
         raise FileFormatError(f"{path}: file header has no '{END}' line")
+    _warn_unknown(path, "file header", header, FILE_HEADER_FIELDS)
     i += 1
     decimal = header.get("Decimal_Separator", ".") or "."
     # (A comma separator cannot also be the decimal one: the header value would be empty.)
@@ -155,6 +178,7 @@ def parse_lvm(path: str | Path) -> LvmFile:
                 i += 1
             if i >= n:
                 raise FileFormatError(f"{path}: segment header without '{END}'")
+            _warn_unknown(path, f"segment {segment + 1} header", seg_header, SEGMENT_HEADER_FIELDS)
             i += 1
             if i >= n:
                 raise FileFormatError(f"{path}: line {i}: segment header without a column-name line")
@@ -178,6 +202,15 @@ def parse_lvm(path: str | Path) -> LvmFile:
                    channels=tuple(channels), x_values=x_values, n_segments=segment + 1)
 
 
+def _warn_unknown(path: Path, where: str, header: Mapping[str, Any], known: frozenset[str]) -> None:
+    unknown = sorted(k for k in header if k not in known)
+    if unknown:
+        warnings.warn(f"{path}: {where}: field{'s' if len(unknown) > 1 else ''} "
+                      f"{', '.join(repr(k) for k in unknown)} not defined by the LabVIEW "
+                      "Measurement format (kept in the header, not used)", LvmHeaderWarning,
+                      stacklevel=3)
+
+
 def _number(text: str, decimal: str) -> str:
     return text.strip().replace(decimal, ".") if decimal == "," else text.strip()
 
@@ -197,12 +230,14 @@ def _segment(path: Path, segment: int, seg_header: Mapping[str, list[str]], name
              rows: list[list[str]], first_line: int, x_columns: str, decimal: str,
              header: Mapping[str, str], channels: list[LvmChannel],
              x_values: dict[int, np.ndarray]) -> None:
+    # X_Columns No: LabVIEW still writes the X_Value heading and an empty first field per row.
+    x_heading = x_columns == "No" and bool(names) and names[0] == "X_Value"
     if x_columns == "One":
         ch_names = names[1:]
     elif x_columns == "Multi":
         ch_names = names[1::2]
     else:
-        ch_names = names
+        ch_names = names[1:] if x_heading else names
     declared = seg_header.get("Channels", [""])[0]
     if declared:
         try:
@@ -249,8 +284,13 @@ def _segment(path: Path, segment: int, seg_header: Mapping[str, list[str]], name
 
     if x_columns == "One":
         x_values[segment] = column(0, "column 'X_Value'")
+    elif x_heading:
+        x_col = column(0, "column 'X_Value'")
+        if x_col.size:       # numbers under the heading after all: the X values
+            x_values[segment] = x_col
     for j, name in enumerate(ch_names):
-        col = j + 1 if x_columns == "One" else (2 * j + 1 if x_columns == "Multi" else j)
+        col = (j + 1 if x_columns == "One" or x_heading
+               else (2 * j + 1 if x_columns == "Multi" else j))
         values = column(col, f"column {name!r}")
         samples = per_channel("Samples", j)
         if samples is not None:

@@ -62,7 +62,7 @@ import numpy as np
 from ..._resources import find_resource
 from ...exceptions import FileFormatError
 from .._convert import (CHANNEL_FIELDS, RIG_FIELDS, ROOT_FIELDS, RUN_FIELDS, SCHEMA_NAME,
-                        SCHEMA_VERSION)
+                        SCHEMA_VERSION, SCHEMA_VERSION_CHAIN)
 from .._errors import DuplicateRunError, MappingError
 from .._h5 import H5Handle, H5Source, decode_attr_value, hdf5_signature_offset
 from .._model import ArraySource, Skipped
@@ -300,8 +300,10 @@ def build_raw(path: Path, spec: MappingSpec, backend: Backend) -> RawRecord:
                                              if k not in SELECTOR_KEYS and k != "name"},
                                   label, cwhere, " + ".join(used_label))
                 if "timestamps" in ch_attrs:
-                    ch_attrs.pop("sample_rate_hz", None)
+                    declared_fs = ch_attrs.pop("sample_rate_hz", None)
                     ch_attrs.pop("start_time_s", None)
+                    ts_src = sources.get(f"/runs/{run_id}/timestamps/{ch_attrs['timestamps']}")
+                    _check_rate_against_time(declared_fs, ts_src, f"{label}: {cwhere}")
                 sources[f"/runs/{run_id}/channels/{ch['name']}"] = src
                 channels[ch["name"]] = {"kind": "dataset", "attrs": ch_attrs,
                                         "dtype": np.dtype(src.dtype).str, "shape": [src.n_samples]}
@@ -330,6 +332,8 @@ def build_raw(path: Path, spec: MappingSpec, backend: Backend) -> RawRecord:
         raise
     tree = {"kind": "group", "attrs": root_attrs,
             "members": {"rig": rig, "runs": {"kind": "group", "attrs": {}, "members": runs}}}
+    if _uses_chain_attrs(rig, runs):
+        root_attrs["schema_version"] = SCHEMA_VERSION_CHAIN
     return RawRecord(tree=tree, sources=sources, format=backend.format, skipped=skipped,
                      closer=backend.close)
 
@@ -459,3 +463,33 @@ def load(path: Path, mapping: MappingSpec | None) -> RawRecord:
                               "(--mapping FILE.toml) to read a foreign layout")
     return build_raw(path, mapping, HDF5Backend(path))
 
+
+
+def _uses_chain_attrs(rig: Mapping[str, Any], runs: Mapping[str, Any]) -> bool:
+    """True when a mapped record carries an attribute of schema version 2 (the chain)."""
+    from .._schema import V2_CHANNEL_ATTRS, V2_RIG_ATTRS, V2_RUN_ATTRS
+
+    if any(k in rig["attrs"] for k in V2_RIG_ATTRS):
+        return True
+    if any(k in run["attrs"] for run in runs.values() for k in V2_RUN_ATTRS):
+        return True
+    return any(k in ch["attrs"] for run in runs.values()
+               for ch in run["members"]["channels"]["members"].values() for k in V2_CHANNEL_ATTRS)
+
+
+#: Relative disagreement between a declared sample rate and a time vector that is refused.
+RATE_TOLERANCE = 1e-3
+
+
+def _check_rate_against_time(fs_hz: Any, ts: Any, where: str) -> None:
+    """Refuse a declared sample rate that contradicts the channel's own time vector."""
+    if fs_hz is None or ts is None or ts.n_samples < 3:
+        return
+    t = np.asarray(ts.read(0, min(ts.n_samples, 100_000)), dtype=np.float64)
+    dt = float(np.median(np.diff(t)))
+    if not dt > 0:
+        return
+    if abs(1.0 / dt - float(fs_hz)) > RATE_TOLERANCE * float(fs_hz):
+        raise MappingError(f"{where}: sample_rate_hz {float(fs_hz):.6g} Hz contradicts the "
+                           f"channel's time vector (median step {dt:.6g} s = {1.0 / dt:.6g} Hz); "
+                           "give one of the two")

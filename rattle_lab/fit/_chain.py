@@ -1,0 +1,193 @@
+"""The measurement chain in the fit: channels on one time base, measurands, transient shocks.
+
+Split from :mod:`rattle_lab.fit._store` (issue 15).  Per run: each channel's samples at
+their physical times (``start_time_s`` less the declared ``group_delay_s``), two plate
+channels at different rates or offsets resampled onto one grid before they are paired,
+an absolute vibrometer's impact velocities made relative to the striker with the base,
+named data-quality flags of the chain, the shock of a transient run in every channel
+(the cause chosen by what each channel measures), and the crossing levels of the ramp
+thresholds that the eq. (3.4) fit takes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from ..detect._pairing import base_velocity_at, onto_grid
+from ..detect._shock import detect_shock
+from ..exceptions import ParameterError
+from ..records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
+                              channel_time_offset_s)
+from ..results import RunResult
+from ..thresholds import Threshold, crossing_level_ms2
+
+#: Quantities that cause a shock (the hammer's force, the drop table or shaker base), in the
+#: order a transient record's cause is chosen; the other channels are its responses.
+CAUSE_QUANTITIES = ("excitation_force", "base_acceleration", "drive_signal")
+#: Quantities a transient record's shock is looked for in.
+SHOCK_QUANTITIES = CAUSE_QUANTITIES + ("plate_acceleration", "plate_velocity", "sound_pressure")
+
+
+def _fs_of(run: Any, ch: Any) -> float:
+    if ch.sample_rate_hz is not None:
+        return float(ch.sample_rate_hz)
+    t = run.timestamps[ch.timestamps].read(0, min(ch.n_samples, 10000))
+    return float(1.0 / np.median(np.diff(t)))
+
+
+def _start_of(run: Any, ch: Any) -> float:
+    if ch.start_time_s is not None:
+        return float(ch.start_time_s)
+    if ch.timestamps is not None:
+        return float(run.timestamps[ch.timestamps].read(0, 1)[0])
+    return 0.0
+
+
+def _t0_of(run: Any, ch: Any) -> float:
+    """Physical time of a channel's first sample: start time less the filters' group delay."""
+    return _start_of(run, ch) + channel_time_offset_s(ch)
+
+
+def paired_plate_channels(run: Any, vel: Any, acc: Any
+                          ) -> tuple[float, float, np.ndarray | None, np.ndarray | None]:
+    """``(fs_hz, t0_s, velocity, acceleration)`` on one time base (SI; either may be None).
+
+    Each channel's samples are placed at their physical times (``start_time_s`` less
+    ``group_delay_s``).  With both channels, the slower (or, at equal rates, the
+    acceleration) is resampled onto the other's grid (:func:`~rattle_lab.detect._pairing.onto_grid`)
+    and both are cut to the span they share.
+    """
+    if vel is None or acc is None:
+        ch = vel if vel is not None else acc
+        data = ch.read()
+        out = (data, None) if vel is not None else (None, data)
+        return _fs_of(run, ch), _t0_of(run, ch), out[0], out[1]
+    fs_v, fs_a = _fs_of(run, vel), _fs_of(run, acc)
+    t0_v, t0_a = _t0_of(run, vel), _t0_of(run, acc)
+    v, a = vel.read(), acc.read()
+    same = abs(fs_v - fs_a) <= 1e-9 * fs_v and abs(t0_v - t0_a) * fs_v < 1e-6
+    if same:
+        n = min(v.size, a.size)
+        return fs_v, t0_v, v[:n], a[:n]
+    if fs_a > fs_v * (1 + 1e-9):
+        fs, t0 = fs_a, t0_a
+        v = onto_grid(v, fs_v, t0_v, fs, t0, a.size)
+    else:
+        fs, t0 = fs_v, t0_v
+        a = onto_grid(a, fs_a, t0_a, fs, t0, v.size)
+    n = min(v.size, a.size)
+    v, a = v[:n], a[:n]
+    ok = np.isfinite(v) & np.isfinite(a)
+    idx = np.flatnonzero(ok)
+    if idx.size == 0:
+        raise ParameterError(f"run {run.run_id!r}: channels {vel.name!r} and {acc.name!r} do not "
+                             "overlap in time")
+    lo, hi = int(idx[0]), int(idx[-1]) + 1
+    return fs, t0 + lo / fs, np.asarray(v[lo:hi]), np.asarray(a[lo:hi])
+
+
+def relative_to_striker(run: Any, log: Any, base: Any, freq_hz: float | None) -> Any:
+    """``log`` with the base velocity taken off ``v_in``/``v_out`` (an absolute vibrometer).
+
+    The striker sits on the shaker base: the impact velocities of the SDF model are the
+    panel's relative to it.  Without a base accelerometer or a constant excitation
+    frequency the log is returned unchanged (and :func:`run_chain_flags` says so).
+    """
+    if base is None or freq_hz is None or log.n_impacts == 0:
+        return log
+    vb = base_velocity_at(base.read(), _fs_of(run, base), _t0_of(run, base), freq_hz, log.t_s)
+    vin, vout = log.v_in_m_s - vb, log.v_out_m_s - vb
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e = np.where(vin != 0, -vout / vin, np.nan)
+    return dataclasses.replace(log, v_in_m_s=vin, v_out_m_s=vout, e=e)
+
+
+def run_chain_flags(run: Any) -> list[str]:
+    """Named data-quality flags of a run's measurement chain (schema v2 metadata)."""
+    flags = []
+    vel = next((c for c in run.channels if c.quantity == "plate_velocity"), None)
+    if vel is not None:
+        measurand = getattr(vel, "measurand", None)
+        if measurand is None:
+            flags.append(FLAG_MEASURAND_UNDECLARED)
+        elif measurand == "panel_absolute":
+            has_base = any(c.quantity == "base_acceleration" for c in run.channels)
+            f_end = getattr(run, "freq_end_hz", None)
+            if not has_base or not run.excitation_freq_hz or (f_end and f_end != run.excitation_freq_hz):
+                flags.append(FLAG_MEASURAND_ABSOLUTE)
+    return flags
+
+
+def transient_shocks(run: Any, *, on: float = 12.0, channel: str | None = None
+                     ) -> list[dict[str, Any]]:
+    """The shock in each channel of a transient run, the cause first, responses paired to it.
+
+    The cause is ``channel`` (or the run's ``detect_channel``) when given, else the first
+    channel measuring a quantity of :data:`CAUSE_QUANTITIES` (force before base before
+    drive), else the first channel with a shock.  Each row: ``channel``, ``quantity``,
+    ``role`` (``"cause"``/``"response"``), ``found``, ``onset_s``, ``peak_s`` (physical
+    times: ``start_time_s`` less ``group_delay_s``), ``peak_value`` (SI), ``strength``
+    (noise units) and, for responses, ``delay_s`` = response onset - cause onset.
+
+    Raises
+    ------
+    ParameterError
+        If ``channel`` names no channel of the run.
+    """
+    wanted = channel or getattr(run, "detect_channel", None)
+    chans = [c for c in run.channels if c.quantity in SHOCK_QUANTITIES]
+    if wanted is not None:
+        if wanted not in {c.name for c in run.channels}:
+            raise ParameterError(f"run {run.run_id!r}: no channel {wanted!r} to detect on "
+                                 f"(has: {', '.join(c.name for c in run.channels)})")
+        chans = [c for c in run.channels if c.name == wanted] + \
+            [c for c in chans if c.name != wanted]
+    rows = []
+    for c in chans:
+        shock = detect_shock(c.read(), _fs_of(run, c), start_time_s=_t0_of(run, c), on=on)
+        rows.append({"channel": c.name, "quantity": c.quantity, "found": shock.found,
+                     "onset_s": shock.onset_s, "peak_s": shock.peak_s,
+                     "peak_value": shock.peak_value, "strength": shock.strength})
+    if not rows:
+        return rows
+    if wanted is None:
+        rank = [next((i for i, q in enumerate(CAUSE_QUANTITIES) if r["quantity"] == q),
+                     len(CAUSE_QUANTITIES) + (0 if r["found"] else 1)) for r in rows]
+        rows.insert(0, rows.pop(int(np.argmin(rank))))
+    cause = rows[0]
+    cause["role"] = "cause"
+    for r in rows[1:]:
+        r["role"] = "response"
+        r["delay_s"] = (r["onset_s"] - cause["onset_s"]) if r["found"] and cause["found"] \
+            else float("nan")
+    return rows
+
+
+def runs_thresholds(runs: list[RunResult]) -> list[Threshold]:
+    """The measured ramp thresholds of ``runs``."""
+    return [r.threshold for r in runs if r.threshold is not None]
+
+
+def _crossing_curve(thresholds: list[Threshold], freq_hz: np.ndarray) -> np.ndarray:
+    """Upward crossing levels (:func:`~rattle_lab.thresholds.crossing_level_ms2`) per frequency.
+
+    Mean over the runs at each frequency, as :func:`~rattle_lab.thresholds.tabulate_thresholds`;
+    a threshold without a measured ramp keeps its impact level.
+    """
+    out = np.full(freq_hz.size, np.nan)
+    for i, f in enumerate(freq_hz):
+        vals = []
+        for t in thresholds:
+            if t.freq_hz == f and t.direction == "up" and np.isfinite(t.accel_ms2):
+                c = crossing_level_ms2(t)
+                vals.append(c if np.isfinite(c) else t.accel_ms2)
+        if vals:
+            out[i] = float(np.mean(vals))
+    return out
+
+
+__all__ = ["CAUSE_QUANTITIES", "SHOCK_QUANTITIES", "paired_plate_channels", "relative_to_striker",
+           "run_chain_flags", "runs_thresholds", "transient_shocks"]

@@ -1,0 +1,151 @@
+"""The measurement chain a record declares (schema v2): participation, measurands, delays.
+
+What a fit needs to know about the chain and that v1 records could not say:
+
+* the modal participation factor ``Q1/Q2`` at the measurement point (rig attribute
+  ``modal_participation``), or the plate geometry from which the plate model computes it
+  (``plate_length_m``, ``plate_width_m``, ``edge_conditions`` in the order of
+  :data:`rattle_lab.plate.EDGE_ORDER`, ``plate_poisson_ratio``);
+* per velocity channel its ``measurand`` (:data:`MEASURANDS`) and ``sign_convention``;
+* per channel the known ``group_delay_s`` of its filters (vibrometer decoder, anti-alias),
+  which :func:`channel_time_offset_s` subtracts together with ``start_time_s`` before two
+  channels are paired.
+
+When the participation is neither given nor computable, 1.0 is assumed and the named
+data-quality flag :data:`FLAG_PARTICIPATION_ASSUMED` says so.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from ..exceptions import ParameterError
+
+#: What a velocity channel measures: the panel alone, or the panel relative to the striker.
+MEASURANDS = ("panel_absolute", "panel_relative_to_striker")
+#: Sign conventions of a velocity or acceleration channel.
+SIGN_CONVENTIONS = ("toward_striker_positive", "away_from_striker_positive")
+
+#: Data-quality flag: no participation in the record or on the command line; 1.0 assumed.
+FLAG_PARTICIPATION_ASSUMED = "participation_assumed"
+#: Data-quality flag: participation from the plate geometry with Poisson's ratio assumed.
+FLAG_POISSON_ASSUMED = "participation_poisson_ratio_assumed"
+#: Data-quality flag: a velocity channel does not say what it measures.
+FLAG_MEASURAND_UNDECLARED = "velocity_measurand_undeclared"
+#: Data-quality flag: the velocity is the panel alone (striker motion not subtracted).
+FLAG_MEASURAND_ABSOLUTE = "velocity_panel_absolute"
+
+#: Poisson's ratio assumed for the plate model when the rig does not give it (aluminium).
+ASSUMED_POISSON_RATIO = 0.33
+
+
+@dataclass(frozen=True)
+class Participation:
+    """The modal participation factor a fit uses, and where it came from.
+
+    Attributes
+    ----------
+    value : float
+        ``Q1/Q2`` of the fitted mode at the measurement point (thesis eq. 2.27), 1.
+    source : str
+        ``"command line"``, ``"pipeline"``, ``"rig modal_participation"``,
+        ``"plate model (...)"`` or ``"assumed"``.
+    flags : tuple of str
+        Named data-quality flags (:data:`FLAG_PARTICIPATION_ASSUMED`, ...).
+    """
+
+    value: float
+    source: str
+    flags: tuple[str, ...] = ()
+
+
+def participation_from_plate(length_m: float, width_m: float, edges: str,
+                             poisson_ratio: float) -> float:
+    """``Q1/Q2`` of the first plate mode (Rayleigh-Ritz; closed form for SSSS).
+
+    ``edges`` are four letters for the edges in the order of
+    :data:`rattle_lab.plate.EDGE_ORDER` (y=0, x=a, y=b, x=0).  ``Q1`` and ``Q2`` do not
+    depend on the plate's thickness, modulus or density, only on its shape, edges and
+    Poisson's ratio (the free edges' conditions carry it).
+    """
+    from ..plate import Plate, simply_supported_modes
+
+    plate = Plate(a_m=length_m, b_m=width_m, h_p_m=1e-3, E_pa=7e10, nu=poisson_ratio,
+                  rho_kg_m3=2700.0, edges=edges)
+    if plate.edges == "SSSS":
+        mode = next(iter(simply_supported_modes(plate.aspect_ratio, 1)))
+        return float(mode.Q1 / mode.Q2)
+    modes = plate.modes(1)
+    return float(modes[0].Q1 / modes[0].Q2)
+
+
+def rig_participation(rig: Any) -> Participation | None:
+    """The participation a record's rig declares or implies, or None.
+
+    ``modal_participation`` wins; else the plate geometry (``plate_length_m``,
+    ``plate_width_m``, ``edge_conditions`` and ``plate_poisson_ratio``; without the ratio
+    :data:`ASSUMED_POISSON_RATIO` is used and flagged).
+    """
+    value = getattr(rig, "modal_participation", None)
+    if value is not None:
+        return Participation(float(value), "rig modal_participation")
+    a, b, edges = rig.plate_length_m, rig.plate_width_m, rig.edge_conditions
+    if a is None or b is None or edges is None:
+        return None
+    nu = getattr(rig, "plate_poisson_ratio", None)
+    flags: tuple[str, ...] = ()
+    if nu is None:
+        nu, flags = ASSUMED_POISSON_RATIO, (FLAG_POISSON_ASSUMED,)
+    q = participation_from_plate(float(a), float(b), str(edges), float(nu))
+    return Participation(q, f"plate model ({edges}, {a:g} m x {b:g} m, nu = {nu:g})", flags)
+
+
+def resolve_participation(rigs: list[Any], given: float | None, given_source: str
+                          ) -> Participation:
+    """The participation for a fit over records with ``rigs``.
+
+    ``given`` (from the command line or a pipeline) wins.  Else every rig must agree (to
+    1e-6 relative) on its :func:`rig_participation`; when none declares one, 1.0 is
+    assumed with :data:`FLAG_PARTICIPATION_ASSUMED`.
+
+    Raises
+    ------
+    ParameterError
+        If ``given`` is not a positive finite number, or the records disagree.
+    """
+    if given is not None:
+        if isinstance(given, bool) or not isinstance(given, (int, float)) or \
+                not math.isfinite(given) or given <= 0:
+            raise ParameterError(f"`participation` must be a finite number > 0, was {given!r}")
+        return Participation(float(given), given_source)
+    found = [p for p in (rig_participation(r) for r in rigs) if p is not None]
+    if not found:
+        return Participation(1.0, "assumed", (FLAG_PARTICIPATION_ASSUMED,))
+    first = found[0]
+    for p in found[1:]:
+        if abs(p.value - first.value) > 1e-6 * first.value:
+            raise ParameterError(
+                f"the records disagree on the modal participation ({first.value:.6g} from "
+                f"{first.source}, {p.value:.6g} from {p.source}): fit them separately or give "
+                "--participation")
+    flags = tuple(sorted({f for p in found for f in p.flags}))
+    return Participation(first.value, first.source, flags)
+
+
+def channel_time_offset_s(channel: Any) -> float:
+    """Seconds to add to a channel's sample times to get the time of the physical event.
+
+    ``-group_delay_s``: a filter of known group delay (vibrometer decoder, anti-alias)
+    shows an event ``group_delay_s`` late.  (``start_time_s`` is honoured by the caller's
+    time base.)
+    """
+    delay = getattr(channel, "group_delay_s", None)
+    return -float(delay) if delay else 0.0
+
+
+__all__ = ["ASSUMED_POISSON_RATIO", "FLAG_MEASURAND_ABSOLUTE", "FLAG_MEASURAND_UNDECLARED",
+           "FLAG_PARTICIPATION_ASSUMED", "FLAG_POISSON_ASSUMED", "MEASURANDS", "Participation",
+           "SIGN_CONVENTIONS", "channel_time_offset_s", "participation_from_plate",
+           "resolve_participation", "rig_participation"]

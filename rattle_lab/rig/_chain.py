@@ -1,0 +1,164 @@
+"""A realistic measurement chain for the synthetic rig (scene table ``[chain]``, opt-in).
+
+Each effect is off by default; a scene turns on what it wants:
+
+* ``decoder_delay_s``: the vibrometer decoder's group delay (a band-limited fractional
+  delay of the velocity); the record declares it (``group_delay_s``, schema v2);
+* ``vibrometer = "absolute"``: the panel alone, the base velocity not subtracted (declared
+  as ``measurand = "panel_absolute"``; default ``"relative"``, a differential vibrometer);
+* ``ring_velocity_per_m_s``: the plate's next modes (the scene's ``ringing_freqs_hz``)
+  ringing in the vibrometer after each impact, excited by its impulse: a velocity step of
+  this many m/s per m/s of velocity change, decaying with ``ringing_decay_s``;
+* ``hum_hz`` with ``hum_m_s``, ``hum_m_s2``, ``hum_pa``: mains hum in the vibrometer, the
+  accelerometers and the microphone;
+* ``offset_velocity_m_s``, ``offset_plate_m_s2``, ``offset_base_m_s2``, ``offset_mic_pa``:
+  DC offsets;
+* ``adc_bits`` (16 or 24; 0 = off): quantisation over each channel's input range (or
+  1.25 times its largest sample when it has none);
+* ``floor_extra_path_m`` and ``floor_gain``: one floor reflection of the sound, arriving
+  ``floor_extra_path_m / c`` after the direct sound (the microphone's distance and
+  propagation delay are the ``[acoustic]`` table's).
+
+Background noise is each sensor's ``noise_rms``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ._channels import convolve_causal, impulse_train, n_samples
+
+if TYPE_CHECKING:
+    from ._motion import RunMotion
+    from ._scene import ModelSpec
+
+TWO_PI = 2.0 * math.pi
+VIBROMETERS = ("relative", "absolute")
+ADC_BITS = (0, 16, 24)
+
+
+@dataclass(frozen=True)
+class ChainSpec:
+    """The measurement chain (see the module docstring); every default is "off"."""
+
+    decoder_delay_s: float = 0.0
+    vibrometer: str = "relative"
+    ring_velocity_per_m_s: float = 0.0
+    hum_hz: float = 50.0
+    hum_m_s: float = 0.0
+    hum_m_s2: float = 0.0
+    hum_pa: float = 0.0
+    offset_velocity_m_s: float = 0.0
+    offset_plate_m_s2: float = 0.0
+    offset_base_m_s2: float = 0.0
+    offset_mic_pa: float = 0.0
+    adc_bits: int = 0
+    floor_extra_path_m: float = 0.0
+    floor_gain: float = 0.0
+
+    @property
+    def measurand(self) -> str:
+        """The velocity channel's ``measurand`` attribute."""
+        return "panel_absolute" if self.vibrometer == "absolute" else "panel_relative_to_striker"
+
+
+def parse_chain(reader: Any) -> ChainSpec:
+    """A :class:`ChainSpec` from the scene's ``[chain]`` table reader (``_scene._Reader``)."""
+    r = reader
+    spec = ChainSpec(
+        decoder_delay_s=r.number("decoder_delay_s", 0.0, low=0.0),
+        vibrometer=r.string("vibrometer", "relative"),
+        ring_velocity_per_m_s=r.number("ring_velocity_per_m_s", 0.0, low=0.0),
+        hum_hz=r.positive("hum_hz", 50.0),
+        hum_m_s=r.number("hum_m_s", 0.0, low=0.0), hum_m_s2=r.number("hum_m_s2", 0.0, low=0.0),
+        hum_pa=r.number("hum_pa", 0.0, low=0.0),
+        offset_velocity_m_s=r.number("offset_velocity_m_s", 0.0),
+        offset_plate_m_s2=r.number("offset_plate_m_s2", 0.0),
+        offset_base_m_s2=r.number("offset_base_m_s2", 0.0),
+        offset_mic_pa=r.number("offset_mic_pa", 0.0),
+        adc_bits=r.integer("adc_bits", 0, low=0),
+        floor_extra_path_m=r.number("floor_extra_path_m", 0.0, low=0.0),
+        floor_gain=r.number("floor_gain", 0.0, low=0.0))
+    if spec.vibrometer not in VIBROMETERS:
+        r.fail(r.key("vibrometer"), spec.vibrometer, f"must be one of {VIBROMETERS}")
+    if spec.adc_bits not in ADC_BITS:
+        r.fail(r.key("adc_bits"), spec.adc_bits, "must be 0 (off), 16 or 24")
+    if spec.floor_gain > 1.0:
+        r.fail(r.key("floor_gain"), spec.floor_gain, "must be <= 1 (a reflection loses energy)")
+    r.done()
+    return spec
+
+
+def fractional_delay(x: np.ndarray, sample_rate_hz: float, delay_s: float) -> np.ndarray:
+    """``x`` delayed by ``delay_s`` (linear phase, band-limited; mirrored, so no wrap step)."""
+    if delay_s == 0.0:
+        return x
+    n = x.size
+    ext = np.concatenate([x, x[::-1]])
+    f = np.fft.rfftfreq(ext.size, 1.0 / sample_rate_hz)
+    return np.fft.irfft(np.fft.rfft(ext) * np.exp(-2j * np.pi * f * delay_s), ext.size)[:n]
+
+
+def base_velocity(motion: RunMotion, sample_rate_hz: float) -> np.ndarray:
+    """The shaker base's velocity, m/s: the integral of its ``-A cos(theta)`` acceleration."""
+    assert motion.theta is not None and motion.level_m_s2 is not None
+    omega = np.gradient(motion.theta) * sample_rate_hz
+    return -motion.level_m_s2 / omega * np.sin(motion.theta)
+
+
+def velocity_ringing(motion: RunMotion, model: ModelSpec, ring_hz: tuple[float, ...],
+                     per_m_s: float, n: int, sample_rate_hz: float) -> np.ndarray:
+    """The next modes in the vibrometer: ``per_m_s dv sum_j w_j exp(-t/decay) cos(2 pi f_j t)``.
+
+    ``w_j = (1/(j+1)) / sum_k 1/(k+1)`` (as the accelerometer's ringing weights its
+    modes), ``dv`` each impact's velocity change.
+    """
+    if not ring_hz or per_m_s == 0.0 or motion.impact_t_s.size == 0:
+        return np.zeros(n)
+    t = np.arange(n_samples(6 * model.ringing_decay_s, sample_rate_hz)) / sample_rate_hz
+    weights = np.array([1.0 / (j + 1) for j in range(len(ring_hz))])
+    weights /= weights.sum()
+    kern = np.exp(-t / model.ringing_decay_s) * sum(
+        w * np.cos(TWO_PI * f * t) for w, f in zip(weights, ring_hz))
+    dv = -(motion.impact_v_in_m_s + motion.impact_v_out_m_s)
+    return convolve_causal(impulse_train(motion.impact_t_s, per_m_s * dv, n, sample_rate_hz), kern)
+
+
+def hum_and_offset(si: np.ndarray, name: str, chain: ChainSpec, sample_rate_hz: float) -> np.ndarray:
+    """``si`` plus the sensor's mains hum and DC offset."""
+    hum = {"velocity": chain.hum_m_s, "plate": chain.hum_m_s2, "base": chain.hum_m_s2,
+           "mic": chain.hum_pa}.get(name, 0.0)
+    offset = {"velocity": chain.offset_velocity_m_s, "plate": chain.offset_plate_m_s2,
+              "base": chain.offset_base_m_s2, "mic": chain.offset_mic_pa}.get(name, 0.0)
+    if hum == 0.0 and offset == 0.0:
+        return si
+    t = np.arange(si.size) / sample_rate_hz
+    return si + hum * np.sin(TWO_PI * chain.hum_hz * t + 0.4) + offset
+
+
+def floor_reflection(p: np.ndarray, chain: ChainSpec, c_m_s: float,
+                     sample_rate_hz: float) -> np.ndarray:
+    """``p`` plus one floor reflection: ``floor_gain`` times ``p``, ``floor_extra_path_m / c`` later."""
+    if chain.floor_gain == 0.0 or chain.floor_extra_path_m == 0.0:
+        return p
+    return p + chain.floor_gain * fractional_delay(p, sample_rate_hz,
+                                                   chain.floor_extra_path_m / c_m_s)
+
+
+def quantise(stored: np.ndarray, range_: float | None, bits: int) -> np.ndarray:
+    """``stored`` rounded to the ADC's step ``2 range / 2**bits`` (unchanged for ``bits == 0``)."""
+    if bits == 0:
+        return stored
+    full = range_ if range_ is not None else 1.25 * float(np.max(np.abs(stored), initial=0.0))
+    if full == 0.0:
+        return stored
+    lsb = 2.0 * full / 2.0 ** bits
+    return np.round(stored / lsb) * lsb
+
+
+__all__ = ["ChainSpec", "base_velocity", "floor_reflection", "fractional_delay", "hum_and_offset",
+           "parse_chain", "quantise", "velocity_ringing"]
