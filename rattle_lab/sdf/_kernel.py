@@ -1190,3 +1190,73 @@ def run_sweep(F_arr, w_arr, e_arr, zeta, t0, x0, v0, th0, stuck0, discard_cycles
             off[i + 2:, 1] = n_crs
             return imp[:n_imp], crs[:n_crs], off, ends, info
     return imp[:n_imp], crs[:n_crs], off, ends, info
+
+
+@jit
+def run_pieces(F_arr, omega, zeta, e, t0, x0, v0, th0, stuck0, t_stop, group_gap, group_size,
+               quiet_time, quiet_ok, last_imp):
+    """Consecutive pieces at forcing amplitudes ``F_arr``, piece ``j`` running until
+    ``t_stop[j]``, the state carried over: one call for a whole amplitude ramp.
+
+    Exactly the calls ``simulate(SDFParams(F_arr[j], omega, zeta, e),
+    duration=max(0, t_stop[j] - state.t), state=state)`` a Python loop makes (same
+    durations and event budgets), so the motion is the same to the last bit.
+    Early stop, after the piece where it first holds (0 or negative: never):
+    ``group_gap > 0``: ``group_size`` consecutive impacts, each less than
+    ``group_gap`` after the previous; ``quiet_time > 0``: a piece without impacts
+    with ``quiet_ok[j]``, ending more than ``quiet_time`` after the last impact
+    (``last_imp``: the last one before this call, NaN if none).
+    Returns (imp, off, ends, info): imp rows (t, phase, v_in) of every piece, piece
+    j's rows ``off[j]:off[j + 1]``; ends rows (t, x, v, theta, stuck) at each piece's
+    end; info rows (status, searches settled at the work cap) as for :func:`run`;
+    the pieces stop at the first nonzero status or early stop (later ``info`` rows
+    -1, their ``off`` equal to the last).
+    """
+    n = F_arr.shape[0]
+    imp = np.empty((64, 3))
+    n_imp = 0
+    off = np.zeros(n + 1, dtype=np.int64)
+    ends = np.zeros((n, 5))
+    info = np.full((n, 2), -1.0)
+    t = t0
+    x = x0
+    v = v0
+    th = th0
+    stuck = stuck0
+    period = TWO_PI / omega
+    streak = 1
+    for j in range(n):
+        d = max(0.0, t_stop[j] - t)
+        me = 10**6 + int(1000.0 * (d / period + 1.0))
+        out = run(F_arr[j], omega, zeta, e, t, x, v, th, stuck, d, False, False, me)
+        t, x, v, th, stuck = out[10], out[11], out[12], out[13], out[14]
+        m = out[1]
+        imp, n_imp = _append_rows(imp, n_imp, out[0][:, :3], m)
+        off[j + 1] = n_imp
+        ends[j, 0] = t
+        ends[j, 1] = x
+        ends[j, 2] = v
+        ends[j, 3] = th
+        ends[j, 4] = 1.0 if stuck else 0.0
+        info[j, 0] = out[16]
+        info[j, 1] = out[17]
+        stop = out[16] != 0
+        if group_gap > 0.0:
+            for i in range(m):
+                ti = out[0][i, 0]
+                if last_imp == last_imp and ti - last_imp < group_gap:
+                    streak += 1
+                else:
+                    streak = 1
+                last_imp = ti
+                if streak >= group_size:
+                    stop = True
+        elif m > 0:
+            last_imp = out[0][m - 1, 0]
+        if (quiet_time > 0.0 and m == 0 and quiet_ok[j] and last_imp == last_imp
+                and t_stop[j] - last_imp > quiet_time):
+            stop = True
+        if stop:
+            off[j + 2:] = n_imp
+            return imp[:n_imp], off, ends, info
+    return imp[:n_imp], off, ends, info

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -191,6 +192,117 @@ def simulate(
         n_events=int(n_events),
         micro_bounce=np.array(np.asarray(avg)[:n_avg]),
     )
+
+
+@dataclass(frozen=True)
+class PieceRun:
+    """What :func:`simulate_pieces` returns.
+
+    Attributes
+    ----------
+    impact_t : ndarray
+        Impact times of all pieces run, in time order.
+    offsets : ndarray
+        Piece ``j``'s impacts are ``impact_t[offsets[j]:offsets[j + 1]]``; length
+        ``n_run + 1``.
+    ends : ndarray
+        Shape (n_run, 5): ``(t, x, v, theta, stuck)`` at the end of each piece run.
+    """
+
+    impact_t: np.ndarray
+    offsets: np.ndarray
+    ends: np.ndarray
+
+    def state(self, j: int) -> SDFState:
+        """The state at the end of piece ``j``."""
+        t, x, v, th, stuck = (float(a) for a in self.ends[j])
+        return SDFState(t=t, x=x, v=v, theta=th, stuck=stuck != 0.0)
+
+
+def simulate_pieces(F: ArrayLike, *, omega: float, zeta: float, e: float, t_stop: ArrayLike,
+                    state: SDFState, group_gap: float | None = None, group_size: int = 4,
+                    quiet_time: float | None = None, quiet_ok: ArrayLike | None = None,
+                    last_impact_t: float = math.nan) -> PieceRun:
+    """Pieces of constant forcing amplitude in one compiled call, the state carried over.
+
+    Piece ``j`` runs at ``F[j]`` until time ``t_stop[j]``: the same motion, to the last
+    bit, as the loop ``state = simulate(SDFParams(F[j], omega, zeta, e),
+    duration=max(0, t_stop[j] - state.t), state=state).state`` (tested), without its
+    fixed cost per call.  Used to replay a ramp of the forcing level.
+
+    Parameters
+    ----------
+    F : array_like
+        Forcing amplitude of each piece, >= 0.
+    omega, zeta, e : float
+        As in :class:`SDFParams`.
+    t_stop : array_like
+        End time of each piece (nondimensional), same length as ``F``.
+    state : SDFState
+        State at the start of the first piece.
+    group_gap, group_size : float, int
+        Stop after the piece in which ``group_size`` consecutive impacts, each less than
+        ``group_gap`` after the previous (nondimensional), are first complete.
+    quiet_time : float, optional
+        Stop after the first piece ``j`` without impacts with ``quiet_ok[j]`` that ends
+        more than ``quiet_time`` after the last impact (``last_impact_t``: the last one
+        before this call, NaN if none).
+    quiet_ok : array_like of bool, optional
+        Where the quiet stop may happen (default: every piece).
+    last_impact_t : float
+        Time of the last impact before ``state`` (NaN: none).
+
+    Returns
+    -------
+    PieceRun
+        The pieces run (all, or up to the stop).
+
+    Raises
+    ------
+    ParameterError
+        On invalid parameters or arrays of different lengths.
+    SimulationError
+        If a piece exhausts its event budget (as :func:`simulate` would).
+    """
+    F_arr = np.ascontiguousarray(F, dtype=float)
+    t_arr = np.ascontiguousarray(t_stop, dtype=float)
+    if F_arr.ndim != 1 or F_arr.shape != t_arr.shape:
+        raise ParameterError(f"`F` and `t_stop` must be 1-D of one length, had shapes "
+                             f"{F_arr.shape} and {t_arr.shape}")
+    if F_arr.size:
+        if not (np.all(np.isfinite(F_arr)) and F_arr.min() >= 0):
+            raise ParameterError("`F` must be finite and >= 0")
+        if not np.all(np.isfinite(t_arr)):
+            raise ParameterError("`t_stop` must be finite")
+    SDFParams(F=0.0, omega=omega, zeta=zeta, e=e)   # validates omega, zeta, e
+    ok = (np.ones(F_arr.shape, dtype=np.bool_) if quiet_ok is None
+          else np.ascontiguousarray(quiet_ok, dtype=np.bool_))
+    if ok.shape != F_arr.shape:
+        raise ParameterError(f"`quiet_ok` must have the shape of `F`, had {ok.shape}")
+    if int(group_size) != group_size or group_size < 1:
+        raise ParameterError(f"`group_size` must be an integer >= 1, was {group_size}")
+    from ._compiled import jit_kernel
+
+    imp, off, ends, info = jit_kernel.run_pieces(
+        F_arr, float(omega), float(zeta), float(e), float(state.t), float(state.x),
+        float(state.v), float(state.theta), bool(state.stuck), t_arr,
+        -1.0 if group_gap is None else float(group_gap), int(group_size),
+        -1.0 if quiet_time is None else float(quiet_time), ok, float(last_impact_t))
+    n_run = int(np.count_nonzero(info[:, 0] >= 0))
+    off = off[:n_run + 1]
+    ends = ends[:n_run]
+    bad = np.flatnonzero(info[:n_run, 0] != 0)
+    if bad.size:
+        j = int(bad[0])
+        raise SimulationError(f"event budget exhausted in piece {j} at t = {ends[j, 0]:.17g} "
+                              f"(F={F_arr[j]}, omega={omega}, zeta={zeta}, e={e})")
+    n_unresolved = float(info[:n_run, 1].sum())
+    if n_unresolved:
+        warnings.warn(
+            f"{int(n_unresolved)} event searches were settled at the work cap "
+            f"(omega={omega}, zeta={zeta}, e={e}); impacts in them are located only to the "
+            "resolution reached", NumericalWarning, stacklevel=2)
+    return PieceRun(impact_t=np.array(imp[:, 0]), offsets=off, ends=ends)
 
 
 def dense_from_segments(params: SDFParams, segments: np.ndarray, t: np.ndarray,
