@@ -21,6 +21,11 @@ Goals (issue 13):
    Both without Lyapunov exponents and without running unsettled matches
    longer (``settle_cycles=0``); the labels of the two must agree.  Goal >= 150x.
 4. ``--version``: ``rattle-lab --version`` in a fresh process <= 0.3 s.
+6. ``ramp fit``: ``fit_restitution_down(method="ramp")`` on the thesis scene's
+   6 s downward ramps at 98 and 100 Hz (thresholds from the synthetic rig's
+   simulation at e = 0.6), against the same fit with one ``simulate()`` call per
+   forcing period of each replay (the previous code path, kept as
+   ``_ramp_model._replay_per_piece``); the fitted e must be equal.  Goal >= 5x.
 5. ``cold first run``: a fresh process that imports ``rattle_lab.sdf`` and
    runs one ``simulate()`` (numba's on-disk cache already written, as after
    the first use following an install) <= 5 s.
@@ -78,6 +83,45 @@ def _reference_sweep(values: np.ndarray, method: str) -> list[str]:
     return labels
 
 
+def _ramp_fit(e_step: float) -> tuple[float, float, float, float]:
+    """Seconds and fitted e of the ramp-model fit of e, one-call replays vs per-piece calls."""
+    from rattle_lab.fit import fit_restitution_down
+    from rattle_lab.fit import _ramp_model
+    from rattle_lab.rig._motion import Modal, simulate_run
+    from rattle_lab.rig._scene import RunSpec
+    from rattle_lab.thresholds import Threshold, sustained_impact_time
+
+    plate = dict(gap_m=1.3e-3, f_s_hz=96.0, participation=1.2442)
+    zeta = 0.0085
+    modal = Modal(f_s_hz=96.0, zeta=zeta, participation=1.2442, gap_m=1.3e-3, e=0.6)
+    ths = []
+    for freq, start, end in ((98.0, 26.0, 2.0), (100.0, 50.0, 3.0)):
+        run = RunSpec(f"down_{freq:g}", "amplitude_ramp_down", freq, start, 6.0,
+                      level_end_m_s2=end)
+        motion = simulate_run(modal, run, piece_periods=1, settle_time_constants=8.0,
+                              sample_rate_hz=None)
+        t = sustained_impact_time(motion.impact_t_s, freq, "down")
+        ths.append(Threshold(run.run_id, freq, "down", start + (end - start) * t / 6.0, t,
+                             ramp_start_ms2=start, ramp_end_ms2=end, ramp_duration_s=6.0,
+                             ramp_rms_ms2=0.0))
+    out = []
+    one_call = _ramp_model._replay
+    for replay in (one_call, _ramp_model._replay_per_piece):
+        _ramp_model._replay = replay
+        _ramp_model._stable_orbit.cache_clear()
+        try:
+            _ramp_model.model_threshold(_ramp_model.RampSpec.from_threshold(ths[0]), e=0.6,
+                                        zeta=zeta, **plate)   # warm-up (numba cache load)
+            _ramp_model._stable_orbit.cache_clear()
+            t0 = time.perf_counter()
+            fit = fit_restitution_down(ths, zeta=zeta, e_bounds=(0.2, 0.95), e_step=e_step,
+                                       **plate)
+            out += [time.perf_counter() - t0, fit.e.value]
+        finally:
+            _ramp_model._replay = one_call
+    return out[0], out[1], out[2], out[3]
+
+
 def _fresh(code: list[str], repeat: int) -> float:
     best = math.inf
     for _ in range(repeat):
@@ -120,6 +164,12 @@ def main(argv: list[str] | None = None) -> int:
     rows.append((f"Fig. 4-3 sweep up+down, {values.size} values",
                  f"{t_fast:.3f} s vs {t_ref:.1f} s pure Python = {ratio:.0f}x (labels equal: {same})",
                  ">= 150x", ratio >= 150 and same))
+
+    t_new, e_new, t_old, e_old = _ramp_fit(0.1 if args.quick else 0.05)
+    rows.append(("ramp-model fit of e (2 ramps)",
+                 f"{t_new:.2f} s vs {t_old:.2f} s per-piece calls = {t_old / t_new:.1f}x "
+                 f"(e {e_new:.6f} vs {e_old:.6f})", ">= 5x, same e",
+                 t_old / t_new >= 5.0 and e_new == e_old))
 
     exe = Path(sys.executable).parent / "rattle-lab"
     exe_s = str(exe) if exe.exists() else (shutil.which("rattle-lab") or "rattle-lab")

@@ -7,8 +7,10 @@ saddle-node of the 1/1 orbit (eq. 3.11) with the delay of a slow passage through
 fold.  On the 3-6 s ramps of the thesis campaign both move the disappearance level by
 more than its whole dependence on ``e``.  So this module simulates the protocol itself:
 the measured ramp (frequency, start and end level, duration) at candidate model
-parameters, with the exact event-driven simulator (:func:`rattle_lab.sdf.simulate`,
-carrying the state and forcing phase from one forcing period to the next), and reads
+parameters, with the exact event-driven simulator (:func:`rattle_lab.sdf.simulate_pieces`:
+one compiled call per replay, carrying the state and forcing phase from one forcing
+period to the next; the same motion, bit for bit, as one ``simulate`` call per period,
+5-7x faster over a fit of ``e``: ``benchmarks/speed_goals.py``), and reads
 the threshold off the simulated impacts exactly as :mod:`rattle_lab.thresholds` reads
 it off detected ones: the impact that starts (up) or ends (down) the first/last
 sustained group (:func:`~rattle_lab.thresholds.sustained_impact_time`), censored
@@ -28,6 +30,7 @@ the staircase of a single replay into (nearly) the expected value.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -160,19 +163,31 @@ def _ramp_particular_state(F: float, dF_dtau: float, omega: float, zeta: float, 
     return x, v, abs(F * H)
 
 
+@functools.lru_cache(maxsize=256)
+def _stable_orbit(F: float, omega: float, zeta: float, e: float) -> tuple[float, float] | None:
+    """``(phase, v_im)`` of the stable 1/1 impacting orbit (the "hi" branch when both are
+    listed), None when there is no stable, existing one.  Cached: the replays of one
+    threshold at different forcing phases start at the same level."""
+    params = SDFParams(F=F, omega=omega, zeta=zeta, e=e)
+    stable = [o for o in one_over_n_orbits(params, 1) if o.exists and o.stable]
+    if not stable:
+        return None
+    return float(stable[-1].phase), float(stable[-1].v_im)
+
+
 def _orbit_state(F: float, omega: float, zeta: float, e: float, theta: float) -> SDFState | None:
     """State at forcing phase ``theta`` on the stable 1/1 impacting orbit (thesis 3.1-3.3).
 
     None when there is no stable, existing 1/1 orbit at these parameters.
     """
-    params = SDFParams(F=F, omega=omega, zeta=zeta, e=e)
-    stable = [o for o in one_over_n_orbits(params, 1) if o.exists and o.stable]
-    if not stable:
+    orbit = _stable_orbit(F, omega, zeta, e)
+    if orbit is None:
         return None
-    orbit = stable[-1]                       # the "hi" branch when both are listed
-    at_impact = SDFState(x=1.0, v=-e * orbit.v_im, theta=orbit.phase)
+    phase, v_im = orbit
+    params = SDFParams(F=F, omega=omega, zeta=zeta, e=e)
+    at_impact = SDFState(x=1.0, v=-e * v_im, theta=phase)
     # follow the orbit from its impact to the wanted phase (less than one period)
-    res = simulate(params, duration=((theta - orbit.phase) % TWO_PI) / omega, state=at_impact)
+    res = simulate(params, duration=((theta - phase) % TWO_PI) / omega, state=at_impact)
     return res.state
 
 
@@ -237,43 +252,56 @@ def _replay(ramp: RampSpec, t_w_s: float, phase: float, *, F_per_ms2: float, ome
     n_pieces = max(1, math.ceil((T - t_w_s) * f / hold - 1e-9))
     # quasi-static linear amplitude per unit level (the X of _ramp_particular_state)
     X_per_ms2 = F_per_ms2 / math.hypot(1.0 - omega * omega, 2.0 * zeta * omega)
-    # the piece grid, with the very arithmetic of the per-piece loop
-    ends_s = [T if j == n_pieces - 1 else t_w_s + (j + 1) * hold / f for j in range(n_pieces)]
-    L0, rate = ramp.level_start_ms2, ramp.rate_ms2_s
-    levels = [L0 + rate * (0.5 * (t_w_s + j * hold / f + b)) for j, b in enumerate(ends_s)]
-    F_pieces = np.array([F_per_ms2 * level for level in levels])
-    tau_stop = np.array([omega_s * b for b in ends_s])
+    # the piece grid, with the very arithmetic (elementwise) of the per-piece loop
+    starts_s = t_w_s + np.arange(n_pieces) * hold / f
+    ends_s = t_w_s + np.arange(1, n_pieces + 1) * hold / f
+    ends_s[-1] = T
+    rate = ramp.rate_ms2_s
+    levels = ramp.level_start_ms2 + rate * (0.5 * (starts_s + ends_s))
     up = ramp.direction == "up"
-    quiet_ok = [rate <= 0 and X_per_ms2 * level < _QUIET_AMPLITUDE for level in levels]
+    quiet_ok = (X_per_ms2 * levels < _QUIET_AMPLITUDE) & (rate <= 0)
+    gap_s = max_gap_cycles / f
     # the compiled call stops at a piece where the rule below surely holds (margins far
-    # beyond rounding); the rule itself is then applied here, piece by piece
+    # beyond rounding); the rule itself is then applied to the pieces run
     margin = 1.0 - 1e-9
-    times: list[float] = []
+    times = np.empty(0)
     t_thr = float("nan")
-    j0, stop = 0, False
-    while j0 < n_pieces and not stop:
+    j0 = 0
+    while j0 < n_pieces:
         run = simulate_pieces(
-            F_pieces[j0:], omega=omega, zeta=zeta, e=e, t_stop=tau_stop[j0:], state=state,
-            group_gap=max_gap_cycles / f * omega_s * margin if up else None,
+            F_per_ms2 * levels[j0:], omega=omega, zeta=zeta, e=e, t_stop=omega_s * ends_s[j0:],
+            state=state, group_gap=gap_s * omega_s * margin if up else None,
             group_size=n_confirm + 1, quiet_time=None if up else quiet_s * omega_s / margin,
-            quiet_ok=quiet_ok[j0:], last_impact_t=times[-1] * omega_s if times else math.nan)
-        imp_s = run.impact_t / omega_s
-        off = run.offsets
-        n_run = off.size - 1
-        for k in range(n_run):
-            j = j0 + k
-            if off[k + 1] > off[k]:
-                times.extend(imp_s[off[k]:off[k + 1]].tolist())
-                if up:
+            quiet_ok=quiet_ok[j0:], last_impact_t=times[-1] * omega_s if times.size else math.nan)
+        n_before = times.size
+        times = np.concatenate([times, run.impact_t / omega_s])
+        n_upto = n_before + run.offsets[1:]          # impacts up to and with each piece run
+        n_run = n_upto.size
+        stop_k = n_run
+        if up:
+            # the first piece after which a sustained group is complete
+            close = np.diff(times) <= gap_s
+            if close.size >= n_confirm:
+                full = np.flatnonzero(np.convolve(close, np.ones(n_confirm, dtype=int),
+                                                  "valid") == n_confirm)
+                full = full[full + n_confirm >= n_before]
+                if full.size:
+                    stop_k = int(np.searchsorted(n_upto, full[0] + n_confirm, side="right"))
+                    times = times[:n_upto[stop_k]]
                     t_thr = sustained_impact_time(times, f, "up", n_confirm=n_confirm,
                                                   max_gap_cycles=max_gap_cycles)
-                    if math.isfinite(t_thr):
-                        stop = True
-                        break
-            elif (not up and times and ends_s[j] - times[-1] >= quiet_s and rate <= 0
-                  and X_per_ms2 * levels[j] < _QUIET_AMPLITUDE):
-                stop = True
-                break
+        else:
+            # the first piece without impacts, quiet_s after the last, where it may be quiet
+            counts = np.diff(np.concatenate([[n_before], n_upto]))
+            last_s = times[np.maximum(n_upto - 1, 0)] if times.size else np.full(n_run, np.nan)
+            quiet = ((counts == 0) & (n_upto > 0) & quiet_ok[j0:j0 + n_run]
+                     & (ends_s[j0:j0 + n_run] - last_s >= quiet_s))
+            hits = np.flatnonzero(quiet)
+            if hits.size:
+                stop_k = int(hits[0])
+                times = times[:n_upto[stop_k]]
+        if stop_k < n_run:
+            break
         state = run.state(n_run - 1)
         j0 += n_run
     if ramp.direction == "down":
@@ -285,9 +313,10 @@ def _replay(ramp: RampSpec, t_w_s: float, phase: float, *, F_per_ms2: float, ome
     return t_thr if from_edge * f >= edge_cycles else float("nan")
 
 
-def _replay_per_piece(ramp: RampSpec, t_w_s: float, phase: float, *, F_per_ms2: float, omega_s: float,
-            omega: float, zeta: float, e: float, settle_tau: float, quiet_s: float,
-            hold: int, n_confirm: int, max_gap_cycles: float, edge_cycles: float) -> float:
+def _replay_per_piece(ramp: RampSpec, t_w_s: float, phase: float, *, F_per_ms2: float,
+                      omega_s: float, omega: float, zeta: float, e: float, settle_tau: float,
+                      quiet_s: float, hold: int, n_confirm: int, max_gap_cycles: float,
+                      edge_cycles: float) -> float:
     """:func:`_replay` with one :func:`~rattle_lab.sdf.simulate` call per piece.
 
     The reference the one-call replay is tested against (same threshold, bit for bit).
