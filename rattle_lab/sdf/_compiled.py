@@ -49,6 +49,8 @@ def warm_cache() -> float:
     t0 = time.perf_counter()
     # each kernel has one signature (floats, booleans, ints, arrays): one call compiles it
     jit_kernel.run(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
+    # what simulate() calls (run, its result packed in one buffer)
+    jit_kernel.run_packed(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
     # the ramp replays' piece runner (rattle_lab.sdf.simulate_pieces)
     import numpy as np
 

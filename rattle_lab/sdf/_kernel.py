@@ -1260,3 +1260,65 @@ def run_pieces(F_arr, omega, zeta, e, t0, x0, v0, th0, stuck0, t_stop, group_gap
             off[j + 2:] = n_imp
             return imp[:n_imp], off, ends, info
     return imp[:n_imp], off, ends, info
+
+
+#: Length of the header of :func:`run_packed`'s buffer.
+N_HEAD = 14
+
+
+@jit
+def run_packed(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_segs,
+               max_events):
+    """:func:`run` with everything in one flat buffer (one array to hand back, not six).
+
+    Layout: a header of ``N_HEAD`` values (n_imp, n_acc, n_stk, n_crs, n_seg, n_avg,
+    t, x, v, th, stuck, n_events, status, n_unresolved), then the impact columns
+    t, phase, v_in, v_out (n_imp each), the accumulation times (n_acc), the sticking
+    rows (n_stk x 2, row-major), the crossing columns t, v (n_crs each), the
+    segment rows (n_seg x 5, row-major) and the micro-bounce rows (n_avg x 3).
+    """
+    (imp, n_imp, acc, n_acc, stk, n_stk, crs, n_crs, seg, n_seg,
+     t, x, v, th, stuck, n_events, status, n_unres, avg, n_avg) = run(
+        F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_segs,
+        max_events)
+    size = N_HEAD + 4 * n_imp + n_acc + 2 * n_stk + 2 * n_crs + 5 * n_seg + 3 * n_avg
+    buf = np.empty(size)
+    buf[0] = n_imp
+    buf[1] = n_acc
+    buf[2] = n_stk
+    buf[3] = n_crs
+    buf[4] = n_seg
+    buf[5] = n_avg
+    buf[6] = t
+    buf[7] = x
+    buf[8] = v
+    buf[9] = th
+    buf[10] = 1.0 if stuck else 0.0
+    buf[11] = n_events
+    buf[12] = status
+    buf[13] = n_unres
+    k = N_HEAD
+    for j in range(4):
+        for i in range(n_imp):
+            buf[k] = imp[i, j]
+            k += 1
+    for i in range(n_acc):
+        buf[k] = acc[i, 0]
+        k += 1
+    for i in range(n_stk):
+        for j in range(2):
+            buf[k] = stk[i, j]
+            k += 1
+    for j in range(2):
+        for i in range(n_crs):
+            buf[k] = crs[i, j]
+            k += 1
+    for i in range(n_seg):
+        for j in range(5):
+            buf[k] = seg[i, j]
+            k += 1
+    for i in range(n_avg):
+        for j in range(3):
+            buf[k] = avg[i, j]
+            k += 1
+    return buf

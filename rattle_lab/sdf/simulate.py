@@ -6,6 +6,7 @@ import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Literal
 
 import numpy as np
@@ -146,14 +147,12 @@ def simulate(
     if method == "rk4-thesis":
         return _simulate_rk4(params, state, duration, crossings, t_grid, steps_per_period)
 
-    from ._compiled import jit_kernel, python_kernel
-
-    kernel = jit_kernel if method == "exact" else python_kernel
-    out = kernel.run(params.F, params.omega, params.zeta, params.e, state.t, state.x, state.v,
-                     state.theta, bool(state.stuck), duration, bool(crossings), t_grid is not None,
-                     int(max_events))
-    (imp, n_imp, acc, n_acc, stk, n_stk, crs, n_crs, seg, n_seg,
-     t, x, v, th, stuck, n_events, status, n_unresolved, avg, n_avg) = out
+    kernel = _kernels()[method == "exact"]
+    buf = kernel.run_packed(params.F, params.omega, params.zeta, params.e, state.t, state.x,
+                            state.v, state.theta, bool(state.stuck), duration, bool(crossings),
+                            t_grid is not None, int(max_events))
+    (n_imp, n_acc, n_stk, n_crs, n_seg, n_avg, t, x, v, th, stuck, n_events, status,
+     n_unresolved) = buf[:_N_HEAD].tolist()
     if status != 0:
         raise SimulationError(
             f"event budget of {max_events} events exhausted at t = {t:.17g} "
@@ -165,33 +164,62 @@ def simulate(
             f"(F={params.F}, omega={params.omega}, zeta={params.zeta}, e={params.e}); "
             "impacts in them are located only to the resolution reached",
             NumericalWarning, stacklevel=2)
-    imp = np.asarray(imp)[:n_imp]
-    impacts = ImpactLog(t=imp[:, 0], phase=imp[:, 1], v_in=imp[:, 2], v_out=imp[:, 3])
+    n_imp, n_acc, n_stk, n_crs, n_seg, n_avg = (int(n) for n in (n_imp, n_acc, n_stk, n_crs,
+                                                                 n_seg, n_avg))
+    k = _N_HEAD
+    if n_imp:
+        cols = buf[k:k + 4 * n_imp].reshape(4, n_imp)
+        impacts = ImpactLog(t=cols[0], phase=cols[1], v_in=cols[2], v_out=cols[3])
+        k += 4 * n_imp
+    else:
+        impacts = _NO_IMPACTS
+    acc = buf[k:k + n_acc]
+    k += n_acc
+    stk = buf[k:k + 2 * n_stk].reshape(n_stk, 2)
+    k += 2 * n_stk
     cross = None
     if crossings:
-        c = np.asarray(crs)[:n_crs]
-        cross = Crossings(t=c[:, 0], v=c[:, 1])
+        c = buf[k:k + 2 * n_crs].reshape(2, n_crs)
+        cross = Crossings(t=c[0], v=c[1])
+    k += 2 * n_crs
     dense = None
     if t_grid is not None:
-        segments = np.asarray(seg)[:n_seg]
+        segments = buf[k:k + 5 * n_seg].reshape(n_seg, 5)
         if n_seg == 0:  # zero duration: the initial state is the only segment
             xp0, vp0 = particular_state(params.F, params.omega, params.zeta, state.theta)
             segments = np.array([[state.t, state.theta, state.x - float(xp0),
                                   state.v - float(vp0), 1.0 if state.stuck else 0.0]])
         dense = dense_from_segments(params, segments, t_grid, fields)
-    end = SDFState(t=float(t), x=float(x), v=float(v), theta=float(th), stuck=bool(stuck))
+    k += 5 * n_seg
+    avg = buf[k:k + 3 * n_avg].reshape(n_avg, 3)
+    end = SDFState._from_kernel(t, x, v, th, stuck != 0.0)
     return SimResult(
         params=params,
         method=method,
         impacts=impacts,
-        accumulations=np.array(np.asarray(acc)[:n_acc, 0]),
-        sticking=np.array(np.asarray(stk)[:n_stk]),
+        accumulations=acc,
+        sticking=stk,
         crossings=cross,
         dense=dense,
         state=end,
         n_events=int(n_events),
-        micro_bounce=np.array(np.asarray(avg)[:n_avg]),
+        micro_bounce=avg,
     )
+
+
+_N_HEAD = 14   # rattle_lab.sdf._kernel.N_HEAD (asserted in the tests)
+_NO_IMPACTS = ImpactLog(t=np.empty(0), phase=np.empty(0), v_in=np.empty(0), v_out=np.empty(0))
+_KERNELS: tuple[ModuleType, ModuleType] | None = None
+
+
+def _kernels() -> tuple[ModuleType, ModuleType]:
+    """(pure-Python kernel, compiled kernel), imported on first use."""
+    global _KERNELS
+    if _KERNELS is None:
+        from ._compiled import jit_kernel, python_kernel
+
+        _KERNELS = (python_kernel, jit_kernel)
+    return _KERNELS
 
 
 @dataclass(frozen=True)
