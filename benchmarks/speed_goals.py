@@ -25,7 +25,11 @@ Goals (issue 13):
    6 s downward ramps at 98 and 100 Hz (thresholds from the synthetic rig's
    simulation at e = 0.6), against the same fit with one ``simulate()`` call per
    forcing period of each replay (the previous code path, kept as
-   ``_ramp_model._replay_per_piece``); the fitted e must be equal.  Goal >= 5x.
+   ``_ramp_model._replay_per_piece``, which profits from today's cheaper
+   ``simulate()``); the fitted e must be equal.  Goal >= 5x.  With
+   ``--baseline-src DIR`` (a source tree of the earlier version, e.g.
+   ``git archive main | tar -x -C DIR``) the same fit is also timed with that
+   code in a child process.
 5. ``cold first run``: a fresh process that imports ``rattle_lab.sdf`` and
    runs one ``simulate()`` (numba's on-disk cache already written, as after
    the first use following an install) <= 5 s.
@@ -35,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import shutil
 import subprocess
 import sys
@@ -46,7 +51,12 @@ from typing import Any
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:  # run from a checkout without installing
+#: Source tree of an earlier version whose ramp fit is timed (``--baseline-src``), set for
+#: the child process that times it.
+_BASELINE = os.environ.get("RATTLE_LAB_BASELINE_SRC")
+if _BASELINE:
+    sys.path.insert(0, _BASELINE)
+elif str(ROOT) not in sys.path:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
 from rattle_lab.analysis import one_over_n_orbits
@@ -83,10 +93,8 @@ def _reference_sweep(values: np.ndarray, method: str) -> list[str]:
     return labels
 
 
-def _ramp_fit(e_step: float) -> tuple[float, float, float, float]:
-    """Seconds and fitted e of the ramp-model fit of e, one-call replays vs per-piece calls."""
-    from rattle_lab.fit import fit_restitution_down
-    from rattle_lab.fit import _ramp_model
+def _ramp_thresholds() -> tuple[list[Any], dict[str, float], float]:
+    """The two measured-like thresholds of the ramp-fit goal, the plate and its zeta."""
     from rattle_lab.rig._motion import Modal, simulate_run
     from rattle_lab.rig._scene import RunSpec
     from rattle_lab.thresholds import Threshold, sustained_impact_time
@@ -104,6 +112,24 @@ def _ramp_fit(e_step: float) -> tuple[float, float, float, float]:
         ths.append(Threshold(run.run_id, freq, "down", start + (end - start) * t / 6.0, t,
                              ramp_start_ms2=start, ramp_end_ms2=end, ramp_duration_s=6.0,
                              ramp_rms_ms2=0.0))
+    return ths, plate, zeta
+
+
+def _time_fit(e_step: float, repeat: int) -> tuple[float, float]:
+    """Best seconds and fitted e of the ramp-model fit of e with the code imported."""
+    from rattle_lab.fit import RampSpec, fit_restitution_down, model_threshold
+
+    ths, plate, zeta = _ramp_thresholds()
+    model_threshold(RampSpec.from_threshold(ths[0]), e=0.6, zeta=zeta, **plate)  # warm-up
+    return _best(lambda: fit_restitution_down(ths, zeta=zeta, e_bounds=(0.2, 0.95),
+                                              e_step=e_step, **plate).e.value, repeat)
+
+
+def _ramp_fit(e_step: float) -> tuple[float, float, float, float]:
+    """Seconds and fitted e of the ramp-model fit of e, one-call replays vs per-piece calls."""
+    from rattle_lab.fit import _ramp_model, fit_restitution_down
+
+    ths, plate, zeta = _ramp_thresholds()
     out = []
     one_call = _ramp_model._replay
     for replay in (one_call, _ramp_model._replay_per_piece):
@@ -134,8 +160,17 @@ def _fresh(code: list[str], repeat: int) -> float:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer values and repeats")
+    ap.add_argument("--baseline-src", type=Path, default=None,
+                    help="source tree of an earlier version (e.g. `git archive main`): also "
+                         "time its ramp fit of e, in a child process")
+    ap.add_argument("--fit-only", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     repeat = 2 if args.quick else 5
+    e_step = 0.1 if args.quick else 0.05
+    if args.fit_only:   # the child process of --baseline-src
+        t_fit, e_fit = _time_fit(e_step, 2)
+        print(f"{t_fit!r} {e_fit!r}")
+        return 0
     rows: list[tuple[str, str, str, bool]] = []
 
     p = SDFParams(F=0.2, omega=1.1, zeta=0.05, e=0.6)
@@ -165,11 +200,22 @@ def main(argv: list[str] | None = None) -> int:
                  f"{t_fast:.3f} s vs {t_ref:.1f} s pure Python = {ratio:.0f}x (labels equal: {same})",
                  ">= 150x", ratio >= 150 and same))
 
-    t_new, e_new, t_old, e_old = _ramp_fit(0.1 if args.quick else 0.05)
+    t_new, e_new, t_old, e_old = _ramp_fit(e_step)
     rows.append(("ramp-model fit of e (2 ramps)",
                  f"{t_new:.2f} s vs {t_old:.2f} s per-piece calls = {t_old / t_new:.1f}x "
-                 f"(e {e_new:.6f} vs {e_old:.6f})", ">= 5x, same e",
+                 f"(e {e_new!r} vs {e_old!r})", ">= 5x, same e",
                  t_old / t_new >= 5.0 and e_new == e_old))
+    if args.baseline_src is not None:
+        env = dict(os.environ, RATTLE_LAB_BASELINE_SRC=str(args.baseline_src.resolve()))
+        child = subprocess.run([sys.executable, __file__, "--fit-only"]
+                               + (["--quick"] if args.quick else []),
+                               env=env, check=True, capture_output=True, text=True)
+        t_base, e_base = (float(x) for x in child.stdout.split()[-2:])
+        t_now, e_now = _time_fit(e_step, 2)
+        rows.append((f"ramp-model fit of e vs {args.baseline_src.name}",
+                     f"{t_now:.2f} s vs {t_base:.2f} s = {t_base / t_now:.1f}x "
+                     f"(e {e_now!r} vs {e_base!r})", ">= 5x, same e",
+                     t_base / t_now >= 5.0 and e_now == e_base))
 
     exe = Path(sys.executable).parent / "rattle-lab"
     exe_s = str(exe) if exe.exists() else (shutil.which("rattle-lab") or "rattle-lab")

@@ -265,3 +265,17 @@ class SimResult:
     state: SDFState
     n_events: int = field(default=0)
     micro_bounce: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
+
+    @classmethod
+    def _from_kernel(cls, params: SDFParams, method: str, impacts: ImpactLog,
+                     accumulations: np.ndarray, sticking: np.ndarray,
+                     crossings: Crossings | None, dense: DenseSamples | None, state: SDFState,
+                     n_events: int, micro_bounce: np.ndarray) -> SimResult:
+        """The result of a simulator kernel, built without the frozen dataclass's per-field
+        ``__setattr__`` (it has no ``__post_init__``; the same object otherwise)."""
+        obj = object.__new__(cls)
+        obj.__dict__.update(params=params, method=method, impacts=impacts,
+                            accumulations=accumulations, sticking=sticking,
+                            crossings=crossings, dense=dense, state=state,
+                            n_events=n_events, micro_bounce=micro_bounce)
+        return obj

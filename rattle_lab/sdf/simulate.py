@@ -151,11 +151,11 @@ def simulate(
     buf = kernel.run_packed(params.F, params.omega, params.zeta, params.e, state.t, state.x,
                             state.v, state.theta, bool(state.stuck), duration, bool(crossings),
                             t_grid is not None, int(max_events))
-    (n_imp, n_acc, n_stk, n_crs, n_seg, n_avg, t, x, v, th, stuck, n_events, status,
-     n_unresolved) = buf[:_N_HEAD].tolist()
+    head = buf[:_N_HEAD].tolist()
+    status, n_unresolved = head[12], head[13]
     if status != 0:
         raise SimulationError(
-            f"event budget of {max_events} events exhausted at t = {t:.17g} "
+            f"event budget of {max_events} events exhausted at t = {head[6]:.17g} "
             f"(F={params.F}, omega={params.omega}, zeta={params.zeta}, e={params.e}); "
             "raise `max_events` or shorten the run")
     if n_unresolved:
@@ -164,8 +164,7 @@ def simulate(
             f"(F={params.F}, omega={params.omega}, zeta={params.zeta}, e={params.e}); "
             "impacts in them are located only to the resolution reached",
             NumericalWarning, stacklevel=2)
-    n_imp, n_acc, n_stk, n_crs, n_seg, n_avg = (int(n) for n in (n_imp, n_acc, n_stk, n_crs,
-                                                                 n_seg, n_avg))
+    n_imp, n_acc, n_stk, n_crs, n_seg, n_avg = map(int, head[:6])
     k = _N_HEAD
     if n_imp:
         cols = buf[k:k + 4 * n_imp].reshape(4, n_imp)
@@ -173,9 +172,9 @@ def simulate(
         k += 4 * n_imp
     else:
         impacts = _NO_IMPACTS
-    acc = buf[k:k + n_acc]
+    acc = buf[k:k + n_acc] if n_acc else np.empty(0)
     k += n_acc
-    stk = buf[k:k + 2 * n_stk].reshape(n_stk, 2)
+    stk = buf[k:k + 2 * n_stk].reshape(n_stk, 2) if n_stk else np.empty((0, 2))
     k += 2 * n_stk
     cross = None
     if crossings:
@@ -191,20 +190,10 @@ def simulate(
                                   state.v - float(vp0), 1.0 if state.stuck else 0.0]])
         dense = dense_from_segments(params, segments, t_grid, fields)
     k += 5 * n_seg
-    avg = buf[k:k + 3 * n_avg].reshape(n_avg, 3)
-    end = SDFState._from_kernel(t, x, v, th, stuck != 0.0)
-    return SimResult(
-        params=params,
-        method=method,
-        impacts=impacts,
-        accumulations=acc,
-        sticking=stk,
-        crossings=cross,
-        dense=dense,
-        state=end,
-        n_events=int(n_events),
-        micro_bounce=avg,
-    )
+    avg = buf[k:k + 3 * n_avg].reshape(n_avg, 3) if n_avg else np.empty((0, 3))
+    end = SDFState._from_kernel(head[6], head[7], head[8], head[9], head[10] != 0.0)
+    return SimResult._from_kernel(params, method, impacts, acc, stk, cross, dense, end,
+                                  int(head[11]), avg)
 
 
 _N_HEAD = 14   # rattle_lab.sdf._kernel.N_HEAD (asserted in the tests)
