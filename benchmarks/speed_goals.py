@@ -29,7 +29,8 @@ Goals (issue 13):
    ``simulate()``); the fitted e must be equal.  Goal >= 5x.  With
    ``--baseline-src DIR`` (a source tree of the earlier version, e.g.
    ``git archive main | tar -x -C DIR``) the same fit is also timed with that
-   code in a child process.
+   code in a child process (same e to 1e-9: an earlier kernel may place impacts
+   differently in the last bits).
 5. ``cold first run``: a fresh process that imports ``rattle_lab.sdf`` and
    runs one ``simulate()`` (numba's on-disk cache already written, as after
    the first use following an install) <= 5 s.
@@ -212,10 +213,13 @@ def main(argv: list[str] | None = None) -> int:
                                env=env, check=True, capture_output=True, text=True)
         t_base, e_base = (float(x) for x in child.stdout.split()[-2:])
         t_now, e_now = _time_fit(e_step, 2)
+        # the kernel's impact times may differ from an earlier version's in the last
+        # bits (e.g. another search chunking): "same e" is then to 1e-9, far below the
+        # fit's standard error (~0.01)
         rows.append((f"ramp-model fit of e vs {args.baseline_src.name}",
                      f"{t_now:.2f} s vs {t_base:.2f} s = {t_base / t_now:.1f}x "
-                     f"(e {e_now!r} vs {e_base!r})", ">= 5x, same e",
-                     t_base / t_now >= 5.0 and e_now == e_base))
+                     f"(e {e_now!r} vs {e_base!r})", ">= 5x, same e to 1e-9",
+                     t_base / t_now >= 5.0 and abs(e_now - e_base) <= 1e-9))
 
     exe = Path(sys.executable).parent / "rattle-lab"
     exe_s = str(exe) if exe.exists() else (shutil.which("rattle-lab") or "rattle-lab")
