@@ -7,7 +7,7 @@ saddle-node of the 1/1 orbit (eq. 3.11) with the delay of a slow passage through
 fold.  On the 3-6 s ramps of the thesis campaign both move the disappearance level by
 more than its whole dependence on ``e``.  So this module simulates the protocol itself:
 the measured ramp (frequency, start and end level, duration) at candidate model
-parameters, with the exact event-driven simulator (:func:`rattle_lab.sdf.simulate_pieces`:
+parameters, with the exact event-driven simulator (:func:`rattle_lab.sdf.simulate.simulate_pieces`:
 one compiled call per replay, carrying the state and forcing phase from one forcing
 period to the next; the same motion, bit for bit, as one ``simulate`` call per period,
 5-7x faster over a fit of ``e``: ``benchmarks/speed_goals.py``), and reads
@@ -39,7 +39,8 @@ import numpy as np
 
 from ..analysis import one_over_n_orbits
 from ..exceptions import ParameterError
-from ..sdf import SDFParams, SDFState, simulate, simulate_pieces
+from ..sdf import SDFParams, SDFState, simulate
+from ..sdf.simulate import simulate_pieces
 from ..thresholds import Threshold, sustained_impact_time
 from ._common import check_positive
 
@@ -238,7 +239,7 @@ def _replay(ramp: RampSpec, t_w_s: float, phase: float, *, F_per_ms2: float, ome
     has decayed by ``exp(-quiet_s zeta omega_s)`` and the level only falls, so the motion
     cannot reach the stop again.
 
-    All pieces run in one compiled call (:func:`~rattle_lab.sdf.simulate_pieces`), which
+    All pieces run in one compiled call (:func:`~rattle_lab.sdf.simulate.simulate_pieces`), which
     stops where the stopping rule surely holds; the rule is then applied piece by piece
     to the impacts: the same threshold, bit for bit, as one ``simulate`` call per piece
     (:func:`_replay_per_piece`, tested), without its fixed cost per call.

@@ -5,7 +5,7 @@ See :func:`simulate` and :mod:`rattle_lab.sdf._kernel` for the algorithm.
 
 from ._flow import flow, homogeneous_transition, particular_coeffs, particular_state
 from ._types import Crossings, DenseSamples, ImpactLog, SDFParams, SDFState, SimResult
-from .simulate import PieceRun, simulate, simulate_pieces
+from .simulate import simulate
 
 __all__ = [
     "SDFParams",
@@ -15,8 +15,6 @@ __all__ = [
     "DenseSamples",
     "SimResult",
     "simulate",
-    "simulate_pieces",
-    "PieceRun",
     "flow",
     "particular_coeffs",
     "particular_state",

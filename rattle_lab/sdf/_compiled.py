@@ -51,7 +51,7 @@ def warm_cache() -> float:
     jit_kernel.run(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
     # what simulate() calls (run, its result packed in one buffer)
     jit_kernel.run_packed(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
-    # the ramp replays' piece runner (rattle_lab.sdf.simulate_pieces)
+    # the ramp replays' piece runner (rattle_lab.sdf.simulate.simulate_pieces)
     import numpy as np
 
     jit_kernel.run_pieces(np.array([0.2]), 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False,
