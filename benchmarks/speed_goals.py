@@ -21,6 +21,16 @@ Goals (issue 13):
    Both without Lyapunov exponents and without running unsettled matches
    longer (``settle_cycles=0``); the labels of the two must agree.  Goal >= 150x.
 4. ``--version``: ``rattle-lab --version`` in a fresh process <= 0.3 s.
+6. ``ramp fit``: ``fit_restitution_down(method="ramp")`` on the thesis scene's
+   6 s downward ramps at 98 and 100 Hz (thresholds from the synthetic rig's
+   simulation at e = 0.6), against the same fit with one ``simulate()`` call per
+   forcing period of each replay (the previous code path, kept as
+   ``_ramp_model._replay_per_piece``, which profits from today's cheaper
+   ``simulate()``); the fitted e must be equal.  Goal >= 5x.  With
+   ``--baseline-src DIR`` (a source tree of the earlier version, e.g.
+   ``git archive main | tar -x -C DIR``) the same fit is also timed with that
+   code in a child process (same e to 1e-9: an earlier kernel may place impacts
+   differently in the last bits).
 5. ``cold first run``: a fresh process that imports ``rattle_lab.sdf`` and
    runs one ``simulate()`` (numba's on-disk cache already written, as after
    the first use following an install) <= 5 s.
@@ -30,6 +40,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import shutil
 import subprocess
 import sys
@@ -41,7 +52,12 @@ from typing import Any
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:  # run from a checkout without installing
+#: Source tree of an earlier version whose ramp fit is timed (``--baseline-src``), set for
+#: the child process that times it.
+_BASELINE = os.environ.get("RATTLE_LAB_BASELINE_SRC")
+if _BASELINE:
+    sys.path.insert(0, _BASELINE)
+elif str(ROOT) not in sys.path:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
 from rattle_lab.analysis import one_over_n_orbits
@@ -78,6 +94,61 @@ def _reference_sweep(values: np.ndarray, method: str) -> list[str]:
     return labels
 
 
+def _ramp_thresholds() -> tuple[list[Any], dict[str, float], float]:
+    """The two measured-like thresholds of the ramp-fit goal, the plate and its zeta."""
+    from rattle_lab.rig._motion import Modal, simulate_run
+    from rattle_lab.rig._scene import RunSpec
+    from rattle_lab.thresholds import Threshold, sustained_impact_time
+
+    plate = dict(gap_m=1.3e-3, f_s_hz=96.0, participation=1.2442)
+    zeta = 0.0085
+    modal = Modal(f_s_hz=96.0, zeta=zeta, participation=1.2442, gap_m=1.3e-3, e=0.6)
+    ths = []
+    for freq, start, end in ((98.0, 26.0, 2.0), (100.0, 50.0, 3.0)):
+        run = RunSpec(f"down_{freq:g}", "amplitude_ramp_down", freq, start, 6.0,
+                      level_end_m_s2=end)
+        motion = simulate_run(modal, run, piece_periods=1, settle_time_constants=8.0,
+                              sample_rate_hz=None)
+        t = sustained_impact_time(motion.impact_t_s, freq, "down")
+        ths.append(Threshold(run.run_id, freq, "down", start + (end - start) * t / 6.0, t,
+                             ramp_start_ms2=start, ramp_end_ms2=end, ramp_duration_s=6.0,
+                             ramp_rms_ms2=0.0))
+    return ths, plate, zeta
+
+
+def _time_fit(e_step: float, repeat: int) -> tuple[float, float]:
+    """Best seconds and fitted e of the ramp-model fit of e with the code imported."""
+    from rattle_lab.fit import RampSpec, fit_restitution_down, model_threshold
+
+    ths, plate, zeta = _ramp_thresholds()
+    model_threshold(RampSpec.from_threshold(ths[0]), e=0.6, zeta=zeta, **plate)  # warm-up
+    return _best(lambda: fit_restitution_down(ths, zeta=zeta, e_bounds=(0.2, 0.95),
+                                              e_step=e_step, **plate).e.value, repeat)
+
+
+def _ramp_fit(e_step: float) -> tuple[float, float, float, float]:
+    """Seconds and fitted e of the ramp-model fit of e, one-call replays vs per-piece calls."""
+    from rattle_lab.fit import _ramp_model, fit_restitution_down
+
+    ths, plate, zeta = _ramp_thresholds()
+    out = []
+    one_call = _ramp_model._replay
+    for replay in (one_call, _ramp_model._replay_per_piece):
+        _ramp_model._replay = replay
+        _ramp_model._stable_orbit.cache_clear()
+        try:
+            _ramp_model.model_threshold(_ramp_model.RampSpec.from_threshold(ths[0]), e=0.6,
+                                        zeta=zeta, **plate)   # warm-up (numba cache load)
+            _ramp_model._stable_orbit.cache_clear()
+            t0 = time.perf_counter()
+            fit = fit_restitution_down(ths, zeta=zeta, e_bounds=(0.2, 0.95), e_step=e_step,
+                                       **plate)
+            out += [time.perf_counter() - t0, fit.e.value]
+        finally:
+            _ramp_model._replay = one_call
+    return out[0], out[1], out[2], out[3]
+
+
 def _fresh(code: list[str], repeat: int) -> float:
     best = math.inf
     for _ in range(repeat):
@@ -90,8 +161,17 @@ def _fresh(code: list[str], repeat: int) -> float:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer values and repeats")
+    ap.add_argument("--baseline-src", type=Path, default=None,
+                    help="source tree of an earlier version (e.g. `git archive main`): also "
+                         "time its ramp fit of e, in a child process")
+    ap.add_argument("--fit-only", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     repeat = 2 if args.quick else 5
+    e_step = 0.1 if args.quick else 0.05
+    if args.fit_only:   # the child process of --baseline-src
+        t_fit, e_fit = _time_fit(e_step, 2)
+        print(f"{t_fit!r} {e_fit!r}")
+        return 0
     rows: list[tuple[str, str, str, bool]] = []
 
     p = SDFParams(F=0.2, omega=1.1, zeta=0.05, e=0.6)
@@ -120,6 +200,26 @@ def main(argv: list[str] | None = None) -> int:
     rows.append((f"Fig. 4-3 sweep up+down, {values.size} values",
                  f"{t_fast:.3f} s vs {t_ref:.1f} s pure Python = {ratio:.0f}x (labels equal: {same})",
                  ">= 150x", ratio >= 150 and same))
+
+    t_new, e_new, t_old, e_old = _ramp_fit(e_step)
+    rows.append(("ramp-model fit of e (2 ramps)",
+                 f"{t_new:.2f} s vs {t_old:.2f} s per-piece calls = {t_old / t_new:.1f}x "
+                 f"(e {e_new!r} vs {e_old!r})", ">= 5x, same e",
+                 t_old / t_new >= 5.0 and e_new == e_old))
+    if args.baseline_src is not None:
+        env = dict(os.environ, RATTLE_LAB_BASELINE_SRC=str(args.baseline_src.resolve()))
+        child = subprocess.run([sys.executable, __file__, "--fit-only"]
+                               + (["--quick"] if args.quick else []),
+                               env=env, check=True, capture_output=True, text=True)
+        t_base, e_base = (float(x) for x in child.stdout.split()[-2:])
+        t_now, e_now = _time_fit(e_step, 2)
+        # the kernel's impact times may differ from an earlier version's in the last
+        # bits (e.g. another search chunking): "same e" is then to 1e-9, far below the
+        # fit's standard error (~0.01)
+        rows.append((f"ramp-model fit of e vs {args.baseline_src.name}",
+                     f"{t_now:.2f} s vs {t_base:.2f} s = {t_base / t_now:.1f}x "
+                     f"(e {e_now!r} vs {e_base!r})", ">= 5x, same e to 1e-9",
+                     t_base / t_now >= 5.0 and abs(e_now - e_base) <= 1e-9))
 
     exe = Path(sys.executable).parent / "rattle-lab"
     exe_s = str(exe) if exe.exists() else (shutil.which("rattle-lab") or "rattle-lab")

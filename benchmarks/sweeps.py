@@ -9,9 +9,15 @@ Run ``python benchmarks/sweeps.py [--quick]``.  Times (wall clock, best of
    side run each) and without it;
 2. the 1/n bifurcation sets n = 1..5 of Fig. 3-10 (default grid);
 3. a regime map over (F, omega) in [0.02, 0.6] x [0.6, 1.5], 150 periods per
-   point (200 x 200 points; 60 x 60 with ``--quick``), serially and on a local
-   Dask cluster of 2 worker processes (cluster start-up included); the two
-   results are checked to be identical.
+   point (200 x 200 points; 60 x 60 with ``--quick``), serially, on a local pool
+   of 2 forked worker processes (``workers=2``, pool start-up included) and on a
+   Dask ``LocalCluster`` of 2 worker processes through its scheduler address
+   (cluster start-up timed apart); all results are checked to be identical, and
+   the break-even serial time of each parallel path is printed: with overhead
+   ``o = t_parallel - t_serial / w``, parallel pays for serial work longer than
+   ``o w / (w - 1)``.  The bifurcation sets are also run with ``workers=2``.
+   Parallel speed-ups mean something only on an otherwise idle machine with at
+   least 2 free cores; the benchmark prints the load average next to them.
 
 Target: the up+down sweep (with Lyapunov exponents) in well under one second
 on one core, i.e. < 1 s; printed as PASS/FAIL.  Numbers also go to
@@ -75,19 +81,40 @@ def main(argv: list[str] | None = None) -> int:
     t_plain, _ = _best(lambda: sweep_up_down("omega", grid, base=base, lyapunov="none"), repeat)
     rows.append(("Fig. 4-3 sweep up+down, no Lyapunov", "2 x 451 values x 100 periods", t_plain))
 
-    t_bif, _ = _best(lambda: bifurcation_sets([1, 2, 3, 4, 5]), repeat)
+    t_bif, bif = _best(lambda: bifurcation_sets([1, 2, 3, 4, 5]), repeat)
     rows.append(("1/n bifurcation sets n = 1..5", "241 x 121 grid, curves traced", t_bif))
+    t_bif2, bif2 = _best(lambda: bifurcation_sets([1, 2, 3, 4, 5], workers=2), repeat)
+    rows.append(("1/n bifurcation sets, workers=2", "same, pool start-up included", t_bif2))
+    bif_same = (np.array_equal(bif.exists, bif2.exists) and np.array_equal(bif.stable, bif2.stable)
+                and all(np.array_equal(a.F, b.F) and np.array_equal(a.omega, b.omega)
+                        for a, b in zip(bif.curves, bif2.curves)))
 
     F = np.linspace(0.02, 0.6, n_map)
     omega = np.linspace(0.6, 1.5, n_map)
     regime_map(F[:2], omega[:2])  # warm-up
     t_serial, serial = _best(lambda: regime_map(F, omega), 1)
     rows.append(("regime map, serial", f"{n_map} x {n_map} points x 150 periods", t_serial))
-    t_dask, dask_map = _best(lambda: regime_map(F, omega, workers=2), 1)
-    rows.append(("regime map, Dask LocalCluster 2 workers", "same, start-up included", t_dask))
-    same = all(np.array_equal(getattr(serial, k), getattr(dask_map, k), equal_nan=k in (
-        "mean_impact_velocity", "max_impact_velocity", "lyapunov"))
-        for k in ("code", "m", "n", "mean_impact_velocity", "max_impact_velocity", "lyapunov"))
+    t_pool, pool_map = _best(lambda: regime_map(F, omega, workers=2), 1)
+    rows.append(("regime map, local pool 2 workers", "same, pool start-up included", t_pool))
+    import logging
+
+    from dask.distributed import LocalCluster
+
+    t0 = time.perf_counter()
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                      silence_logs=logging.ERROR) as cluster:
+        t_start = time.perf_counter() - t0
+        t_dask, dask_map = _best(lambda: regime_map(F, omega,
+                                                    scheduler=cluster.scheduler_address), 1)
+    rows.append(("Dask LocalCluster start, 2 workers", "", t_start))
+    rows.append(("regime map, Dask scheduler 2 workers", "same, cluster already running", t_dask))
+
+    def _same(a: Any, b: Any) -> bool:
+        return all(np.array_equal(getattr(a, k), getattr(b, k), equal_nan=k in (
+            "mean_impact_velocity", "max_impact_velocity", "lyapunov"))
+            for k in ("code", "m", "n", "mean_impact_velocity", "max_impact_velocity", "lyapunov"))
+
+    same = _same(serial, pool_map) and _same(serial, dask_map) and bif_same
 
     print("Sweep and study benchmark (rattle_lab.analysis), nondimensional units.")
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; "
@@ -100,8 +127,20 @@ def main(argv: list[str] | None = None) -> int:
     for name, size, t in rows:
         print(f"{name:<46} {size:<44} {t:>9.3f}")
     print()
-    print(f"regime map: {n_map * n_map / t_serial:,.0f} points/s serial, "
-          f"speed-up with 2 workers {t_serial / t_dask:.2f}x; results identical: {same}")
+    w = 2
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"regime map: {n_map * n_map / t_serial:,.0f} points/s serial; results of every "
+          f"parallel run identical to serial: {same}")
+    print(f"load average {load:.1f} on {os.cpu_count()} cores: the speed-ups below are "
+          f"meaningful only on an idle machine (goal >= 1.8x on 2 cores)")
+    for name, t_par in (("local pool, 2 workers", t_pool),
+                        ("Dask scheduler, 2 workers", t_dask),
+                        ("Dask incl. cluster start", t_dask + t_start),
+                        ("bifurcation sets, pool 2 workers", t_bif2)):
+        t_ser = t_bif if name.startswith("bifurcation") else t_serial
+        over = max(t_par - t_ser / w, 0.0)
+        print(f"  {name:<34} {t_ser / t_par:5.2f}x over serial; overhead {over:6.2f} s, "
+              f"break-even at {over * w / (w - 1):6.2f} s of serial work")
     ok = t_sweep < SWEEP_TARGET_S
     print(f"{'PASS' if ok else 'FAIL'}: Fig. 4-3 up+down sweep {t_sweep:.3f} s < "
           f"{SWEEP_TARGET_S:g} s on one core")

@@ -178,3 +178,16 @@ def test_bifsets_doctests() -> None:
 
     result = doctest.testmod(bifsets)
     assert result.failed == 0 and result.attempted > 0
+
+
+def test_workers_give_the_serial_sets(sets: BifurcationSets) -> None:
+    """The orbit types on 2 local worker processes: regions and curves equal bit for bit."""
+    pooled = bifurcation_sets([1, 2, 3], omega_range=(0.6, 1.5), F_range=(0.0, 0.6),
+                              zeta=ZETA, e=E, n_omega=91, n_F=61, n_v=41, workers=2)
+    np.testing.assert_array_equal(pooled.exists, sets.exists)
+    np.testing.assert_array_equal(pooled.stable, sets.stable)
+    assert len(pooled.curves) == len(sets.curves) > 3
+    for a, b in zip(pooled.curves, sets.curves):
+        assert (a.n, a.kind) == (b.n, b.kind)
+        for name in ("omega", "F", "v_im"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))

@@ -9,6 +9,8 @@ from numba's on-disk cache.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -47,12 +49,27 @@ def test_regime_map_through_scheduler_equals_serial(cluster) -> None:  # type: i
 
 
 def test_local_workers_equal_serial() -> None:
-    # workers > 1: the package starts (and stops) its own LocalCluster
+    # workers > 1: the package starts (and stops) its own pool of forked worker processes
     kw = dict(kick_tol=0.05, cycles=120, check_cycles=10, chunk_size=2)
     serial = disturbance_map([0.12, 0.2], [1.1, 1.2], **kw)  # type: ignore[arg-type]
     local = disturbance_map([0.12, 0.2], [1.1, 1.2], workers=2, **kw)  # type: ignore[arg-type]
     np.testing.assert_array_equal(serial.threshold, local.threshold)
     assert np.isfinite(serial.threshold).any()
+
+
+def test_regime_map_on_a_local_pool_equals_serial() -> None:
+    """Chunks spread over 2 forked worker processes, results reassembled in order."""
+    serial = regime_map(F, OMEGA, cycles=100, discard=70, chunk_size=3)
+    pooled = regime_map(F, OMEGA, cycles=100, discard=70, chunk_size=3, workers=2)
+    _assert_same_map(serial, pooled)
+    assert (serial.code == 2).any() and (serial.code == 1).any()
+
+
+def test_pool_keeps_order_and_raises_the_workers_error() -> None:
+    rows = np.arange(10.0).reshape(5, 2)
+    assert run_chunks(np.sum, chunk_rows(rows, 1), workers=2) == [1.0, 5.0, 9.0, 13.0, 17.0]
+    with pytest.raises(ValueError, match="math domain error"):
+        run_chunks(math.sqrt, [4.0, -1.0, 9.0], workers=2)
 
 
 def test_run_chunks_keeps_order_and_validates() -> None:

@@ -317,3 +317,40 @@ def test_invalid_state_and_arguments():
 def test_event_budget_raises_simulation_error():
     with pytest.raises(SimulationError, match=r"event budget of 5 events exhausted at t = "):
         simulate(SDFParams(0.2, 1.0, 0.05, 0.6), cycles=100, max_events=5)
+
+
+def test_packed_result_unpacks_to_the_kernels_arrays():
+    """simulate() reads the kernel's one-buffer result (``run_packed``): the same impacts,
+    crossings, sticking, accumulations, dense motion and end state as ``run``'s six arrays,
+    exactly (same kernel); a run with chatter, sticking and crossings."""
+    from rattle_lab.sdf import _kernel
+    import importlib
+
+    simulate_module = importlib.import_module("rattle_lab.sdf.simulate")
+    from rattle_lab.sdf._compiled import jit_kernel
+
+    assert simulate_module._N_HEAD == _kernel.N_HEAD
+    p = SDFParams(F=2.0, omega=0.3, zeta=0.05, e=0.5)
+    start = SDFState(t=0.25, x=0.1, v=0.2, theta=1.0)
+    res = simulate(p, state=start, cycles=6, crossings=True, dense_t=np.linspace(0.25, 100, 50))
+    (imp, n_imp, acc, n_acc, stk, n_stk, crs, n_crs, seg, n_seg, t, x, v, th, stuck, n_ev,
+     status, n_unres, avg, n_avg) = jit_kernel.run(p.F, p.omega, p.zeta, p.e, start.t, start.x,
+                                                   start.v, start.theta, False,
+                                                   6 * p.period, True, True, 10**7)
+    assert n_imp > 10 and n_stk > 0 and n_acc > 0 and n_crs > 0 and status == 0
+    for j, name in enumerate(("t", "phase", "v_in", "v_out")):
+        np.testing.assert_array_equal(getattr(res.impacts, name), imp[:n_imp, j])
+        assert not getattr(res.impacts, name).flags.writeable
+    np.testing.assert_array_equal(res.accumulations, acc[:n_acc, 0])
+    np.testing.assert_array_equal(res.sticking, stk[:n_stk])
+    np.testing.assert_array_equal(res.crossings.t, crs[:n_crs, 0])
+    np.testing.assert_array_equal(res.crossings.v, crs[:n_crs, 1])
+    np.testing.assert_array_equal(res.micro_bounce, avg[:n_avg])
+    assert res.state == SDFState(t=t, x=x, v=v, theta=th, stuck=stuck)
+    assert res.n_events == n_ev
+    dense = simulate_module.dense_from_segments(p, seg[:n_seg], np.linspace(0.25, 100, 50),
+                                                ("x", "v", "a"))
+    np.testing.assert_array_equal(res.dense.x, dense.x)
+    empty = simulate(p, state=start, cycles=0.001)
+    assert len(empty.impacts) == 0 and empty.sticking.shape == (0, 2)
+    assert empty.micro_bounce.shape == (0, 3) and empty.accumulations.shape == (0,)

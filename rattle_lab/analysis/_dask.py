@@ -6,10 +6,18 @@ run
 
 * in this process, one after the other (``workers=1``, no scheduler: the
   default; Dask is not even imported);
-* on a :class:`dask.distributed.LocalCluster` of ``workers`` processes with
-  one thread each on this machine (``workers > 1``);
+* on a pool of ``workers`` processes on this machine (``workers > 1``), forked
+  from this one after its compiled kernels are loaded (where the platform can
+  fork; elsewhere spawned), so that a worker starts in milliseconds instead of
+  the seconds of a fresh interpreter that imports the package and loads numba's
+  cache.  This is what a Dask ``LocalCluster`` cost before (0.11x serial on a
+  regime map: cluster start-up, a fresh interpreter per worker, scheduling);
 * on a running ``dask.distributed`` cluster (``scheduler="tcp://host:8786"``),
-  whose workers must have ``rattle_lab`` installed.
+  whose workers must have ``rattle_lab`` installed: for more cores than this
+  machine has.  It pays once the serial work exceeds the cluster's overheads
+  (connection, the first chunk's kernel load on each worker, one round trip per
+  chunk) times ``w / (w - 1)`` for ``w`` workers; ``benchmarks/sweeps.py``
+  measures both and prints the break-even.
 
 Every point is computed by the same deterministic code whatever runs it, so
 the results are identical to serial execution, bit for bit (tested).  The
@@ -20,7 +28,6 @@ compiles once (a few seconds).
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
@@ -76,8 +83,8 @@ def run_chunks(func: Callable[[T], Any], chunks: Sequence[T], *, workers: int = 
     chunks : sequence
         The chunks (picklable).
     workers : int
-        1: run here, serially.  More: a local cluster of that many processes
-        (ignored when ``scheduler`` is given).
+        1: run here, serially.  More: a local pool of that many processes, forked
+        from this one (ignored when ``scheduler`` is given).
     scheduler : str, optional
         Address of a running ``dask.distributed`` scheduler.
     desc : str
@@ -96,21 +103,17 @@ def run_chunks(func: Callable[[T], Any], chunks: Sequence[T], *, workers: int = 
         On invalid ``workers`` / ``scheduler``, or if the scheduler cannot be reached.
     """
     workers, scheduler = check_execution(workers, scheduler)
-    if scheduler is None and workers == 1:
+    if scheduler is None and (workers == 1 or len(chunks) <= 1):
         return [func(c) for c in progress(chunks, total=len(chunks), desc=desc, quiet=quiet,
                                            unit="chunk")]
-    from dask.distributed import Client, LocalCluster, as_completed
+    if scheduler is None:
+        return _run_pool(func, chunks, workers, desc, quiet)
+    from dask.distributed import Client, as_completed
 
-    cluster = None
-    if scheduler is not None:
-        try:
-            client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise ParameterError(f"`scheduler` {scheduler!r}: cannot connect ({exc})") from None
-    else:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=logging.ERROR)
-        client = Client(cluster)
+    try:
+        client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ParameterError(f"`scheduler` {scheduler!r}: cannot connect ({exc})") from None
     try:
         futures = client.map(func, list(chunks), pure=False)
         position = {f.key: i for i, f in enumerate(futures)}
@@ -121,5 +124,23 @@ def run_chunks(func: Callable[[T], Any], chunks: Sequence[T], *, workers: int = 
         return results
     finally:
         client.close()
-        if cluster is not None:
-            cluster.close()
+
+
+def _run_pool(func: Callable[[T], Any], chunks: Sequence[T], workers: int, desc: str,
+              quiet: bool) -> list[Any]:
+    """``[func(c) for c in chunks]`` on a local pool of ``workers`` processes."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    from ..sdf._compiled import warm_cache
+
+    warm_cache()  # load the compiled kernels here, so that forked workers inherit them
+    method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
+    with ProcessPoolExecutor(max_workers=min(workers, len(chunks)),
+                             mp_context=mp.get_context(method)) as pool:
+        futures = {pool.submit(func, c): i for i, c in enumerate(chunks)}
+        results: list[Any] = [None] * len(chunks)
+        for fut in progress(as_completed(futures), total=len(futures), desc=desc, quiet=quiet,
+                            unit="chunk"):
+            results[futures[fut]] = fut.result()
+    return results

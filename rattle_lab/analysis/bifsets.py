@@ -39,6 +39,7 @@ import numpy as np
 from .._version import __version__
 from ..exceptions import ParameterError
 from . import _one_over_n as _on
+from ._dask import check_execution, run_chunks
 
 BoundaryKind = Literal["grazing", "saddle-node", "period-doubling", "secondary-grazing"]
 KINDS: tuple[BoundaryKind, ...] = ("grazing", "saddle-node", "period-doubling", "secondary-grazing")
@@ -301,11 +302,20 @@ def _curves_for_n(n: int, wg: np.ndarray, F_range: tuple[float, float], zeta: fl
     return curves
 
 
+def _sets_for_n(job: tuple[int, np.ndarray, np.ndarray, tuple[float, float], float, float, int]
+                ) -> tuple[np.ndarray, np.ndarray, list[BoundaryCurve]]:
+    """Regions and boundary curves of one orbit type: one chunk of :func:`bifurcation_sets`."""
+    n, wg, Fg, F_lim, zeta, e, n_v = job
+    exists, stable = _regions(n, wg, Fg, zeta, e)
+    return exists, stable, list(_curves_for_n(n, wg, F_lim, zeta, e, n_v))
+
+
 def bifurcation_sets(ns: Sequence[int] = (1, 2, 3, 4), *,
                      omega_range: tuple[float, float] = (0.6, 1.5),
                      F_range: tuple[float, float] = (0.0, 0.6),
                      zeta: float = 0.05, e: float = 0.6,
-                     n_omega: int = 241, n_F: int = 121, n_v: int = 81) -> BifurcationSets:
+                     n_omega: int = 241, n_F: int = 121, n_v: int = 81, workers: int = 1,
+                     scheduler: str | None = None) -> BifurcationSets:
     """Regions of existence and stability of 1/n orbits in the (omega, F) plane.
 
     The thesis's Fig. 3-7, 3-9 and 3-10 (``zeta = 0.05``, ``e = 0.6``,
@@ -326,6 +336,11 @@ def bifurcation_sets(ns: Sequence[int] = (1, 2, 3, 4), *,
         Grid of the filled regions (and ``n_omega`` also of the curve tracing).
     n_v : int
         Impact-velocity grid of the curve tracing.
+    workers : int
+        Local worker processes over the orbit types ``ns`` (1: serial); the result is
+        the same, bit for bit (:mod:`rattle_lab.analysis._dask`).
+    scheduler : str, optional
+        Address of a running ``dask.distributed`` scheduler to run them on instead.
 
     Returns
     -------
@@ -346,14 +361,19 @@ def bifurcation_sets(ns: Sequence[int] = (1, 2, 3, 4), *,
     True
     """
     ns_t = _validate(ns, omega_range, F_range, zeta, e, n_omega, n_F, n_v)
+    workers_i, sched = check_execution(workers, scheduler)
     wg = np.linspace(float(omega_range[0]), float(omega_range[1]), int(n_omega))
     Fg = np.linspace(float(F_range[0]), float(F_range[1]), int(n_F))
     exists = np.zeros((len(ns_t), Fg.size, wg.size), dtype=bool)
     stable = np.zeros_like(exists)
     curves: list[BoundaryCurve] = []
-    for k, n in enumerate(ns_t):
-        exists[k], stable[k] = _regions(n, wg, Fg, zeta, e)
-        curves.extend(_curves_for_n(n, wg, (float(F_range[0]), float(F_range[1])), zeta, e, int(n_v)))
+    F_lim = (float(F_range[0]), float(F_range[1]))
+    jobs = [(n, wg, Fg, F_lim, float(zeta), float(e), int(n_v)) for n in ns_t]
+    parts = run_chunks(_sets_for_n, jobs, workers=workers_i, scheduler=sched,
+                       desc="bifurcation sets")
+    for k, (ex, st, cv) in enumerate(parts):
+        exists[k], stable[k] = ex, st
+        curves.extend(cv)
     wf = np.linspace(wg[0], wg[-1], 4 * wg.size)
     Fgr = np.sqrt(((1.0 - wf) * (1.0 + wf)) ** 2 + (2.0 * zeta * wf) ** 2)
     inside = (Fgr >= Fg[0]) & (Fgr <= Fg[-1])

@@ -1,9 +1,9 @@
 """Regime maps, basins of attraction and the disturbance study (thesis 4.2, 4.3.3, Fig. 4-7).
 
 Each point of these studies is an independent run of the exact simulator, so
-they are cut into chunks and run serially, on a local Dask cluster or on a
-remote one (:mod:`rattle_lab.analysis._dask`); the results do not depend on
-how they were run.
+they are cut into chunks and run serially, on a pool of local worker processes
+(``workers``) or on a Dask cluster (``scheduler``) (:mod:`rattle_lab.analysis._dask`);
+the results do not depend on how they were run (tested bit for bit).
 
 Regime map
     The attractor reached from one initial state (default: at rest, ``x = 0``,
@@ -324,7 +324,7 @@ def regime_map(F: ArrayLike, omega: ArrayLike, *, zeta: float = 0.05, e: float =
     chunk_size : int
         Points per chunk of work.
     workers : int
-        Local worker processes (1: serial, no Dask).
+        Local worker processes (1: serial; more: a process pool, no Dask).
     scheduler : str, optional
         Address of a running ``dask.distributed`` scheduler.
     quiet : bool

@@ -7,8 +7,10 @@ saddle-node of the 1/1 orbit (eq. 3.11) with the delay of a slow passage through
 fold.  On the 3-6 s ramps of the thesis campaign both move the disappearance level by
 more than its whole dependence on ``e``.  So this module simulates the protocol itself:
 the measured ramp (frequency, start and end level, duration) at candidate model
-parameters, with the exact event-driven simulator (:func:`rattle_lab.sdf.simulate`,
-carrying the state and forcing phase from one forcing period to the next), and reads
+parameters, with the exact event-driven simulator (:func:`rattle_lab.sdf.simulate.simulate_pieces`:
+one compiled call per replay, carrying the state and forcing phase from one forcing
+period to the next; the same motion, bit for bit, as one ``simulate`` call per period,
+5-7x faster over a fit of ``e``: ``benchmarks/speed_goals.py``), and reads
 the threshold off the simulated impacts exactly as :mod:`rattle_lab.thresholds` reads
 it off detected ones: the impact that starts (up) or ends (down) the first/last
 sustained group (:func:`~rattle_lab.thresholds.sustained_impact_time`), censored
@@ -28,6 +30,7 @@ the staircase of a single replay into (nearly) the expected value.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -37,6 +40,7 @@ import numpy as np
 from ..analysis import one_over_n_orbits
 from ..exceptions import ParameterError
 from ..sdf import SDFParams, SDFState, simulate
+from ..sdf.simulate import simulate_pieces
 from ..thresholds import Threshold, sustained_impact_time
 from ._common import check_positive
 
@@ -160,19 +164,31 @@ def _ramp_particular_state(F: float, dF_dtau: float, omega: float, zeta: float, 
     return x, v, abs(F * H)
 
 
+@functools.lru_cache(maxsize=256)
+def _stable_orbit(F: float, omega: float, zeta: float, e: float) -> tuple[float, float] | None:
+    """``(phase, v_im)`` of the stable 1/1 impacting orbit (the "hi" branch when both are
+    listed), None when there is no stable, existing one.  Cached: the replays of one
+    threshold at different forcing phases start at the same level."""
+    params = SDFParams(F=F, omega=omega, zeta=zeta, e=e)
+    stable = [o for o in one_over_n_orbits(params, 1) if o.exists and o.stable]
+    if not stable:
+        return None
+    return float(stable[-1].phase), float(stable[-1].v_im)
+
+
 def _orbit_state(F: float, omega: float, zeta: float, e: float, theta: float) -> SDFState | None:
     """State at forcing phase ``theta`` on the stable 1/1 impacting orbit (thesis 3.1-3.3).
 
     None when there is no stable, existing 1/1 orbit at these parameters.
     """
-    params = SDFParams(F=F, omega=omega, zeta=zeta, e=e)
-    stable = [o for o in one_over_n_orbits(params, 1) if o.exists and o.stable]
-    if not stable:
+    orbit = _stable_orbit(F, omega, zeta, e)
+    if orbit is None:
         return None
-    orbit = stable[-1]                       # the "hi" branch when both are listed
-    at_impact = SDFState(x=1.0, v=-e * orbit.v_im, theta=orbit.phase)
+    phase, v_im = orbit
+    params = SDFParams(F=F, omega=omega, zeta=zeta, e=e)
+    at_impact = SDFState(x=1.0, v=-e * v_im, theta=phase)
     # follow the orbit from its impact to the wanted phase (less than one period)
-    res = simulate(params, duration=((theta - orbit.phase) % TWO_PI) / omega, state=at_impact)
+    res = simulate(params, duration=((theta - phase) % TWO_PI) / omega, state=at_impact)
     return res.state
 
 
@@ -216,6 +232,95 @@ def _replay(ramp: RampSpec, t_w_s: float, phase: float, *, F_per_ms2: float, ome
             omega: float, zeta: float, e: float, settle_tau: float, quiet_s: float,
             hold: int, n_confirm: int, max_gap_cycles: float, edge_cycles: float) -> float:
     """Time of the threshold impact of one replay from ``t_w_s`` (NaN if none or censored).
+
+    An upward replay stops at its first sustained group (later impacts cannot change it).
+    A downward one stops once it has been free of impacts for ``quiet_s`` while the
+    linear amplitude is below ``_QUIET_AMPLITUDE``: the transient left by the last impact
+    has decayed by ``exp(-quiet_s zeta omega_s)`` and the level only falls, so the motion
+    cannot reach the stop again.
+
+    All pieces run in one compiled call (:func:`~rattle_lab.sdf.simulate.simulate_pieces`), which
+    stops where the stopping rule surely holds; the rule is then applied piece by piece
+    to the impacts: the same threshold, bit for bit, as one ``simulate`` call per piece
+    (:func:`_replay_per_piece`, tested), without its fixed cost per call.
+    """
+    f = ramp.freq_hz
+    T = ramp.duration_s
+    theta_w = (TWO_PI * f * t_w_s + phase) % TWO_PI
+    state = _start_state(ramp, ramp.level_ms2(t_w_s), theta_w, omega_s * t_w_s,
+                         F_per_ms2=F_per_ms2, omega_s=omega_s, omega=omega, zeta=zeta, e=e,
+                         settle_tau=settle_tau)
+    n_pieces = max(1, math.ceil((T - t_w_s) * f / hold - 1e-9))
+    # quasi-static linear amplitude per unit level (the X of _ramp_particular_state)
+    X_per_ms2 = F_per_ms2 / math.hypot(1.0 - omega * omega, 2.0 * zeta * omega)
+    # the piece grid, with the very arithmetic (elementwise) of the per-piece loop
+    starts_s = t_w_s + np.arange(n_pieces) * hold / f
+    ends_s = t_w_s + np.arange(1, n_pieces + 1) * hold / f
+    ends_s[-1] = T
+    rate = ramp.rate_ms2_s
+    levels = ramp.level_start_ms2 + rate * (0.5 * (starts_s + ends_s))
+    up = ramp.direction == "up"
+    quiet_ok = (X_per_ms2 * levels < _QUIET_AMPLITUDE) & (rate <= 0)
+    gap_s = max_gap_cycles / f
+    # the compiled call stops at a piece where the rule below surely holds (margins far
+    # beyond rounding); the rule itself is then applied to the pieces run
+    margin = 1.0 - 1e-9
+    times = np.empty(0)
+    t_thr = float("nan")
+    j0 = 0
+    while j0 < n_pieces:
+        run = simulate_pieces(
+            F_per_ms2 * levels[j0:], omega=omega, zeta=zeta, e=e, t_stop=omega_s * ends_s[j0:],
+            state=state, group_gap=gap_s * omega_s * margin if up else None,
+            group_size=n_confirm + 1, quiet_time=None if up else quiet_s * omega_s / margin,
+            quiet_ok=quiet_ok[j0:], last_impact_t=times[-1] * omega_s if times.size else math.nan)
+        n_before = times.size
+        times = np.concatenate([times, run.impact_t / omega_s])
+        n_upto = n_before + run.offsets[1:]          # impacts up to and with each piece run
+        n_run = n_upto.size
+        stop_k = n_run
+        if up:
+            # the first piece after which a sustained group is complete
+            close = np.diff(times) <= gap_s
+            if close.size >= n_confirm:
+                full = np.flatnonzero(np.convolve(close, np.ones(n_confirm, dtype=int),
+                                                  "valid") == n_confirm)
+                full = full[full + n_confirm >= n_before]
+                if full.size:
+                    stop_k = int(np.searchsorted(n_upto, full[0] + n_confirm, side="right"))
+                    times = times[:n_upto[stop_k]]
+                    t_thr = sustained_impact_time(times, f, "up", n_confirm=n_confirm,
+                                                  max_gap_cycles=max_gap_cycles)
+        else:
+            # the first piece without impacts, quiet_s after the last, where it may be quiet
+            counts = np.diff(np.concatenate([[n_before], n_upto]))
+            last_s = times[np.maximum(n_upto - 1, 0)] if times.size else np.full(n_run, np.nan)
+            quiet = ((counts == 0) & (n_upto > 0) & quiet_ok[j0:j0 + n_run]
+                     & (ends_s[j0:j0 + n_run] - last_s >= quiet_s))
+            hits = np.flatnonzero(quiet)
+            if hits.size:
+                stop_k = int(hits[0])
+                times = times[:n_upto[stop_k]]
+        if stop_k < n_run:
+            break
+        state = run.state(n_run - 1)
+        j0 += n_run
+    if ramp.direction == "down":
+        t_thr = sustained_impact_time(times, f, "down", n_confirm=n_confirm,
+                                      max_gap_cycles=max_gap_cycles)
+    if not math.isfinite(t_thr):
+        return float("nan")
+    from_edge = t_thr if ramp.direction == "up" else T - t_thr
+    return t_thr if from_edge * f >= edge_cycles else float("nan")
+
+
+def _replay_per_piece(ramp: RampSpec, t_w_s: float, phase: float, *, F_per_ms2: float,
+                      omega_s: float, omega: float, zeta: float, e: float, settle_tau: float,
+                      quiet_s: float, hold: int, n_confirm: int, max_gap_cycles: float,
+                      edge_cycles: float) -> float:
+    """:func:`_replay` with one :func:`~rattle_lab.sdf.simulate` call per piece.
+
+    The reference the one-call replay is tested against (same threshold, bit for bit).
 
     An upward replay stops at its first sustained group (later impacts cannot change it).
     A downward one stops once it has been free of impacts for ``quiet_s`` while the

@@ -47,8 +47,15 @@ def warm_cache() -> float:
     import time
 
     t0 = time.perf_counter()
-    # the exact kernel has one signature (floats, booleans, an int): one call compiles it
+    # each kernel has one signature (floats, booleans, ints, arrays): one call compiles it
     jit_kernel.run(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
+    # what simulate() calls (run, its result packed in one buffer)
+    jit_kernel.run_packed(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
+    # the ramp replays' piece runner (rattle_lab.sdf.simulate.simulate_pieces)
+    import numpy as np
+
+    jit_kernel.run_pieces(np.array([0.2]), 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False,
+                          np.array([1.0]), -1.0, 4, -1.0, np.ones(1, dtype=np.bool_), np.nan)
     return time.perf_counter() - t0
 
 

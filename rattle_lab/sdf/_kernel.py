@@ -127,8 +127,12 @@ TAU_EXIT = 1e-2
 GRAZE_TOL = 4.0 * EPS
 #: Maximum sub-intervals examined in one search chunk.
 MAX_WORK = 20000
-#: A flight's window is searched in chunks of at most W / CHUNKS_PER_WINDOW.
-CHUNKS_PER_WINDOW = 8.0
+#: A flight's window is searched in chunks of at most W / CHUNKS_PER_WINDOW.  The search
+#: is rigorous (derivative bounds) whatever the chunk, so this only moves work: 2 (half a
+#: period) costs 0.7-1.3 us per impact on the 1/1 orbit where 8 cost 2.4 us (fewer chunks
+#: and bounds per flight; chatter, chaos and 1/3 motion also as fast or faster), with every
+#: mpmath, thesis and grazing test unchanged (benchmarks/speed_goals.py).
+CHUNKS_PER_WINDOW = 2.0
 
 # Layout of the parameter vector P.
 I_F, I_W, I_Z, I_E, I_AC, I_AS, I_R, I_RES, I_REG, I_WD, I_R1, I_R2, I_LAM = range(13)
@@ -1190,3 +1194,135 @@ def run_sweep(F_arr, w_arr, e_arr, zeta, t0, x0, v0, th0, stuck0, discard_cycles
             off[i + 2:, 1] = n_crs
             return imp[:n_imp], crs[:n_crs], off, ends, info
     return imp[:n_imp], crs[:n_crs], off, ends, info
+
+
+@jit
+def run_pieces(F_arr, omega, zeta, e, t0, x0, v0, th0, stuck0, t_stop, group_gap, group_size,
+               quiet_time, quiet_ok, last_imp):
+    """Consecutive pieces at forcing amplitudes ``F_arr``, piece ``j`` running until
+    ``t_stop[j]``, the state carried over: one call for a whole amplitude ramp.
+
+    Exactly the calls ``simulate(SDFParams(F_arr[j], omega, zeta, e),
+    duration=max(0, t_stop[j] - state.t), state=state)`` a Python loop makes (same
+    durations and event budgets), so the motion is the same to the last bit.
+    Early stop, after the piece where it first holds (0 or negative: never):
+    ``group_gap > 0``: ``group_size`` consecutive impacts, each less than
+    ``group_gap`` after the previous; ``quiet_time > 0``: a piece without impacts
+    with ``quiet_ok[j]``, ending more than ``quiet_time`` after the last impact
+    (``last_imp``: the last one before this call, NaN if none).
+    Returns (imp, off, ends, info): imp rows (t, phase, v_in) of every piece, piece
+    j's rows ``off[j]:off[j + 1]``; ends rows (t, x, v, theta, stuck) at each piece's
+    end; info rows (status, searches settled at the work cap) as for :func:`run`;
+    the pieces stop at the first nonzero status or early stop (later ``info`` rows
+    -1, their ``off`` equal to the last).
+    """
+    n = F_arr.shape[0]
+    imp = np.empty((64, 3))
+    n_imp = 0
+    off = np.zeros(n + 1, dtype=np.int64)
+    ends = np.zeros((n, 5))
+    info = np.full((n, 2), -1.0)
+    t = t0
+    x = x0
+    v = v0
+    th = th0
+    stuck = stuck0
+    period = TWO_PI / omega
+    streak = 1
+    for j in range(n):
+        d = max(0.0, t_stop[j] - t)
+        me = 10**6 + int(1000.0 * (d / period + 1.0))
+        out = run(F_arr[j], omega, zeta, e, t, x, v, th, stuck, d, False, False, me)
+        t, x, v, th, stuck = out[10], out[11], out[12], out[13], out[14]
+        m = out[1]
+        imp, n_imp = _append_rows(imp, n_imp, out[0][:, :3], m)
+        off[j + 1] = n_imp
+        ends[j, 0] = t
+        ends[j, 1] = x
+        ends[j, 2] = v
+        ends[j, 3] = th
+        ends[j, 4] = 1.0 if stuck else 0.0
+        info[j, 0] = out[16]
+        info[j, 1] = out[17]
+        stop = out[16] != 0
+        if group_gap > 0.0:
+            for i in range(m):
+                ti = out[0][i, 0]
+                if last_imp == last_imp and ti - last_imp < group_gap:
+                    streak += 1
+                else:
+                    streak = 1
+                last_imp = ti
+                if streak >= group_size:
+                    stop = True
+        elif m > 0:
+            last_imp = out[0][m - 1, 0]
+        if (quiet_time > 0.0 and m == 0 and quiet_ok[j] and last_imp == last_imp
+                and t_stop[j] - last_imp > quiet_time):
+            stop = True
+        if stop:
+            off[j + 2:] = n_imp
+            return imp[:n_imp], off, ends, info
+    return imp[:n_imp], off, ends, info
+
+
+#: Length of the header of :func:`run_packed`'s buffer.
+N_HEAD = 14
+
+
+@jit
+def run_packed(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_segs,
+               max_events):
+    """:func:`run` with everything in one flat buffer (one array to hand back, not six).
+
+    Layout: a header of ``N_HEAD`` values (n_imp, n_acc, n_stk, n_crs, n_seg, n_avg,
+    t, x, v, th, stuck, n_events, status, n_unresolved), then the impact columns
+    t, phase, v_in, v_out (n_imp each), the accumulation times (n_acc), the sticking
+    rows (n_stk x 2, row-major), the crossing columns t, v (n_crs each), the
+    segment rows (n_seg x 5, row-major) and the micro-bounce rows (n_avg x 3).
+    """
+    (imp, n_imp, acc, n_acc, stk, n_stk, crs, n_crs, seg, n_seg,
+     t, x, v, th, stuck, n_events, status, n_unres, avg, n_avg) = run(
+        F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_segs,
+        max_events)
+    size = N_HEAD + 4 * n_imp + n_acc + 2 * n_stk + 2 * n_crs + 5 * n_seg + 3 * n_avg
+    buf = np.empty(size)
+    buf[0] = n_imp
+    buf[1] = n_acc
+    buf[2] = n_stk
+    buf[3] = n_crs
+    buf[4] = n_seg
+    buf[5] = n_avg
+    buf[6] = t
+    buf[7] = x
+    buf[8] = v
+    buf[9] = th
+    buf[10] = 1.0 if stuck else 0.0
+    buf[11] = n_events
+    buf[12] = status
+    buf[13] = n_unres
+    k = N_HEAD
+    for j in range(4):
+        for i in range(n_imp):
+            buf[k] = imp[i, j]
+            k += 1
+    for i in range(n_acc):
+        buf[k] = acc[i, 0]
+        k += 1
+    for i in range(n_stk):
+        for j in range(2):
+            buf[k] = stk[i, j]
+            k += 1
+    for j in range(2):
+        for i in range(n_crs):
+            buf[k] = crs[i, j]
+            k += 1
+    for i in range(n_seg):
+        for j in range(5):
+            buf[k] = seg[i, j]
+            k += 1
+    for i in range(n_avg):
+        for j in range(3):
+            buf[k] = avg[i, j]
+            k += 1
+    return buf

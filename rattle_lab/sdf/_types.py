@@ -116,6 +116,26 @@ class SDFState:
             raise ParameterError("a stuck state must have x = 1 and v = 0")
         object.__setattr__(self, "theta", math.fmod(self.theta, TWO_PI) % TWO_PI)
 
+    @classmethod
+    def _from_kernel(cls, t: float, x: float, v: float, theta: float, stuck: bool) -> SDFState:
+        """The state a simulator kernel ended in, without re-validation.
+
+        The kernel's state is finite with ``x <= 1`` and a stuck state on the stop by
+        construction (checked cheaply; otherwise the checked constructor raises); the
+        phase is reduced as ``__post_init__`` does.
+        """
+        if not (math.isfinite(t + x + v + theta) and x <= 1.0
+                and (not stuck or (x == 1.0 and v == 0.0))):
+            return cls(t=t, x=x, v=v, theta=theta, stuck=stuck)
+        obj = object.__new__(cls)
+        d = obj.__dict__
+        d["t"] = t
+        d["x"] = x
+        d["v"] = v
+        d["theta"] = math.fmod(theta, TWO_PI) % TWO_PI
+        d["stuck"] = stuck
+        return obj
+
 
 def _ro(a: np.ndarray) -> np.ndarray:
     a = np.ascontiguousarray(a, dtype=float)
@@ -245,3 +265,17 @@ class SimResult:
     state: SDFState
     n_events: int = field(default=0)
     micro_bounce: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
+
+    @classmethod
+    def _from_kernel(cls, params: SDFParams, method: str, impacts: ImpactLog,
+                     accumulations: np.ndarray, sticking: np.ndarray,
+                     crossings: Crossings | None, dense: DenseSamples | None, state: SDFState,
+                     n_events: int, micro_bounce: np.ndarray) -> SimResult:
+        """The result of a simulator kernel, built without the frozen dataclass's per-field
+        ``__setattr__`` (it has no ``__post_init__``; the same object otherwise)."""
+        obj = object.__new__(cls)
+        obj.__dict__.update(params=params, method=method, impacts=impacts,
+                            accumulations=accumulations, sticking=sticking,
+                            crossings=crossings, dense=dense, state=state,
+                            n_events=n_events, micro_bounce=micro_bounce)
+        return obj

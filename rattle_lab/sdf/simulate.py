@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Sequence
+from dataclasses import dataclass
+from types import ModuleType
 from typing import Literal
 
 import numpy as np
@@ -145,17 +147,15 @@ def simulate(
     if method == "rk4-thesis":
         return _simulate_rk4(params, state, duration, crossings, t_grid, steps_per_period)
 
-    from ._compiled import jit_kernel, python_kernel
-
-    kernel = jit_kernel if method == "exact" else python_kernel
-    out = kernel.run(params.F, params.omega, params.zeta, params.e, state.t, state.x, state.v,
-                     state.theta, bool(state.stuck), duration, bool(crossings), t_grid is not None,
-                     int(max_events))
-    (imp, n_imp, acc, n_acc, stk, n_stk, crs, n_crs, seg, n_seg,
-     t, x, v, th, stuck, n_events, status, n_unresolved, avg, n_avg) = out
+    kernel = _kernels()[method == "exact"]
+    buf = kernel.run_packed(params.F, params.omega, params.zeta, params.e, state.t, state.x,
+                            state.v, state.theta, bool(state.stuck), duration, bool(crossings),
+                            t_grid is not None, int(max_events))
+    head = buf[:_N_HEAD].tolist()
+    status, n_unresolved = head[12], head[13]
     if status != 0:
         raise SimulationError(
-            f"event budget of {max_events} events exhausted at t = {t:.17g} "
+            f"event budget of {max_events} events exhausted at t = {head[6]:.17g} "
             f"(F={params.F}, omega={params.omega}, zeta={params.zeta}, e={params.e}); "
             "raise `max_events` or shorten the run")
     if n_unresolved:
@@ -164,33 +164,162 @@ def simulate(
             f"(F={params.F}, omega={params.omega}, zeta={params.zeta}, e={params.e}); "
             "impacts in them are located only to the resolution reached",
             NumericalWarning, stacklevel=2)
-    imp = np.asarray(imp)[:n_imp]
-    impacts = ImpactLog(t=imp[:, 0], phase=imp[:, 1], v_in=imp[:, 2], v_out=imp[:, 3])
+    n_imp, n_acc, n_stk, n_crs, n_seg, n_avg = map(int, head[:6])
+    k = _N_HEAD
+    if n_imp:
+        cols = buf[k:k + 4 * n_imp].reshape(4, n_imp)
+        impacts = ImpactLog(t=cols[0], phase=cols[1], v_in=cols[2], v_out=cols[3])
+        k += 4 * n_imp
+    else:
+        impacts = _NO_IMPACTS
+    acc = buf[k:k + n_acc] if n_acc else np.empty(0)
+    k += n_acc
+    stk = buf[k:k + 2 * n_stk].reshape(n_stk, 2) if n_stk else np.empty((0, 2))
+    k += 2 * n_stk
     cross = None
     if crossings:
-        c = np.asarray(crs)[:n_crs]
-        cross = Crossings(t=c[:, 0], v=c[:, 1])
+        c = buf[k:k + 2 * n_crs].reshape(2, n_crs)
+        cross = Crossings(t=c[0], v=c[1])
+    k += 2 * n_crs
     dense = None
     if t_grid is not None:
-        segments = np.asarray(seg)[:n_seg]
+        segments = buf[k:k + 5 * n_seg].reshape(n_seg, 5)
         if n_seg == 0:  # zero duration: the initial state is the only segment
             xp0, vp0 = particular_state(params.F, params.omega, params.zeta, state.theta)
             segments = np.array([[state.t, state.theta, state.x - float(xp0),
                                   state.v - float(vp0), 1.0 if state.stuck else 0.0]])
         dense = dense_from_segments(params, segments, t_grid, fields)
-    end = SDFState(t=float(t), x=float(x), v=float(v), theta=float(th), stuck=bool(stuck))
-    return SimResult(
-        params=params,
-        method=method,
-        impacts=impacts,
-        accumulations=np.array(np.asarray(acc)[:n_acc, 0]),
-        sticking=np.array(np.asarray(stk)[:n_stk]),
-        crossings=cross,
-        dense=dense,
-        state=end,
-        n_events=int(n_events),
-        micro_bounce=np.array(np.asarray(avg)[:n_avg]),
-    )
+    k += 5 * n_seg
+    avg = buf[k:k + 3 * n_avg].reshape(n_avg, 3) if n_avg else np.empty((0, 3))
+    end = SDFState._from_kernel(head[6], head[7], head[8], head[9], head[10] != 0.0)
+    return SimResult._from_kernel(params, method, impacts, acc, stk, cross, dense, end,
+                                  int(head[11]), avg)
+
+
+_N_HEAD = 14   # rattle_lab.sdf._kernel.N_HEAD (asserted in the tests)
+_NO_IMPACTS = ImpactLog(t=np.empty(0), phase=np.empty(0), v_in=np.empty(0), v_out=np.empty(0))
+_KERNELS: tuple[ModuleType, ModuleType] | None = None
+
+
+def _kernels() -> tuple[ModuleType, ModuleType]:
+    """(pure-Python kernel, compiled kernel), imported on first use."""
+    global _KERNELS
+    if _KERNELS is None:
+        from ._compiled import jit_kernel, python_kernel
+
+        _KERNELS = (python_kernel, jit_kernel)
+    return _KERNELS
+
+
+@dataclass(frozen=True)
+class PieceRun:
+    """What :func:`simulate_pieces` returns.
+
+    Attributes
+    ----------
+    impact_t : ndarray
+        Impact times of all pieces run, in time order.
+    offsets : ndarray
+        Piece ``j``'s impacts are ``impact_t[offsets[j]:offsets[j + 1]]``; length
+        ``n_run + 1``.
+    ends : ndarray
+        Shape (n_run, 5): ``(t, x, v, theta, stuck)`` at the end of each piece run.
+    """
+
+    impact_t: np.ndarray
+    offsets: np.ndarray
+    ends: np.ndarray
+
+    def state(self, j: int) -> SDFState:
+        """The state at the end of piece ``j``."""
+        t, x, v, th, stuck = (float(a) for a in self.ends[j])
+        return SDFState(t=t, x=x, v=v, theta=th, stuck=stuck != 0.0)
+
+
+def simulate_pieces(F: ArrayLike, *, omega: float, zeta: float, e: float, t_stop: ArrayLike,
+                    state: SDFState, group_gap: float | None = None, group_size: int = 4,
+                    quiet_time: float | None = None, quiet_ok: ArrayLike | None = None,
+                    last_impact_t: float = math.nan) -> PieceRun:
+    """Pieces of constant forcing amplitude in one compiled call, the state carried over.
+
+    Piece ``j`` runs at ``F[j]`` until time ``t_stop[j]``: the same motion, to the last
+    bit, as the loop ``state = simulate(SDFParams(F[j], omega, zeta, e),
+    duration=max(0, t_stop[j] - state.t), state=state).state`` (tested), without its
+    fixed cost per call.  Used to replay a ramp of the forcing level.
+
+    Parameters
+    ----------
+    F : array_like
+        Forcing amplitude of each piece, >= 0.
+    omega, zeta, e : float
+        As in :class:`SDFParams`.
+    t_stop : array_like
+        End time of each piece (nondimensional), same length as ``F``.
+    state : SDFState
+        State at the start of the first piece.
+    group_gap, group_size : float, int
+        Stop after the piece in which ``group_size`` consecutive impacts, each less than
+        ``group_gap`` after the previous (nondimensional), are first complete.
+    quiet_time : float, optional
+        Stop after the first piece ``j`` without impacts with ``quiet_ok[j]`` that ends
+        more than ``quiet_time`` after the last impact (``last_impact_t``: the last one
+        before this call, NaN if none).
+    quiet_ok : array_like of bool, optional
+        Where the quiet stop may happen (default: every piece).
+    last_impact_t : float
+        Time of the last impact before ``state`` (NaN: none).
+
+    Returns
+    -------
+    PieceRun
+        The pieces run (all, or up to the stop).
+
+    Raises
+    ------
+    ParameterError
+        On invalid parameters or arrays of different lengths.
+    SimulationError
+        If a piece exhausts its event budget (as :func:`simulate` would).
+    """
+    F_arr = np.ascontiguousarray(F, dtype=float)
+    t_arr = np.ascontiguousarray(t_stop, dtype=float)
+    if F_arr.ndim != 1 or F_arr.shape != t_arr.shape:
+        raise ParameterError(f"`F` and `t_stop` must be 1-D of one length, had shapes "
+                             f"{F_arr.shape} and {t_arr.shape}")
+    if F_arr.size:
+        if not (np.all(np.isfinite(F_arr)) and F_arr.min() >= 0):
+            raise ParameterError("`F` must be finite and >= 0")
+        if not np.all(np.isfinite(t_arr)):
+            raise ParameterError("`t_stop` must be finite")
+    SDFParams(F=0.0, omega=omega, zeta=zeta, e=e)   # validates omega, zeta, e
+    ok = (np.ones(F_arr.shape, dtype=np.bool_) if quiet_ok is None
+          else np.ascontiguousarray(quiet_ok, dtype=np.bool_))
+    if ok.shape != F_arr.shape:
+        raise ParameterError(f"`quiet_ok` must have the shape of `F`, had {ok.shape}")
+    if int(group_size) != group_size or group_size < 1:
+        raise ParameterError(f"`group_size` must be an integer >= 1, was {group_size}")
+    from ._compiled import jit_kernel
+
+    imp, off, ends, info = jit_kernel.run_pieces(
+        F_arr, float(omega), float(zeta), float(e), float(state.t), float(state.x),
+        float(state.v), float(state.theta), bool(state.stuck), t_arr,
+        -1.0 if group_gap is None else float(group_gap), int(group_size),
+        -1.0 if quiet_time is None else float(quiet_time), ok, float(last_impact_t))
+    n_run = int(np.count_nonzero(info[:, 0] >= 0))
+    off = off[:n_run + 1]
+    ends = ends[:n_run]
+    bad = np.flatnonzero(info[:n_run, 0] != 0)
+    if bad.size:
+        j = int(bad[0])
+        raise SimulationError(f"event budget exhausted in piece {j} at t = {ends[j, 0]:.17g} "
+                              f"(F={F_arr[j]}, omega={omega}, zeta={zeta}, e={e})")
+    n_unresolved = float(info[:n_run, 1].sum())
+    if n_unresolved:
+        warnings.warn(
+            f"{int(n_unresolved)} event searches were settled at the work cap "
+            f"(omega={omega}, zeta={zeta}, e={e}); impacts in them are located only to the "
+            "resolution reached", NumericalWarning, stacklevel=2)
+    return PieceRun(impact_t=np.array(imp[:, 0]), offsets=off, ends=ends)
 
 
 def dense_from_segments(params: SDFParams, segments: np.ndarray, t: np.ndarray,
