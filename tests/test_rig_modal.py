@@ -147,3 +147,20 @@ def test_modal_scene_needs_a_plate_and_no_acoustic_table() -> None:
     del cfg["plate"]
     with pytest.raises(SceneError, match="plate"):
         parse_scene(cfg, "modal_lab.toml")
+
+
+def test_modal_scene_with_a_measurement_chain() -> None:
+    cfg = tomllib.loads(SCENE.read_text("utf-8"))
+    cfg["runs"] = [{**cfg["runs"][0], "duration_s": 0.2}]
+    cfg["chain"] = {"ring_velocity_per_m_s": 0.1, "decoder_delay_s": 18e-6, "hum_hz": 50.0, "hum_pa": 0.002}
+    with pytest.raises(SceneError, match="ring_velocity_per_m_s"):   # would double the ringing
+        parse_scene(cfg, "modal_lab.toml")
+    cfg["chain"]["ring_velocity_per_m_s"] = 0.0
+    from rattle_lab.rig import synthesize
+    plain = synthesize(parse_scene({**cfg, "chain": {"ring_velocity_per_m_s": 0.0}}, "a")).record
+    chained = synthesize(parse_scene(cfg, "b")).record
+    v0 = {c.name: c for c in plain.runs[0].channels}["velocity"]
+    v1 = {c.name: c for c in chained.runs[0].channels}["velocity"]
+    assert v1.group_delay_s == pytest.approx(18e-6) and not v0.group_delay_s
+    # same motion, same impacts: the chain changes only what the sensors report
+    np.testing.assert_array_equal(plain.truth.impacts["dwell_099"].t_s, chained.truth.impacts["dwell_099"].t_s)

@@ -458,6 +458,9 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
     if cr is not None:
         from ._chain import parse_chain
         chain = parse_chain(cr)
+        if model.kind == "modal" and chain.ring_velocity_per_m_s:   # the modes ring by themselves
+            cr.fail(cr.key("ring_velocity_per_m_s"), chain.ring_velocity_per_m_s,
+                    'must be 0 with `model.kind` = "modal" (the plate\'s modes ring physically)')
     sim = SimulationSpec()
     smr = top.sub("simulation")
     if smr is not None:
