@@ -11,8 +11,9 @@ continuous across pieces.
 
 What the channels get:
 
-* vibrometer: the plate's velocity relative to the base at the plate centre (all
-  modes), band-limited like the SDF vibrometer;
+* vibrometer: the plate's velocity relative to the base at the striker's point (all
+  modes; the plate centre unless ``striker_x_m``, ``striker_y_m`` say otherwise),
+  band-limited like the SDF vibrometer;
 * plate accelerometer: base acceleration plus the central difference of the sampled
   relative velocity (so it is band-limited to the sample rate);
 * microphone: the Rayleigh integral of the baffled plate at ``(a/2, b/2, mic_distance_m)``
@@ -163,7 +164,7 @@ def simulate_run_modal(scene: Scene, base: ModalSystem, contact: Contact, run: R
     -------
     motion : RunMotion
         Forcing phase, level, frequency, velocity and acceleration relative to the base at
-        the plate centre, and the impacts (contact episodes, contact-point velocities).
+        the striker's point, and the impacts (contact episodes, contact-point velocities).
     mic_pa : numpy.ndarray or None
         Sound pressure at the microphone (None when the scene records no microphone).
     episodes : list of EpisodeLog
@@ -214,7 +215,7 @@ def simulate_run_modal(scene: Scene, base: ModalSystem, contact: Contact, run: R
     counter.add("motion_dense")
     plate = base.plate
     assert plate is not None and base.modes is not None
-    W = np.asarray(base.modes.evaluate(0.5, 0.5), dtype=float)  # type: ignore[attr-defined]
+    W = np.asarray(base.modes.evaluate(base.striker_xi, base.striker_eta), dtype=float)  # type: ignore[attr-defined]
     v_rel = W @ velocity(t0 + t)
     a_rel = np.gradient(v_rel, 1.0 / sample_rate_hz) if n > 1 else np.zeros(n)
     mic = None
@@ -279,8 +280,11 @@ def truth_extra(scene: Scene, system: ModalSystem, contact: Contact, e_mode1: li
 
 
 def place_striker(rig: Rig, system: ModalSystem) -> Rig:
-    """The rig with the modal model's striker position."""
+    """The rig with the modal model's striker position; the vibrometer and the plate
+    accelerometer sit at the striker's point (on the other face), as simulated."""
     plate = system.plate
     assert plate is not None
-    return dataclasses.replace(rig, striker_x_m=system.striker_xi * plate.a_m,
-                               striker_y_m=system.striker_eta * plate.b_m)
+    xs, ys = system.striker_xi * plate.a_m, system.striker_eta * plate.b_m
+    sensors = tuple(dataclasses.replace(s, position_m=(xs, ys, s.position_m[2]))
+                    if s.sensor_id in ("velocity", "plate") else s for s in rig.sensors)
+    return dataclasses.replace(rig, striker_x_m=xs, striker_y_m=ys, sensors=sensors)
