@@ -4,6 +4,9 @@
 * :func:`synthesize` runs the exact SDF simulator in physical units for every run of the
   protocol and synthesises the channels the scene records; :func:`write_synthetic` also
   writes the record.  Everything the rig knows goes into ``/truth``.
+  ``[model] kind = "modal"`` (opt-in) simulates the plate's lowest modes against a point
+  striker with :mod:`rattle_lab.modal` instead: physical ringing in the vibrometer and the
+  plate accelerometer, the Rayleigh-integral sound at the microphone (see ``_modal``).
 * :class:`StageCounter` counts the stages evaluated (skipped stages never run).
 """
 

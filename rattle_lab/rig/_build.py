@@ -18,8 +18,10 @@ from ..exceptions import OutputError
 from ..plate import Plate
 from ..records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable, Truth,
                        scale_to_si, write_record)
+from ..modal._sound import C_AIR_M_S
 from ..records._model import as_source
 from . import _chain as cc
+from . import _modal as md
 from . import _channels as ch
 from ._counter import StageCounter
 from ._motion import Modal, RunMotion, simulate_run, thresholds
@@ -151,7 +153,12 @@ def _store(sensor: SensorSpec, si: np.ndarray, noise_rng: np.random.Generator, f
 
 
 def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz: float,
-              ring: tuple[float, ...], counter: StageCounter, with_ids: bool) -> list[Channel]:
+              ring: tuple[float, ...], counter: StageCounter, with_ids: bool,
+              modal_mic_pa: np.ndarray | None = None) -> list[Channel]:
+    """The channels of one run.  With ``[model] kind = "modal"`` the motion already holds
+    the plate's physical ringing and ``modal_mic_pa`` the radiated sound, so the canned
+    contact pulses, ringing and acoustic law of the SDF rig are not added."""
+    modal = scene.model.kind == "modal"
     art = scene.artefacts
     chain = scene.chain
     fan_phase = float(_rng(seed, run_index, 200).uniform(0.0, 2.0 * math.pi))
@@ -168,23 +175,32 @@ def _channels(scene: Scene, run_index: int, seed: int, motion: RunMotion, fs_hz:
         elif sensor.name == "plate":
             counter.add("plate")
             assert a_base is not None
-            si = ch.plate_acceleration(motion, a_base, scene.model, ring, fs_hz)
+            assert motion.a_rel_m_s2 is not None
+            si = (a_base + motion.a_rel_m_s2 if modal
+                  else ch.plate_acceleration(motion, a_base, scene.model, ring, fs_hz))
         elif sensor.name == "velocity":
             counter.add("velocity")
-            si = ch.vibrometer_velocity(motion, sensor.band_hz, fs_hz, scene.model.contact_s)
-            if chain is not None:
+            si = ch.vibrometer_velocity(motion, sensor.band_hz, fs_hz, 0.0 if modal else scene.model.contact_s)
+            if chain is not None and not modal:
                 si = si + cc.velocity_ringing(motion, scene.model, ring,
                                               chain.ring_velocity_per_m_s, si.size, fs_hz)
-                if chain.vibrometer == "absolute":
-                    si = si + cc.base_velocity(motion, fs_hz)
+            if chain is not None and chain.vibrometer == "absolute":
+                si = si + cc.base_velocity(motion, fs_hz)
         elif sensor.name == "mic":
             counter.add("mic")
-            counter.add("acoustic")
-            assert scene.acoustic is not None
-            si, _ = ch.sound_pressure(motion, scene.acoustic, art, fs_hz, _rng(seed, run_index, 100),
-                                      fan_phase)
-            if chain is not None:
-                si = cc.floor_reflection(si, chain, scene.acoustic.c_m_s, fs_hz)
+            if modal:
+                assert modal_mic_pa is not None
+                si = modal_mic_pa + art.fan_pa * np.sin(2.0 * math.pi * art.fan_hz * np.arange(modal_mic_pa.size)
+                                                        / fs_hz + fan_phase)
+                if chain is not None:
+                    si = cc.floor_reflection(si, chain, C_AIR_M_S, fs_hz)
+            else:
+                counter.add("acoustic")
+                assert scene.acoustic is not None
+                si, _ = ch.sound_pressure(motion, scene.acoustic, art, fs_hz, _rng(seed, run_index, 100),
+                                          fan_phase)
+                if chain is not None:
+                    si = cc.floor_reflection(si, chain, scene.acoustic.c_m_s, fs_hz)
         else:
             counter.add("drive")
             assert motion.theta is not None and motion.level_m_s2 is not None
@@ -248,7 +264,13 @@ def synthesize(scene: Scene | str | os.PathLike[str], *, seed: int | None = None
     if seed < 0:
         raise SceneError(f"`seed` must be >= 0, was {seed}")
     counter = counter if counter is not None else StageCounter()
-    modal, ring = resolve_modal(scene)
+    system = contact = None
+    if scene.model.kind == "modal":
+        system, contact = md.build_system(scene)
+        modal, ring = md.truth_modal(scene, system), ()
+    else:
+        modal, ring = resolve_modal(scene)
+    e_mode1: list[tuple[np.ndarray, np.ndarray]] = []
     names = {s.name for s in scene.sensors}
     want_v = "velocity" in names
     want_a = "plate" in names or ("mic" in names and scene.acoustic is not None
@@ -262,13 +284,22 @@ def synthesize(scene: Scene | str | os.PathLike[str], *, seed: int | None = None
     onsets: dict[float, list[float]] = {}
     gones: dict[float, list[float]] = {}
     rig = _rig(scene, modal.participation)
+    if system is not None:
+        rig = md.place_striker(rig, system)
     for i, spec in enumerate(progress(scene.runs, total=len(scene.runs), desc="simulate",
                                       quiet=quiet, unit="run")):
         fs_hz = spec.sample_rate_hz or scene.sample_rate_hz
-        motion = simulate_run(modal, spec, piece_periods=scene.simulation.piece_periods,
-                              settle_time_constants=scene.simulation.settle_time_constants,
-                              sample_rate_hz=fs_hz, want_v=want_v, want_a=want_a, counter=counter)
-        chans = _channels(scene, i, seed, motion, fs_hz, ring, counter, rig.apparatus == "plate_striker")
+        mic_pa = None
+        if system is not None:
+            assert contact is not None
+            motion, mic_pa, episodes = md.simulate_run_modal(scene, system, contact, spec, fs_hz, counter)
+            e_mode1.extend((e.e_mode1, e.v_in_m_s) for e in episodes)
+        else:
+            motion = simulate_run(modal, spec, piece_periods=scene.simulation.piece_periods,
+                                  settle_time_constants=scene.simulation.settle_time_constants,
+                                  sample_rate_hz=fs_hz, want_v=want_v, want_a=want_a, counter=counter)
+        chans = _channels(scene, i, seed, motion, fs_hz, ring, counter, rig.apparatus == "plate_striker",
+                          mic_pa)
         runs.append(_run(spec, chans, start))
         start += timedelta(seconds=spec.duration_s + RUN_GAP_S)
         onset, gone = thresholds(spec, motion)
@@ -300,7 +331,11 @@ def synthesize(scene: Scene | str | os.PathLike[str], *, seed: int | None = None
                      mic_distance_m=a.distance_m, sound_speed_m_s=a.c_m_s,
                      second_peak_probability=a.second_peak_probability)
     law = scene.acoustic.law_text() if scene.acoustic is not None else "none (no acoustic model in the scene)"
-    truth = Truth(gap_m=modal.gap_m, f_s_hz=modal.f_s_hz, zeta=modal.zeta, e=modal.e,
+    e_truth = modal.e
+    if system is not None:
+        assert contact is not None
+        law, e_truth = md.truth_extra(scene, system, contact, e_mode1, extra)
+    truth = Truth(gap_m=modal.gap_m, f_s_hz=modal.f_s_hz, zeta=modal.zeta, e=e_truth,
                   participation=modal.participation, acoustic_law=law, impacts=impacts,
                   thresholds=table, extra=extra)
     record = Record(scene.campaign_id, "synthetic", rig, tuple(runs), truth=truth,

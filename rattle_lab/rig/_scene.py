@@ -70,6 +70,9 @@ class ModelSpec:
     that spreads the velocity jump in the plate accelerometer and the vibrometer alike;
     ``ringing_m_s2_per_m_s`` the ringing
     amplitude per m/s of impact velocity; ``ringing_decay_s`` its time constant.
+
+    ``kind = "modal"`` (opt-in) simulates the plate with the multi-mode model instead
+    (``modal``: :class:`rattle_lab.rig._modal.ModalRigSpec`; needs a [plate]).
     """
 
     gap_m: float
@@ -81,6 +84,8 @@ class ModelSpec:
     ringing_m_s2_per_m_s: float = 2000.0
     ringing_decay_s: float = 0.004
     contact_s: float = 0.0002
+    kind: str = "sdf"
+    modal: Any = None    # rig._modal.ModalRigSpec when kind == "modal"
 
 
 @dataclass(frozen=True)
@@ -346,6 +351,15 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
                       ringing_m_s2_per_m_s=mr.number("ringing_m_s2_per_m_s", 2000.0, low=0.0),
                       ringing_decay_s=mr.positive("ringing_decay_s", 0.004),
                       contact_s=mr.positive("contact_s", 0.0002))
+    kind = mr.string("kind", "sdf", choices=("sdf", "modal"))
+    if kind == "modal":
+        from ._modal import parse_modal
+        for name in ("f_s_hz", "participation", "ringing_freqs_hz"):
+            if getattr(model, name) is not None:   # the plate's modes give them
+                mr.fail(mr.key(name), getattr(model, name), 'must not be given with kind = "modal"')
+        if plate is None:
+            mr.fail(mr.key("kind"), kind, "needs a [plate] table")
+        model = ModelSpec(**{**model.__dict__, "kind": kind, "modal": parse_modal(mr)})
     if plate is None:
         for name in ("f_s_hz", "participation"):
             if getattr(model, name) is None:
@@ -367,6 +381,8 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
             second_peak_ratio=ar.positive("second_peak_ratio", 1.3),
             second_peak_delay_s=ar.positive("second_peak_delay_s", 0.0015),
             mode_pa_per_m_s2=ar.number("mode_pa_per_m_s2", 0.0002, low=0.0))
+        if model.kind == "modal":   # the modal model radiates its own sound
+            ar.fail("acoustic", "[acoustic]", 'must not be given with `model.kind` = "modal"')
         ar.done()
 
     sensors = []
@@ -391,7 +407,7 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
         s.done()
         sensors.append(spec)
     sr.done()
-    if acoustic is None and any(s.name == "mic" for s in sensors):
+    if acoustic is None and model.kind != "modal" and any(s.name == "mic" for s in sensors):
         raise SceneError(f"{source}: `sensors.mic` needs an [acoustic] table, was None")
     if not sensors:
         raise SceneError(f"{source}: `sensors` must name at least one sensor, was {{}}")
@@ -444,6 +460,9 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
     if cr is not None:
         from ._chain import parse_chain
         chain = parse_chain(cr)
+        if model.kind == "modal" and chain.ring_velocity_per_m_s:   # the modes ring by themselves
+            cr.fail(cr.key("ring_velocity_per_m_s"), chain.ring_velocity_per_m_s,
+                    'must be 0 with `model.kind` = "modal" (the plate\'s modes ring physically)')
     sim = SimulationSpec()
     smr = top.sub("simulation")
     if smr is not None:
