@@ -267,7 +267,8 @@ def synthesize(scene: Scene | str | os.PathLike[str], *, seed: int | None = None
     system = contact = None
     if scene.model.kind == "modal":
         system, contact = md.build_system(scene)
-        modal, ring = md.truth_modal(scene, system), ()
+        ring: tuple[float, ...] = ()
+        modal = md.truth_modal(scene, system)
     else:
         modal, ring = resolve_modal(scene)
     e_mode1: list[tuple[np.ndarray, np.ndarray]] = []

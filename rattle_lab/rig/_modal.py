@@ -34,7 +34,8 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
+from collections.abc import Callable
 
 import numpy as np
 
@@ -215,7 +216,7 @@ def simulate_run_modal(scene: Scene, base: ModalSystem, contact: Contact, run: R
     counter.add("motion_dense")
     plate = base.plate
     assert plate is not None and base.modes is not None
-    W = np.asarray(base.modes.evaluate(base.striker_xi, base.striker_eta), dtype=float)  # type: ignore[attr-defined]
+    W = np.asarray(base.modes.evaluate(base.striker_xi, base.striker_eta), dtype=float)  # type: ignore[attr-defined,type-var]
     v_rel = W @ velocity(t0 + t)
     a_rel = np.gradient(v_rel, 1.0 / sample_rate_hz) if n > 1 else np.zeros(n)
     mic = None
