@@ -57,7 +57,8 @@ class LinkError(FileFormatError):
     """An HDF5 input refers to data in another file, and that is not allowed."""
 
 
-_POLICY: ContextVar[LinkPolicy] = ContextVar("rattle_lab_link_policy", default=LinkPolicy())  # noqa: B039 (see report)
+# No shared default instance: a LinkPolicy holds a mutable set of targets.
+_POLICY: ContextVar[LinkPolicy | None] = ContextVar("rattle_lab_link_policy", default=None)
 
 
 @contextlib.contextmanager
@@ -72,7 +73,8 @@ def link_policy(policy: LinkPolicy) -> Iterator[LinkPolicy]:
 
 def current_link_policy() -> LinkPolicy:
     """The policy in force (refuse every link unless a caller said otherwise)."""
-    return _POLICY.get()
+    policy = _POLICY.get()
+    return LinkPolicy() if policy is None else policy
 
 
 def _approve(policy: LinkPolicy, home: Path, target: Path, where: str, what: str) -> None:
