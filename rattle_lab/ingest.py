@@ -732,6 +732,8 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
                  limits: QualityLimits, n_chunk_samples: int, quiet: bool,
                  unchanged: list[_Input]) -> tuple[dict[_Input, InputResult], dict[str, list[Any]]]:
     """Write the new inputs into (a copy of) the store; return their results and the catalogue."""
+    from .acoustics.calibration import apply_campaign_calibration  # [issue 17 calibration hook]
+
     when = _now_iso()
     added: dict[_Input, InputResult] = {}
     rows: list[dict[str, Any]] = []
@@ -750,6 +752,9 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
             records = fh.require_group("records")
             for item in new:
                 with read(item.path, mapping=spec if item.foreign else None) as record:
+                    # [issue 17 calibration hook] sensitivities from the campaign's calibrator
+                    # records, with provenance (rattle_lab.acoustics.calibration)
+                    record = apply_campaign_calibration(record)
                     for run in record.runs:
                         other = runs.get((record.campaign_id, run.run_id))
                         if other is not None:
