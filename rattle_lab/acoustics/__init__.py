@@ -9,9 +9,11 @@ from ._filters import (NOMINAL_THIRD_OCTAVE_HZ, apply_weighting, band_edges_hz, 
                        band_mean_squares, weighting_db, weighting_response)
 from ._levels import P_REF_PA, SoundLevels, fast_time_weighted, rattle_episodes, sound_levels
 from ._loudness import Loudness, loudness
+from ._run import RunAcoustics, channel_calibration, run_acoustics
 
 __all__ = [
-    "Loudness", "NOMINAL_THIRD_OCTAVE_HZ", "P_REF_PA", "SoundLevels", "apply_weighting",
-    "band_edges_hz", "band_gain", "band_mean_squares", "fast_time_weighted", "loudness",
-    "rattle_episodes", "sound_levels", "weighting_db", "weighting_response",
+    "Loudness", "NOMINAL_THIRD_OCTAVE_HZ", "P_REF_PA", "RunAcoustics", "SoundLevels",
+    "apply_weighting", "band_edges_hz", "band_gain", "band_mean_squares", "channel_calibration",
+    "fast_time_weighted", "loudness", "rattle_episodes", "run_acoustics", "sound_levels",
+    "weighting_db", "weighting_response",
 ]
