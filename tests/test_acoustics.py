@@ -237,3 +237,30 @@ def test_sharpness_din45692_reference_sound():
     x = np.fft.irfft(spec, n=n)
     x *= P0 * 10 ** (60 / 20) / np.sqrt(np.mean(x**2))
     assert loudness(x, FS).sharpness_acum == pytest.approx(1.0, abs=0.05)
+
+
+def test_run_acoustics_survives_the_pipeline_detection_cache(tmp_path):
+    # The pipeline caches RunResult (with its acoustics) field by field in HDF5 (JSON for
+    # what is not an array): the summary read back must equal the one computed.
+    import h5py
+
+    from rattle_lab.acoustics import run_acoustics
+    from rattle_lab.pipeline import _get, _put
+    from rattle_lab.results import RunResult
+
+    fs = 20000.0
+    p = 0.1 * np.sin(2 * np.pi * 500 * np.arange(int(fs)) / fs)
+    ra = run_acoustics(p, fs, [0.2, 0.3, 0.9], with_loudness=False)
+    with h5py.File(tmp_path / "c.h5", "w") as fh:
+        _put(fh, "r", RunResult("k", "r", "sine_dwell", "ok", acoustics=ra))
+    with h5py.File(tmp_path / "c.h5", "r") as fh:
+        back = _get(fh["r"])
+    assert back.acoustics.summary() == ra.summary() or \
+        json_equal(back.acoustics.summary(), ra.summary())
+    assert len(back.acoustics.episodes) == 2
+
+
+def json_equal(a, b) -> bool:
+    import json
+
+    return json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)

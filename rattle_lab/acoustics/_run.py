@@ -31,8 +31,10 @@ class RunAcoustics:
         LAeq, LAFmax, LCpeak, third-octave levels of the whole run.
     loudness : Loudness or None
         N5, Nmax (sone) and sharpness (acum) of the whole run (None when too short).
-    episodes : tuple of (float, float, SoundLevels)
-        Rattle episodes (start, end in s, on the record's time axis) and their levels.
+    episodes : tuple of dict
+        Rattle episodes: ``t_start_s``, ``t_end_s`` (s, on the record's time axis) and
+        their levels (the keys of :meth:`SoundLevels.to_dict`).  Plain dicts, so that the
+        pipeline's detection cache stores them as JSON.
     rattle_bands_db, background_bands_db : dict of str to float
         Third-octave levels of the rattle episodes together and of the rest of the run
         (duration-weighted mean square of the pieces), dB; empty when there is none.
@@ -43,7 +45,7 @@ class RunAcoustics:
 
     levels: SoundLevels
     loudness: Loudness | None
-    episodes: tuple[tuple[float, float, SoundLevels], ...]
+    episodes: tuple[dict[str, Any], ...]
     rattle_bands_db: dict[str, float]
     background_bands_db: dict[str, float]
     calibration: dict[str, Any]
@@ -59,10 +61,7 @@ class RunAcoustics:
             "loudness_max_sone": ld.nmax_sone if ld else nan,
             "sharpness_acum": ld.sharpness_acum if ld else nan,
             "sound_field": ld.field_type if ld else None,
-            "episodes": [{"t_start_s": a, "t_end_s": b, "laeq_db": e.laeq_db,
-                          "lafmax_db": e.lafmax_db, "lcpeak_db": e.lcpeak_db,
-                          "third_octave_db": dict(e.third_octave_db)}
-                         for a, b, e in self.episodes],
+            "episodes": [dict(e) for e in self.episodes],
             "rattle_third_octave_db": dict(self.rattle_bands_db),
             "background_third_octave_db": dict(self.background_bands_db),
         }
@@ -143,7 +142,8 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
             continue
         inside[i0:i1] = True
         rattle_pieces.append(p[i0:i1])
-        episodes.append((a, b, sound_levels(p[i0:i1], fs_hz)))
+        episodes.append({"t_start_s": a, "t_end_s": b,
+                         **sound_levels(p[i0:i1], fs_hz).to_dict()})
     edges = np.flatnonzero(np.diff(np.concatenate([[1], inside.astype(int), [1]])))
     background = [p[edges[i]:edges[i + 1]] for i in range(0, edges.size - 1, 2)
                   if edges[i + 1] - edges[i] >= 2]

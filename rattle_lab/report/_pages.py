@@ -793,13 +793,13 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
         handles += [Patch(facecolor=color, alpha=0.15, label=f"1/{n} orbit exists"),
                     Patch(facecolor=color, alpha=0.45, label=f"1/{n} orbit exists and is stable")]
     if len(sets.ns) >= 2:
-        both = sets.stable[0] & sets.stable[1]
-        if both.any():  # the blended colour of two stable regions, named in the legend
+        both = sets.exists[0] & sets.exists[1]
+        if both.any():  # where the two shadings blend: named in the legend, hatched
             ax.contourf(*smooth_region(sets.omega, sets.F, both), levels=[0.5, 1.5],
                         colors="none", hatches=["xx"])
             handles.append(Patch(facecolor="none", edgecolor="0.3", hatch="xx",
-                                 label=f"1/{sets.ns[0]} and 1/{sets.ns[1]} both stable "
-                                       "(overlap: coexisting orbits)"))
+                                 label=f"1/{sets.ns[0]} and 1/{sets.ns[1]} both exist "
+                                       "(overlap of the shadings: coexisting orbits)"))
     for kind in ("saddle-node", "period-doubling", "secondary-grazing"):
         if any(c.kind == kind for n in sets.ns for c in sets.curves_of(n)):
             handles.append(Line2D([], [], color="0.3", ls=_LINESTYLES[kind], label=kind))
@@ -972,7 +972,7 @@ def acoustics_page(data: ReportData) -> list[Figure]:
     ax_n.set_xscale("log")
     ax_n.set_yscale("log")
     ax_n.set_xlabel("RMS impact velocity of the run (m/s)")
-    ax_n.set_ylabel("loudness (sone, ISO 532-1)")
+    ax_n.set_ylabel("ISO 532-1 loudness (sone)")
     field = sorted({str(r["acoustics"].get("sound_field") or "free") for r in rows})
     ax_n.set_title(f"Loudness against impact velocity ({'/'.join(field)} field)", fontsize=9)
     ax_n.grid(alpha=0.3, which="both")
