@@ -709,13 +709,13 @@ def smooth_region(omega: np.ndarray, F: np.ndarray, mask: np.ndarray,
                   factor: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A boolean region on a grid as a smooth field on a finer grid (for contourf at 0.5).
 
-    The 0/1 field is blurred by a Gaussian of 0.6 cells and interpolated cubically
+    The 0/1 field is blurred by a Gaussian of one cell and interpolated cubically
     onto a grid ``factor`` times finer: the 0.5 contour then runs smoothly, within a
     cell of the computed boundary, instead of in grid-cell steps.
     """
     from scipy import ndimage
 
-    z = ndimage.gaussian_filter(np.asarray(mask, dtype=float), sigma=0.6, mode="nearest")
+    z = ndimage.gaussian_filter(np.asarray(mask, dtype=float), sigma=1.0, mode="nearest")
     z = ndimage.zoom(z, factor, order=3, mode="nearest", grid_mode=False)
     w = np.linspace(omega[0], omega[-1], z.shape[1])
     f = np.linspace(F[0], F[-1], z.shape[0])
