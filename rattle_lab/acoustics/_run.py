@@ -40,7 +40,8 @@ class RunAcoustics:
         (duration-weighted mean square of the pieces), dB; empty when there is none.
     calibration : dict
         ``sensitivity``, ``sensitivity_units``, ``source`` ("calibrator", "declared",
-        "none"), ``drift_db``, ``flags`` of the microphone channel.
+        "none"), ``drift_db`` (None without a pre- and a post-calibration), ``flags`` of the
+        microphone channel.
     """
 
     levels: SoundLevels
@@ -68,6 +69,15 @@ class RunAcoustics:
         return {"acoustics": acoustics, "calibration": dict(self.calibration)}
 
 
+def _finite_or_none(x: Any) -> float | None:
+    """``float(x)``, or None for an absent or non-finite value (JSON-ready, and equal to itself)."""
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
 def channel_calibration(channel: Any) -> dict[str, Any]:
     """The calibration facts of a stored channel (``ingest_calibration_*`` provenance).
 
@@ -80,7 +90,7 @@ def channel_calibration(channel: Any) -> dict[str, Any]:
     return {"sensitivity": channel.sensitivity, "sensitivity_units": channel.sensitivity_units,
             "units": channel.units,
             "source": str(ex.get("ingest_calibration_source", default)),
-            "drift_db": float(ex.get("ingest_calibration_drift_db", math.nan)),
+            "drift_db": _finite_or_none(ex.get("ingest_calibration_drift_db")),
             "flags": [f for f in flags.split(",") if f]}
 
 
@@ -149,7 +159,7 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
                   if edges[i + 1] - edges[i] >= 2]
     calib = channel_calibration(channel) if channel is not None else {
         "sensitivity": None, "sensitivity_units": None, "units": "Pa", "source": "declared",
-        "drift_db": math.nan, "flags": []}
+        "drift_db": None, "flags": []}
     return RunAcoustics(lv, ld, tuple(episodes), _pooled_bands(rattle_pieces, fs_hz),
                         _pooled_bands(background, fs_hz), calib)
 
