@@ -52,6 +52,9 @@ class RunResult:
         RMS sound pressure level of the run, unweighted and A-weighted, dB re 20 uPa.
     threshold : Threshold or None
         Ramp threshold (ramp runs with a base accelerometer).
+    acoustics : RunAcoustics or None
+        LAeq, LAFmax, LCpeak, third-octave bands, loudness, sharpness and the
+        microphone's calibration (:func:`rattle_lab.acoustics.run_acoustics`).
     """
 
     input_key: str
@@ -71,6 +74,7 @@ class RunResult:
     spl_rms_db: float = float("nan")
     spl_rms_a_db: float = float("nan")
     threshold: Threshold | None = None
+    acoustics: Any = None  # [issue 17] RunAcoustics (levels, loudness) with a microphone
 
 
 @dataclass(frozen=True)

@@ -422,3 +422,35 @@ def test_real_mouse_events_reach_the_widgets() -> None:
     assert ex.histories.start_state == end
     click(ex.buttons["restart"].ax, 0.5)
     assert ex.histories.start_state == SDFState()
+
+
+def _legend_labels(ax) -> list[str]:
+    return [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def test_legends_list_only_the_curves_shown() -> None:
+    # issue 17: the legend listed the hidden parts (forced, transient, excitation)
+    ex = _explorer()
+    assert _legend_labels(ex.axes["x"]) == [ex.lines[("x", "total")].get_label(), "stop (x = 1)"]
+    assert ex.lines[("a", "excitation")].get_label() not in _legend_labels(ex.axes["a"])
+    ex.toggle("forced", True)
+    ex.toggle("total", False)
+    shown_x = _legend_labels(ex.axes["x"])
+    assert ex.lines[("x", "forced")].get_label() in shown_x
+    assert ex.lines[("x", "total")].get_label() not in shown_x
+    ex.toggle("excitation", True)
+    assert ex.lines[("a", "excitation")].get_label() in _legend_labels(ex.axes["a"])
+
+
+def test_sweep_panel_is_never_a_blank_frame() -> None:
+    # issue 17: before a sweep the panel says how to fill it; a sweep without impacts says so
+    ex = _explorer()
+    ax = ex.axes["sweep"]
+    assert any("no sweep yet" in t.get_text() for t in ax.texts)
+    ex.set_param("F", 1e-4)  # far below the grazing amplitude: no impact anywhere
+    ex.run_sweep("omega")
+    assert ex.last_sweep is not None
+    texts = [t.get_text() for t in ax.texts]
+    assert not any("no sweep yet" in t for t in texts)
+    assert not any(p.impact_velocities.size for p in ex.last_sweep.points)
+    assert "no impact at any value of this sweep" in texts

@@ -117,11 +117,11 @@ def test_report_parameter_reruns_only_the_report_and_outside_fits_are_noticed(
     no_model = _pipe(["report"], report={"model": False})
     first = run_pipeline(no_model, rec, store=store, out_dir=tmp_path)
     assert first.executed == ["ingest", "detect", "thresholds", "fit", "report"]
-    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 6
+    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 7  # with the acoustics page
     # [report] model = true: the report only (one more page pair: the model predictions)
     with_model = run_pipeline(_pipe(["report"]), rec, store=store, out_dir=tmp_path)
     assert with_model.executed == ["report"]
-    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 8
+    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 9
     # `rattle-lab fit` run on the store by hand replaces /results: the fit stage is stale
     fit_store(store, fit={"outlier_k": 3.0})
     after = run_pipeline(_pipe(["results"]), rec, store=store, out_dir=tmp_path)
@@ -148,7 +148,7 @@ def test_shipped_pipelines_run(synthetic_campaign_record: Path, tmp_path: Path) 
     assert full.executed == ["simulate", "ingest", "detect", "thresholds", "fit", "report"]
     assert set(full.outputs) == {"store", "results", "report"}
     reader = pypdf.PdfReader(full.outputs["report"])
-    assert len(reader.pages) == 8 and "model onset" in reader.pages[-1].extract_text()
+    assert len(reader.pages) == 9 and "model onset" in reader.pages[-1].extract_text()
     again = run_pipeline(full_pipe, ["default"], out_dir=tmp_path)
     assert again.executed == []
     assert again.cached == ["simulate:default.h5", "ingest", "detect", "thresholds", "fit",

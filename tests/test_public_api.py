@@ -51,6 +51,13 @@ def test_unknown_attribute_raises():
 # The public names of every package, in the order ``__all__`` lists them.  Changing one is an
 # API decision: update this table in the same commit.
 PACKAGES: dict[str, list[str]] = {
+    "rattle_lab.acoustics": [
+        "Loudness", "NOMINAL_THIRD_OCTAVE_HZ", "P_REF_PA", "RunAcoustics", "SoundLevels",
+        "apply_weighting", "band_edges_hz", "band_gain", "band_mean_squares",
+        "channel_calibration", "fast_time_weighted", "loudness", "rattle_episodes",
+        "run_acoustics", "sound_levels", "weighting_db", "weighting_response",
+    ],
+    "rattle_lab.exchange": ["UFF_TYPE_OF_QUANTITY", "export_uff", "uff_sets"],
     "rattle_lab.analysis": [
         "OneOverNOrbit", "BranchEvent", "PeriodicOrbit", "BifurcationSets", "BoundaryCurve",
         "one_over_n_orbits", "impact_quadratic", "impact_velocities", "orbit_forcing",

@@ -606,10 +606,12 @@ def plot_sweeps(sweeps: Sequence[Sweep], path: str | os.PathLike[str]) -> Path:
     gap = param == "gap"
     fig = Figure(figsize=(5.0 * len(sweeps), 9.0), layout="constrained")
     axes = fig.subplots(3, len(sweeps), squeeze=False, sharex="col")
-    names = ("v_im / F (nondim.)", "v_{x=0}^+ / F (nondim.)",
-             "mean v_im / F per cycle (nondim.)") if gap else \
-        ("impact velocity v_im (nondim.)", "crossing velocity v_{x=0}^+ (nondim.)",
-         "mean v_im per forcing cycle (nondim.)")
+    # [issue 17] mathtext labels (was raw "v_{x=0}^+"), on two short lines so that the
+    # three rows' labels do not run into each other
+    names = ("$v_{im}\\,/\\,F$\n(nondim.)", "$v_{x=0}^{+}\\,/\\,F$\n(nondim.)",
+             "mean $v_{im}\\,/\\,F$\nper cycle (nondim.)") if gap else \
+        ("impact velocity $v_{im}$\n(nondim.)", "crossing velocity $v_{x=0}^{+}$\n(nondim.)",
+         "mean $v_{im}$ per\nforcing cycle (nondim.)")
     for col, sw in enumerate(sweeps):
         xs = sw.values
         scale = np.array([p.params.F if gap else 1.0 for p in sw.points])
@@ -625,8 +627,17 @@ def plot_sweeps(sweeps: Sequence[Sweep], path: str | os.PathLike[str]) -> Path:
                             label="aperiodic, lambda_1 > 0" if flag else None)
         lin = np.array([p.linear_impact_velocity for p in sw.points]) / scale
         if np.any(np.isfinite(lin)):
+            # [issue 17] the y range follows the simulated data; the linear estimate (which
+            # grows without bound near resonance) is drawn within it, not stretching it
+            data_y = np.concatenate([np.asarray(p.impact_velocities, float) / s
+                                     for p, s in zip(sw.points, scale)] or [np.zeros(0)])
+            data_y = data_y[np.isfinite(data_y)]
             axes[0, col].plot(xs, lin, "-", color="tab:blue", linewidth=1.2,
                               label="linear estimate, eq. (4.11)")
+            if data_y.size:
+                lo, hi = float(data_y.min()), float(data_y.max())
+                pad = 0.08 * (hi - lo) if hi > lo else 0.1 * max(abs(hi), 1e-12)
+                axes[0, col].set_ylim(lo - pad, hi + pad)
         axes[2, col].plot(xs, sw.mean_impact_velocity / scale, ".-", color="black",
                           markersize=2, linewidth=0.6)
         for row in range(3):
@@ -642,6 +653,7 @@ def plot_sweeps(sweeps: Sequence[Sweep], path: str | os.PathLike[str]) -> Path:
         handles, _ = axes[0, col].get_legend_handles_labels()
         if handles:
             axes[0, col].legend(fontsize=7, loc="best")
+    fig.align_ylabels(axes[:, 0])
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format=fmt, dpi=150)
     return Path(path)

@@ -44,6 +44,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rattle_lab.cli._explore",
     "rattle_lab.cli._simulate",
     "rattle_lab.cli._report",
+    "rattle_lab.cli._export",
     "rattle_lab.cli._run",
 )
 

@@ -201,10 +201,14 @@ def _run_sweep(args: argparse.Namespace) -> int:
         return 0
     for s in sweeps:
         b = s.base
+        # [issue 17] only the parameters that are held fixed (not the swept one, nor F for
+        # a gap sweep, which sweeps 1/F)
+        held = {"F": b.F, "omega": b.omega, "zeta": b.zeta, "e": b.e}
+        fixed = " ".join(f"{k}={v:g}" for k, v in held.items()
+                         if k != param and not (param == "gap" and k == "F"))
         print(f"{s.direction}-sweep of {param} over {grid[0]:g}..{grid[-1]:g} step "
-              f"{float(args.step):g} ({grid.size} values; F={b.F:g} omega={b.omega:g} "
-              f"zeta={b.zeta:g} e={b.e:g} where fixed; {s.cycles} periods, first {s.discard} "
-              "discarded)")
+              f"{float(args.step):g} ({grid.size} values; fixed: {fixed}; {s.cycles} periods, "
+              f"first {s.discard} discarded)")
         print(f"  {'from':>10} {'to':>10} {'between':>21}")
         for tr in s.transitions():
             print(f"  {tr['from']:>10} {tr['to']:>10} {tr['before']:>10.6g} {tr['after']:>10.6g}")

@@ -467,6 +467,11 @@ class Explorer:
         ax_i.set_ylabel("impact velocity v_in (nondimensional)")
         ax_i.grid(alpha=0.3)
         ax_s.set_title("sweep: press 'sweep'", fontsize=10)
+        # [issue 17] say what the panel will hold instead of showing an empty frame
+        self._sweep_hint = ax_s.text(
+            0.5, 0.5, "no sweep yet: choose omega, F (or A) or e\nand press 'sweep' to sweep it "
+            "up from the current state", transform=ax_s.transAxes, ha="center", va="center",
+            color="gray", fontsize=8, wrap=True)
         ax_s.set_xlabel(_SWEEP_X_LABELS["omega"])
         ax_s.set_ylabel("impact velocity v_im (nondimensional)")
         ax_s.grid(alpha=0.3)
@@ -652,9 +657,18 @@ class Explorer:
             f"zeta = {p.zeta:.4g}   e = {p.e:.4g}   gap = {self._gap_m * 1e3:.4g} mm   |   "
             f"{len(imp)} impacts, max v_in = {v_max:.4g} "
             f"(= {v_max * self.omega_s_rad_s * self._gap_m:.4g} m/s)")
+        self._refresh_legends()
         self._status_text.set_text(self.status)
         self._status_text.set_color("tab:red" if self.status.startswith("error") else "black")
         self.figure.canvas.draw_idle()
+
+    def _refresh_legends(self) -> None:
+        """Legends of the time-history axes that list only the curves shown (issue 17)."""
+        for name in ("x", "a"):
+            ax = self._axes[name]
+            shown = [ln for ln in ax.get_lines()
+                     if ln.get_visible() and not str(ln.get_label()).startswith("_")]
+            ax.legend(handles=shown, loc="lower left", fontsize=7, ncol=4)
 
     def _draw_sweep(self) -> None:
         sw = self.last_sweep
@@ -683,6 +697,9 @@ class Explorer:
         ax.set_ylabel("impact velocity v_im (nondimensional)")
         ax.set_title(f"up-sweep of {'A_e' if accel else sw.param} from the current state",
                      fontsize=10)
+        if pts.shape[0] == 0:  # [issue 17] an empty sweep says so
+            ax.text(0.5, 0.5, "no impact at any value of this sweep", transform=ax.transAxes,
+                    ha="center", va="center", color="gray", fontsize=8)
         ax.legend(loc="upper left", fontsize=7)
         ax.grid(alpha=0.3)
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from .._progress import progress_bar
 from .._version import __version__
+from ..acoustics import run_acoustics  # [issue 17]
 from ..detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
                       impact_pattern, impulse_train, rms_spl_db, sound_peaks)
 from ..exceptions import ParameterError, RattleLabError
@@ -43,7 +44,8 @@ from ._spl_law import fit_db_law, fit_linear_law, law_dict
 SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01, "channel": None}
 FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0,
             "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3,
-            "restitution_method": "ramp", "level_hold_periods": 1}
+            "restitution_method": "ramp", "level_hold_periods": 1,
+            "sound_field": "free", "loudness": True}  # [issue 17] acoustics options
 _QUANTITIES = ("plate_velocity", "plate_acceleration", "sound_pressure", "base_acceleration")
 
 
@@ -58,7 +60,10 @@ def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, An
     ``speed_of_sound_m_s``, ``n_confirm``, ``restitution_method`` (``"ramp"``, the
     default, or ``"quasi-static"``: see :func:`~rattle_lab.fit.fit_restitution_down`),
     ``level_hold_periods`` (forcing periods the drive holds each level of a ramp: 1 for
-    a continuous ramp, the default; the synthetic rig holds ``piece_periods``).
+    a continuous ramp, the default; the synthetic rig holds ``piece_periods``),
+    ``sound_field`` (``"free"``, the default, or ``"diffuse"``: the loudness's sound field,
+    unless a run says ``x_sound_field``) and ``loudness`` (compute ISO 532-1 loudness,
+    default true).
     Other tables are ignored (they belong to other stages); unknown keys in these two
     are errors.
 
@@ -95,6 +100,9 @@ def _check_fit_values(fit: Mapping[str, Any], where: str = "") -> None:
     if method not in METHODS:
         raise ParameterError(f"{where}`restitution_method` must be one of {METHODS}, "
                              f"was {method!r}")
+    if fit.get("sound_field", "free") not in ("free", "diffuse"):  # [issue 17]
+        raise ParameterError(f"{where}`sound_field` must be 'free' or 'diffuse', "
+                             f"was {fit.get('sound_field')!r}")
     hold = fit.get("level_hold_periods", FIT_KEYS["level_hold_periods"])
     if isinstance(hold, bool) or not isinstance(hold, (int, np.integer)) or hold < 1:
         raise ParameterError(f"{where}`level_hold_periods` must be an integer >= 1, was {hold!r}")
@@ -170,6 +178,7 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
         pattern, pattern_n, counts = pr.pattern, pr.n, pr.counts
     sk = {**SOUND_KEYS, **{k: v for k, v in detect.items() if k in SOUND_KEYS}}
     peaks, delay, expected, spl, spl_a = None, np.nan, np.nan, np.nan, np.nan
+    acoustic = None  # [issue 17]
     mic = by_q.get("sound_pressure")
     if mic is not None:
         fs_mic = _fs_of(run, mic)
@@ -190,6 +199,11 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
             delay = cross_correlation_delay(train, p, fs_mic, max_lag_s=sk["max_lag_s"])
         if mic_distance_m:
             expected = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0))
+        # [issue 17 acoustics hook] levels, bands, loudness, calibration of the microphone
+        acoustic = run_acoustics(p, fs_mic, log.t_s, start_time_s=t0_mic, channel=mic,
+                                 field_type=run.extra.get("x_sound_field",
+                                                          fit.get("sound_field", "free")),
+                                 with_loudness=bool(fit.get("loudness", True)))
     threshold = None
     if run.protocol in ("amplitude_ramp_up", "amplitude_ramp_down") and math.isfinite(freq):
         b = by_q.get("base_acceleration")
@@ -202,7 +216,7 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
                      pattern_n=pattern_n, cycle_counts=counts, acoustic_delay_s=delay,
                      expected_delay_s=expected, spl_rms_db=spl, spl_rms_a_db=spl_a,
-                     threshold=threshold, **base)
+                     threshold=threshold, acoustics=acoustic, **base)
 
 
 def _f(x: Any) -> float | None:
@@ -474,7 +488,8 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                   "pattern": r.pattern, "acoustic_delay_s": r.acoustic_delay_s,
                   "expected_delay_s": r.expected_delay_s, "spl_rms_db": r.spl_rms_db,
                   "spl_rms_a_db": r.spl_rms_a_db,
-                  "threshold_accel_ms2": r.threshold.accel_ms2 if r.threshold else None}
+                  "threshold_accel_ms2": r.threshold.accel_ms2 if r.threshold else None,
+                  **(r.acoustics.summary() if r.acoustics is not None else {})}  # [issue 17]
                  for r in ok],
         "thresholds": {"freq_hz": curve.freq_hz.tolist(), "up_ms2": curve.up_ms2.tolist(),
                        "down_ms2": curve.down_ms2.tolist(),

@@ -16,7 +16,7 @@ from ._readers import RawRecord
 from ._readers.mapping import MappingSpec, load_mapping
 from ._schema import validate_tree
 
-Format = Literal["rattle_hdf5", "hdf5", "lvm", "npy", "tdms", "wav"]
+Format = Literal["rattle_hdf5", "hdf5", "lvm", "npy", "tdms", "uff", "wav"]
 
 #: Format name -> reader module.  "hdf5" is a foreign HDF5 layout read through a mapping.
 READERS: dict[str, str] = {
@@ -26,10 +26,11 @@ READERS: dict[str, str] = {
     "wav": "rattle_lab.records._readers.wav",
     "lvm": "rattle_lab.records._readers.lvm",
     "npy": "rattle_lab.records._readers.npy",
+    "uff": "rattle_lab.records._readers.uff",  # [issue 17] UFF dataset 58
 }
 
 #: Formats recognised from their first bytes, in this order (HDF5 is checked before them).
-SNIFFED: tuple[str, ...] = ("tdms", "wav", "lvm", "npy")
+SNIFFED: tuple[str, ...] = ("tdms", "wav", "lvm", "npy", "uff")
 
 
 def _head(path: Path) -> bytes:
@@ -60,7 +61,7 @@ def detect_format(path: str | os.PathLike[str]) -> str:
         if importlib.import_module(READERS[name]).sniff(head, path):
             return name
     raise FileFormatError(f"{path}: not a recognised record format (a rattle HDF5 record, or HDF5 / "
-                          "MATLAB v7.3, TDMS, WAV, LabVIEW .lvm or NumPy .npy with a mapping)")
+                          "MATLAB v7.3, TDMS, WAV, UFF 58, LabVIEW .lvm or NumPy .npy with a mapping)")
 
 
 def read_raw(path: str | os.PathLike[str], *,

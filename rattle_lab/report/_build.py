@@ -22,6 +22,7 @@ SECTIONS: tuple[tuple[str, Callable[[ReportData], list[Figure]]], ...] = (
     ("impact patterns", _pages.pattern_page),
     ("waveforms", _pages.waveform_page),
     ("SPL law", _pages.spl_page),
+    ("acoustics", _pages.acoustics_page),
     ("model predictions", _pages.model_pages),
 )
 

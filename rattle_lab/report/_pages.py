@@ -211,8 +211,12 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
     lines += ["", "Data-quality flags (catalogue)"]
     cat = data.catalogue
     flagged = cat[cat["flags"].astype(str) != ""]
-    if len(flagged) == 0:
+    negative = negative_hysteresis(data)
+    if len(flagged) == 0 and not negative:
         lines.append("  none")
+    for f_hz, h in negative:
+        lines.append(f"  thresholds: NEGATIVE hysteresis at {f_hz:g} Hz ({h:.3g} m/s^2): the "
+                     "disappearance lies above the onset")
     for _, row in flagged.head(12).iterrows():
         lines.append(f"  {row['input_key']}/{row['run_id']}/{row['channel']}: {row['flags']}")
     if len(flagged) > 12:
@@ -403,6 +407,18 @@ def grazing_band_ms2(freq_hz: np.ndarray, g: Mapping[str, Any]) -> tuple[np.ndar
     return y, band_quantile(g)[0] * np.sqrt(np.maximum(var, 0.0))
 
 
+def negative_hysteresis(data: ReportData) -> list[tuple[float, float]]:
+    """``(freq_hz, onset - disappearance)`` where the disappearance lies above the onset."""
+    if data.results is None:
+        return []
+    th = data.results.thresholds
+    f = np.asarray(th.get("freq_hz", []), dtype=float)
+    up = np.asarray(th.get("up_ms2", np.full(f.size, np.nan)), dtype=float)
+    down = np.asarray(th.get("down_ms2", np.full(f.size, np.nan)), dtype=float)
+    h = up - down
+    return [(float(a), float(b)) for a, b in zip(f, h) if math.isfinite(b) and b < 0]
+
+
 def threshold_page(data: ReportData) -> list[Figure]:
     """Onset/disappearance thresholds against frequency, eq. 3.4 fit and band, hysteresis."""
     if data.results is None:
@@ -437,8 +453,8 @@ def threshold_page(data: ReportData) -> list[Figure]:
                     label="left out of the fit (outlier)")
     ok = np.isfinite(up) & np.isfinite(down)
     if ok.any():
-        ax.fill_between(f[ok], down[ok], up[ok], color="tab:orange", alpha=0.25,
-                        label="hysteresis (onset - disappearance)")
+        ax.fill_between(f[ok], down[ok], up[ok], where=(up[ok] >= down[ok]), interpolate=True,
+                        color="tab:orange", alpha=0.25, label="hysteresis (onset - disappearance)")
     ax.plot(f, up, "^", color="tab:red", label="onset (ramp up)")
     ax.plot(f, down, "v", color="tab:blue", label="disappearance (ramp down)")
     ax.set_xlabel("excitation frequency (Hz)")
@@ -446,8 +462,20 @@ def threshold_page(data: ReportData) -> list[Figure]:
     ax.set_title("Impact thresholds (thesis Fig. 6-2, 6-3 a)")
     ax.legend(fontsize=8, loc="upper center")
     ax.grid(alpha=0.3)
-    ax_h.bar(f, up - down, width=0.6 * (np.min(np.diff(f)) if f.size > 1 else 1.0),
-             color="tab:orange")
+    hyst = up - down
+    neg = np.isfinite(hyst) & (hyst < 0)
+    width = 0.6 * (np.min(np.diff(f)) if f.size > 1 else 1.0)
+    ax_h.bar(f[~neg], hyst[~neg], width=width, color="tab:orange", label="onset above "
+             "disappearance (expected)")
+    if neg.any():  # a negative hysteresis is not physical for this oscillator: flag it
+        ax_h.bar(f[neg], hyst[neg], width=width, color="tab:red", hatch="//", edgecolor="k",
+                 label="NEGATIVE: disappearance above onset (check the ramps)")
+        for fx, h in zip(f[neg], hyst[neg]):
+            ax_h.annotate(f"negative\n{h:.3g} m/s^2", (fx, h), xytext=(0, -28),
+                          textcoords="offset points", ha="center", fontsize=8, color="tab:red",
+                          weight="bold")
+        ax_h.legend(fontsize=7, loc="upper left")
+    ax_h.axhline(0.0, color="k", lw=0.8)
     ax_h.set_xlabel("excitation frequency (Hz)")
     ax_h.set_ylabel("hysteresis, onset - disappearance (m/s^2)")
     ax_h.set_title("Hysteresis")
@@ -511,17 +539,22 @@ def pattern_page(data: ReportData) -> list[Figure]:
     ax = fig.add_subplot()
     classes = ((0, "no impact", "0.8"), (1, "1 impact per cycle", "tab:blue"),
                (2, "2 impacts per cycle", "tab:orange"), (3, ">= 3 impacts per cycle", "tab:red"))
+    diamonds: list[tuple[float, float, float, str]] = []
     for n, label, color in classes:
         sel = arr[:, 2] == n if n < 3 else arr[:, 2] >= 3
         ramp, dwell = sel & (arr[:, 3] == 0), sel & (arr[:, 3] == 1)
-        if ramp.any():
-            ax.scatter(arr[ramp, 0], arr[ramp, 1], s=6, color=color, label=label)
+        if ramp.any():  # the rarer (more impacts) classes above and larger: never hidden
+            ax.scatter(arr[ramp, 0], arr[ramp, 1], s=6 + 5 * n, color=color, label=label,
+                       zorder=2 + n, linewidths=0)
         if dwell.any():  # one marker per dwell: the share of its cycles in this class
             for fx, lv in sorted({(a, b) for a, b in arr[dwell, :2]}):
                 share = float(np.mean(arr[(arr[:, 0] == fx) & (arr[:, 1] == lv)][:, 2]
                                       .clip(max=3) == n))
-                ax.scatter([fx], [lv], s=40 + 120 * share, marker="D", color=color,
-                           edgecolor="k", linewidth=0.6, zorder=3)
+                diamonds.append((fx, lv, share, color))
+    # the largest diamonds first, so that a small share is drawn on top of a large one
+    for fx, lv, share, color in sorted(diamonds, key=lambda d: -d[2]):
+        ax.scatter([fx], [lv], s=40 + 120 * share, marker="D", color=color, edgecolor="k",
+                   linewidth=0.6, zorder=10)
     if (arr[:, 3] == 1).any():
         ax.scatter([], [], s=60, marker="D", color="w", edgecolor="k",
                    label="sine dwell (size: share of its cycles)")
@@ -678,6 +711,23 @@ def _nondim(g: Mapping[str, Any], f_hz: np.ndarray, a_ms2: np.ndarray) -> tuple[
     return f_hz / f_s, q * a_ms2 / (w_s**2 * gap)
 
 
+def smooth_region(omega: np.ndarray, F: np.ndarray, mask: np.ndarray,
+                  factor: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A boolean region on a grid as a smooth field on a finer grid (for contourf at 0.5).
+
+    The 0/1 field is blurred by a Gaussian of one cell and interpolated cubically
+    onto a grid ``factor`` times finer: the 0.5 contour then runs smoothly, within a
+    cell of the computed boundary, instead of in grid-cell steps.
+    """
+    from scipy import ndimage
+
+    z = ndimage.gaussian_filter(np.asarray(mask, dtype=float), sigma=1.0, mode="nearest")
+    z = ndimage.zoom(z, factor, order=3, mode="nearest", grid_mode=False)
+    w = np.linspace(omega[0], omega[-1], z.shape[1])
+    f = np.linspace(F[0], F[-1], z.shape[0])
+    return w, f, z
+
+
 def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
                 quiet: bool = True) -> list[Figure]:
     """Bifurcation sets and F sweeps of the SDF model at the fitted parameters (coarse grids).
@@ -725,24 +775,40 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     F_hi = float(max(1.6 * F_all.max(), 4 * zeta)) if F_all.size else 0.2
     sets = bifurcation_sets((1, 2), omega_range=(max(w_lo, 0.05), w_hi), F_range=(0.0, F_hi),
                             zeta=zeta, e=e, n_omega=61, n_F=41, n_v=31)
+    import matplotlib
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
+
+    from ..analysis.bifsets import _LINESTYLES  # the same styles as `model bifsets`' plot
 
     fig = landscape_figure()
     ax = fig.add_subplot()
     handles: list[Any] = []
-    for k, (n, color) in enumerate(zip(sets.ns, ("tab:blue", "tab:orange"))):
+    tab10 = matplotlib.colormaps["tab10"].colors  # type: ignore[attr-defined]
+    for k, n in enumerate(sets.ns):
+        color = tab10[k % len(tab10)]
         if sets.exists[k].any():
-            ax.contourf(sets.omega, sets.F, sets.exists[k].astype(float), levels=[0.5, 1.5],
+            ax.contourf(*smooth_region(sets.omega, sets.F, sets.exists[k]), levels=[0.5, 1.5],
                         colors=[color], alpha=0.15)
         if sets.stable[k].any():
-            ax.contourf(sets.omega, sets.F, sets.stable[k].astype(float), levels=[0.5, 1.5],
-                        colors=[color], alpha=0.4)
+            ax.contourf(*smooth_region(sets.omega, sets.F, sets.stable[k]), levels=[0.5, 1.5],
+                        colors=[color], alpha=0.45)
         for c in sets.curves_of(n):
             if c.kind != "grazing":
-                ax.plot(c.omega, c.F, color=color, lw=1.0,
-                        ls={"saddle-node": "--", "period-doubling": ":"}.get(c.kind, "-."))
-        handles += [Patch(color=color, alpha=0.15, label=f"1/{n} orbit exists"),
-                    Patch(color=color, alpha=0.55, label=f"1/{n} orbit exists and is stable")]
+                ax.plot(c.omega, c.F, color=color, lw=1.3, ls=_LINESTYLES[c.kind])
+        handles += [Patch(facecolor=color, alpha=0.15, label=f"1/{n} orbit exists"),
+                    Patch(facecolor=color, alpha=0.45, label=f"1/{n} orbit exists and is stable")]
+    if len(sets.ns) >= 2:
+        both = sets.exists[0] & sets.exists[1]
+        if both.any():  # where the two shadings blend: named in the legend, hatched
+            ax.contourf(*smooth_region(sets.omega, sets.F, both), levels=[0.5, 1.5],
+                        colors="none", hatches=["xx"])
+            handles.append(Patch(facecolor="none", edgecolor="0.3", hatch="xx",
+                                 label=f"1/{sets.ns[0]} and 1/{sets.ns[1]} both exist "
+                                       "(overlap of the shadings: coexisting orbits)"))
+    for kind in ("saddle-node", "period-doubling", "secondary-grazing"):
+        if any(c.kind == kind for n in sets.ns for c in sets.curves_of(n)):
+            handles.append(Line2D([], [], color="0.3", ls=_LINESTYLES[kind], label=kind))
     (graze,) = ax.plot(sets.grazing.omega, sets.grazing.F, color="k", lw=1.4,
                        label="grazing, eq. (3.4)")
     (on,) = ax.plot(w_up, F_up, "^", color="tab:red", ms=7, label="measured onset")
@@ -752,8 +818,8 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     ax.set_xlabel("forcing frequency omega = f / f_s (nondimensional)")
     ax.set_ylabel("forcing amplitude F = Q A / (omega_s^2 h) (nondimensional)")
     ax.set_title(f"Model bifurcation sets at the fitted zeta = {zeta:.3g} ({zeta_src}), "
-                 f"e = {e:.3g}, with the measured thresholds\n(boundaries: dashed saddle-node, "
-                 "dotted period-doubling)")
+                 f"e = {e:.3g}, with the measured thresholds\n(region edges smoothed within "
+                 f"one cell of the {sets.omega.size} x {sets.F.size} grid)")
     ax.legend(handles=[*handles, graze, on, off], fontsize=8, loc="upper left")
     ax.grid(alpha=0.3)
     figs = [fig]
@@ -795,3 +861,153 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
         ax2.grid(alpha=0.3)
         figs.append(fig2)
     return figs
+
+
+# --- acoustics: levels, bands, loudness (issue 17) -----------------------------------------
+
+def _acoustic_rows(data: ReportData) -> list[dict[str, Any]]:
+    """Summary rows of the runs with an ``acoustics`` object, with their impact velocity."""
+    if data.results is None:
+        return []
+    out = []
+    for row in data.results.summary.get("runs", []):
+        ac = row.get("acoustics")
+        if not isinstance(ac, Mapping):
+            continue
+        r = data.results.runs.get((row.get("input_key"), row.get("run_id")), {})
+        v = np.abs(np.asarray(r.get("v_in_m_s", []), dtype=float))
+        v = v[np.isfinite(v)]
+        out.append({**row, "v_rms_m_s": float(np.sqrt(np.mean(v**2))) if v.size else np.nan})
+    return out
+
+
+def _num(x: Any) -> float:
+    return float("nan") if x is None else float(x)
+
+
+def _band_arrays(bands: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    items = sorted((float(k), _num(v)) for k, v in bands.items())
+    if not items:
+        return np.zeros(0), np.zeros(0)
+    f, db = np.array(items).T
+    return f, db
+
+
+def calibration_note(rows: list[dict[str, Any]]) -> str:
+    """One line saying how the microphones were calibrated (calibrator or declared)."""
+    sources = sorted({str((r.get("calibration") or {}).get("source", "declared")) for r in rows})
+    flags = sorted({f for r in rows for f in (r.get("calibration") or {}).get("flags", [])})
+    if sources == ["calibrator"]:
+        text = "microphone sensitivity from the campaign's calibrator records"
+    elif "calibrator" in sources:
+        text = "microphone sensitivity from calibrator records for some runs, declared for others"
+    elif sources == ["none"]:
+        text = "microphone UNCALIBRATED (full-scale units): levels are not in dB re 20 uPa"
+    else:
+        text = "no calibrator record: the declared microphone sensitivity is used"
+    if flags:
+        text += "; FLAGGED: " + ", ".join(flags) + " (pre/post calibration differ by > 0.5 dB)"
+    return text
+
+
+def acoustics_page(data: ReportData) -> list[Figure]:
+    """Third-octave spectra of rattle against background; level and loudness against velocity."""
+    if data.results is None:
+        raise Missing(data.missing.get("results", "no results"))
+    rows = _acoustic_rows(data)
+    if not rows:
+        raise Missing("no run with a microphone has acoustic results (fit with this version)")
+    fig = landscape_figure()
+    (ax_b, ax_l), (ax_n, ax_t) = fig.subplots(2, 2)
+    # (a) band spectra: each run thin, energy mean over runs thick
+    pooled: dict[str, dict[float, list[float]]] = {"rattle": {}, "background": {}}
+    for r in rows:
+        ac = r["acoustics"]
+        for what, key, color in (("rattle", "rattle_third_octave_db", "tab:red"),
+                                 ("background", "background_third_octave_db", "0.45")):
+            f, db = _band_arrays(ac.get(key) or {})
+            if f.size:
+                ax_b.plot(f, db, drawstyle="steps-mid", color=color, lw=0.5, alpha=0.35)
+                for fk, dk in zip(f, db):
+                    pooled[what].setdefault(fk, []).append(dk)
+    for what, color in (("rattle", "tab:red"), ("background", "0.2")):
+        if pooled[what]:
+            f = np.array(sorted(pooled[what]))
+            db = np.array([10 * np.log10(np.mean(10 ** (np.array(pooled[what][k]) / 10)))
+                           for k in f])
+            ax_b.plot(f, db, drawstyle="steps-mid", color=color, lw=1.8,
+                      label=f"{what}: energy mean of {len(rows)} runs"
+                      if what == "rattle" else f"{what} (no impacts): energy mean")
+    ax_b.set_xscale("log")
+    ax_b.set_xlabel("third-octave band centre frequency (Hz)")
+    ax_b.set_ylabel("band level (dB re 20 uPa)")
+    ax_b.set_title("Third-octave spectra (IEC 61260-1 class 1): rattle against background",
+                   fontsize=9)
+    ax_b.grid(alpha=0.3, which="both")
+    if ax_b.get_legend_handles_labels()[0]:
+        ax_b.legend(fontsize=7, loc="lower left")
+    v = np.array([r["v_rms_m_s"] for r in rows])
+    laeq = np.array([_num(r["acoustics"].get("laeq_db")) for r in rows])
+    lafmax = np.array([_num(r["acoustics"].get("lafmax_db")) for r in rows])
+    n5 = np.array([_num(r["acoustics"].get("loudness_n5_sone")) for r in rows])
+    nmax = np.array([_num(r["acoustics"].get("loudness_max_sone")) for r in rows])
+    ok = np.isfinite(v) & (v > 0)
+    # (b) levels against impact velocity, with the 20 dB/decade of a linear SPL law
+    ax_l.plot(v[ok], laeq[ok], "o", color="tab:blue", label="LAeq of the run")
+    ax_l.plot(v[ok], lafmax[ok], "^", color="tab:purple", label="LAFmax of the run")
+    if ok.sum() >= 1 and np.isfinite(laeq[ok]).any():
+        grid = np.geomspace(v[ok].min() / 1.2, v[ok].max() * 1.2, 50)
+        v_mid, l_mid = np.exp(np.nanmedian(np.log(v[ok]))), np.nanmedian(laeq[ok])
+        ax_l.plot(grid, l_mid + 20 * np.log10(grid / v_mid), "--", color="0.4",
+                  label="20 dB per decade (p proportional to v, the SPL law)")
+    ax_l.set_xscale("log")
+    ax_l.set_xlabel("RMS impact velocity of the run (m/s)")
+    ax_l.set_ylabel("A-weighted level (dB re 20 uPa)")
+    ax_l.set_title("Level against impact velocity (IEC 61672-1)", fontsize=9)
+    ax_l.grid(alpha=0.3, which="both")
+    ax_l.legend(fontsize=7)
+    # (c) loudness against impact velocity: is the SPL law a loudness law?
+    ax_n.plot(v[ok], n5[ok], "o", color="tab:green", label="N5 (exceeded 5 % of the time)")
+    ax_n.plot(v[ok], nmax[ok], "s", mfc="none", color="tab:green", label="Nmax")
+    sel = ok & np.isfinite(n5) & (n5 > 0)
+    if sel.any():
+        grid = np.geomspace(v[sel].min() / 1.2, v[sel].max() * 1.2, 50)
+        v_mid, n_mid = np.exp(np.median(np.log(v[sel]))), np.exp(np.median(np.log(n5[sel])))
+        ax_n.plot(grid, n_mid * (grid / v_mid) ** 0.602, "--", color="0.4",
+                  label="N proportional to v^0.6 (SPL law with loudness doubling per 10 dB)")
+    ax_n.set_xscale("log")
+    ax_n.set_yscale("log")
+    ax_n.set_xlabel("RMS impact velocity of the run (m/s)")
+    ax_n.set_ylabel("ISO 532-1 loudness (sone)")
+    field = sorted({str(r["acoustics"].get("sound_field") or "free") for r in rows})
+    ax_n.set_title(f"Loudness against impact velocity ({'/'.join(field)} field)", fontsize=9)
+    ax_n.grid(alpha=0.3, which="both")
+    ax_n.legend(fontsize=7)
+    # (d) the table
+    ax_t.axis("off")
+    cols = ["run", "LAeq", "LAFmax", "LCpeak", "N5", "Nmax", "S", "calibration"]
+    table_rows = [[str(r["run_id"]), _fmt(r["acoustics"].get("laeq_db"), ".1f"),
+                   _fmt(r["acoustics"].get("lafmax_db"), ".1f"),
+                   _fmt(r["acoustics"].get("lcpeak_db"), ".1f"),
+                   _fmt(r["acoustics"].get("loudness_n5_sone"), ".3g"),
+                   _fmt(r["acoustics"].get("loudness_max_sone"), ".3g"),
+                   _fmt(r["acoustics"].get("sharpness_acum"), ".2f"),
+                   str((r.get("calibration") or {}).get("source", "declared"))]
+                  for r in rows[:14]]
+    _table(ax_t, table_rows, cols, 7.0)
+    ax_t.set_title("Per run: levels in dB re 20 uPa, loudness in sone, sharpness (DIN 45692) "
+                   "in acum", fontsize=9, loc="left")
+    if len(rows) > 14:
+        ax_t.text(0.0, 0.0, f"... and {len(rows) - 14} more runs", fontsize=7,
+                  transform=ax_t.transAxes)
+    from matplotlib.ticker import LogFormatterSciNotation, NullFormatter, ScalarFormatter
+
+    for ax in (ax_l, ax_n):  # log axes over less than a decade: plain numbers, no minor labels
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_formatter(NullFormatter())
+    ax_n.yaxis.set_major_formatter(ScalarFormatter())
+    ax_n.yaxis.set_minor_formatter(NullFormatter())
+    ax_b.xaxis.set_major_formatter(LogFormatterSciNotation())
+    fig.suptitle("Sound levels, third-octave bands and loudness\n" + calibration_note(rows),
+                 fontsize=11)
+    return [fig]

@@ -757,6 +757,8 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
                  unchanged: list[_Input], replace: bool = False, allow_links: bool = False
                  ) -> tuple[dict[_Input, InputResult], dict[str, list[Any]]]:
     """Write the new inputs into (a copy of) the store; return their results and the catalogue."""
+    from ..acoustics.calibration import apply_campaign_calibration  # [issue 17 calibration hook]
+
     when = _now_iso()
     added: dict[_Input, InputResult] = {}
     rows: list[dict[str, Any]] = []
@@ -768,6 +770,9 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
             policy = LinkPolicy(allow=allow_links)
             with link_policy(policy), read(item.path,
                                            mapping=spec if item.foreign else None) as record:
+                # [issue 17 calibration hook] sensitivities from the campaign's calibrator
+                # records, with provenance (rattle_lab.acoustics.calibration)
+                record = apply_campaign_calibration(record)
                 for run in record.runs:
                     other = runs.get((record.campaign_id, run.run_id))
                     if other is not None and replace and other[1] and other[1] in records:

@@ -71,7 +71,7 @@ from . import RawRecord
 
 FORMAT = "hdf5"
 MAPPING_VERSION = 1
-FORMATS = ("hdf5", "lvm", "npy", "tdms", "wav")
+FORMATS = ("hdf5", "lvm", "npy", "tdms", "uff", "wav")
 SELECTOR_KEYS = ("source", "index", "axis", "segment")
 
 _TOP_KEYS = {"mapping", "campaign", "rig", "runs", "skip"}

@@ -1,0 +1,155 @@
+"""Frequency weightings (IEC 61672-1) and third-octave band filters (IEC 61260-1), applied exactly.
+
+Both are the *analog* responses the standards define, evaluated on the FFT bins
+of the signal (magnitude and phase), so that nothing is warped near Nyquist:
+
+* A and C weighting: IEC 61672-1:2013 Annex E, poles ``f1 = 20.598997 Hz``,
+  ``f2 = 107.65265 Hz``, ``f3 = 737.86223 Hz``, ``f4 = 12194.217 Hz``;
+  ``H_C(s) = k_C s^2 w4^2 / ((s + w1)^2 (s + w4)^2)``,
+  ``H_A(s) = k_A s^4 w4^2 / ((s + w1)^2 (s + w2) (s + w3) (s + w4)^2)``, ``k`` normalising
+  to 0 dB at 1 kHz (these are causal, minimum-phase responses: a C-weighted peak
+  is the standard's).
+* Third-octave bands: base-ten ratio ``G = 10^(3/10)``, exact mid-band frequencies
+  ``f_m = 1000 G^(x/3)`` Hz (``x = -17 .. 13``: 20 Hz .. 20 kHz), edges
+  ``f_m G^(+-1/6)``; each band a third-order analog Butterworth band-pass
+  (:func:`scipy.signal.butter` with ``analog=True``), which meets the class-1
+  attenuation mask (checked in the tests).
+
+Why not digital IIR filters: the bilinear transform (the usual digital
+A-weighting, and :func:`scipy.signal.butter` with ``fs``) compresses the response
+towards Nyquist; at ``fs = 48 kHz`` the third-octave bands from 10 kHz up miss the
+class-1 stop-band limits and the A-weighting misses class 1 at 16-20 kHz
+(``benchmarks/bench_acoustic_filters.py`` prints both).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Literal
+
+import numpy as np
+from scipy import signal
+
+from ..exceptions import ParameterError
+
+Weighting = Literal["A", "C", "Z"]
+
+_F1_HZ, _F2_HZ, _F3_HZ, _F4_HZ = 20.598997, 107.65265, 737.86223, 12194.217
+#: Base-ten octave ratio of IEC 61260-1.
+G10 = 10.0 ** 0.3
+#: Band numbers ``x`` of the third-octave bands 20 Hz .. 20 kHz (``f_m = 1000 G^(x/3)``).
+BAND_NUMBERS = tuple(range(-17, 14))
+#: Nominal mid-band frequencies (IEC 61260-1 Annex E), Hz, as labels.
+NOMINAL_THIRD_OCTAVE_HZ = ("20", "25", "31.5", "40", "50", "63", "80", "100", "125", "160", "200",
+                           "250", "315", "400", "500", "630", "800", "1000", "1250", "1600", "2000",
+                           "2500", "3150", "4000", "5000", "6300", "8000", "10000", "12500",
+                           "16000", "20000")
+
+
+def _unnormalised(weighting: Weighting, freq_hz: np.ndarray) -> np.ndarray:
+    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
+    w1, w2, w3, w4 = (2 * np.pi * f for f in (_F1_HZ, _F2_HZ, _F3_HZ, _F4_HZ))
+    if weighting == "C":
+        return s**2 * w4**2 / ((s + w1) ** 2 * (s + w4) ** 2)
+    if weighting == "A":
+        return s**4 * w4**2 / ((s + w1) ** 2 * (s + w2) * (s + w3) * (s + w4) ** 2)
+    if weighting == "Z":
+        return np.ones_like(s)
+    raise ParameterError(f"`weighting` must be 'A', 'C' or 'Z', was {weighting!r}")
+
+
+def weighting_response(weighting: Weighting, freq_hz: object) -> np.ndarray:
+    """Complex analog response of the A, C (or Z = flat) weighting, 1 at 1 kHz.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> bool(np.isclose(abs(weighting_response("A", 1000.0)), 1.0))
+    True
+    >>> bool(np.isclose(20 * np.log10(abs(weighting_response("C", 31.6228))), -3.0, atol=0.05))
+    True
+    """
+    h = _unnormalised(weighting, np.asarray(freq_hz, dtype=float))
+    return h / abs(complex(_unnormalised(weighting, np.array(1000.0))))
+
+
+def weighting_db(weighting: Weighting, freq_hz: object) -> np.ndarray:
+    """Weighting in dB (``-inf`` at 0 Hz for A and C)."""
+    with np.errstate(divide="ignore"):
+        return 20.0 * np.log10(np.abs(weighting_response(weighting, freq_hz)))
+
+
+def apply_weighting(pressure_pa: np.ndarray, fs_hz: float, weighting: Weighting) -> np.ndarray:
+    """The frequency-weighted signal: the analog response applied on the FFT bins.
+
+    The signal is zero-padded by 0.5 s (at least) before the transform so that the
+    weighting's decay (time constant ``1 / (2 pi 20.6 Hz) = 7.7 ms``) does not wrap
+    around to the start; the result is the causal filter's output over the record.
+    """
+    p = np.asarray(pressure_pa, dtype=float)
+    if weighting == "Z" or p.size == 0:
+        return p.copy()
+    n_fft = int(2 ** np.ceil(np.log2(p.size + max(round(0.5 * fs_hz), 1))))
+    spec = np.fft.rfft(p, n=n_fft)
+    h = weighting_response(weighting, np.fft.rfftfreq(n_fft, 1.0 / fs_hz))
+    return np.fft.irfft(spec * h, n=n_fft)[: p.size]
+
+
+def band_edges_hz(band_number: int) -> tuple[float, float, float]:
+    """``(lower, exact mid-band, upper)`` frequency of third-octave band ``x``, Hz."""
+    fm = 1000.0 * G10 ** (band_number / 3.0)
+    return fm * G10 ** (-1.0 / 6.0), fm, fm * G10 ** (1.0 / 6.0)
+
+
+@lru_cache(maxsize=64)
+def _band_zpk(band_number: int) -> tuple[np.ndarray, np.ndarray, float]:
+    lo, _, hi = band_edges_hz(band_number)
+    z, p, k = signal.butter(3, [2 * np.pi * lo, 2 * np.pi * hi], "bandpass", analog=True,
+                            output="zpk")
+    return z, p, float(k)
+
+
+def band_gain(band_number: int, freq_hz: object) -> np.ndarray:
+    """``|H|`` of the class-1 third-order Butterworth band-pass of band ``x`` (analog)."""
+    z, p, k = _band_zpk(band_number)
+    _, h = signal.freqs_zpk(z, p, k, worN=2 * np.pi * np.atleast_1d(np.asarray(freq_hz, float)))
+    return np.abs(h)
+
+
+def band_mean_squares(x: np.ndarray, fs_hz: float) -> dict[str, float]:
+    """Mean square of ``x`` in each third-octave band 20 Hz .. 20 kHz that fits the record.
+
+    Parseval on the FFT of the whole segment with the band's ``|H|^2``: the mean
+    square of the band filter's steady-state output.  A band is left out when its
+    upper edge is not below ``fs_hz / 2`` or when the segment is shorter than one
+    over the band's width (too few spectral lines to resolve the band).
+
+    Returns
+    -------
+    dict
+        Nominal mid-band frequency (``"1000"``) -> mean square (units of ``x`` squared).
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    out: dict[str, float] = {}
+    if n == 0:
+        return out
+    spec2 = np.abs(np.fft.rfft(x)) ** 2
+    fold = np.full(spec2.size, 2.0)
+    fold[0] = 1.0
+    if n % 2 == 0:
+        fold[-1] = 1.0
+    power = fold * spec2 / n**2  # sums to mean(x**2)
+    freq = np.fft.rfftfreq(n, 1.0 / fs_hz)
+    duration_s = n / fs_hz
+    for x_band, label in zip(BAND_NUMBERS, NOMINAL_THIRD_OCTAVE_HZ):
+        lo, _, hi = band_edges_hz(x_band)
+        if hi >= fs_hz / 2 or duration_s * (hi - lo) < 1.0:
+            continue
+        out[label] = float(np.sum(power * band_gain(x_band, freq) ** 2))
+    return out
+
+
+__all__ = ["BAND_NUMBERS", "G10", "NOMINAL_THIRD_OCTAVE_HZ", "Weighting", "apply_weighting",
+           "band_edges_hz", "band_gain", "band_mean_squares", "weighting_db",
+           "weighting_response"]

@@ -1,0 +1,102 @@
+"""Time-varying loudness (ISO 532-1:2017, Zwicker) and sharpness (DIN 45692), via MoSQITo.
+
+MoSQITo (``mosqito.sq_metrics``) implements ISO 532-1 method 1 for time-varying
+sounds (third-octave levels every 0.5 ms, core loudness, nonlinear decay, slopes,
+temporal weighting; output every 2 ms) and the DIN 45692 weighting ``g(z)``.  It
+is validated here against the standard's anchors (1 kHz tone at 40 dB -> 1 sone,
+60 dB -> 4 sone) and the DIN 45692 reference sound (1 acum).
+
+* ``N5``: the loudness exceeded 5 % of the time (the 95th percentile of ``N(t)``),
+  ``Nmax`` its maximum, sone.
+* Sharpness: DIN 45692 applied to the time-averaged specific loudness ``N'(z)``
+  (one value for the stretch), acum.
+
+The record is resampled to 48 kHz (MoSQITo's rate) with a polyphase filter when
+it is at another rate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Literal
+
+import numpy as np
+from scipy import signal
+
+from ..exceptions import ParameterError
+
+FieldType = Literal["free", "diffuse"]
+_FS_LOUDNESS_HZ = 48000
+
+
+@dataclass(frozen=True)
+class Loudness:
+    """Loudness and sharpness of a stretch of a pressure record.
+
+    Attributes
+    ----------
+    n5_sone : float
+        Percentile loudness ``N5`` (exceeded 5 % of the time), sone (ISO 532-1).
+    nmax_sone : float
+        Largest time-varying loudness, sone.
+    sharpness_acum : float
+        DIN 45692 sharpness of the time-averaged specific loudness, acum.
+    field_type : {"free", "diffuse"}
+        Sound field assumed (free = frontal incidence).
+    """
+
+    n5_sone: float
+    nmax_sone: float
+    sharpness_acum: float
+    field_type: FieldType = "free"
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict."""
+        return {"loudness_n5_sone": self.n5_sone, "loudness_max_sone": self.nmax_sone,
+                "sharpness_acum": self.sharpness_acum, "field_type": self.field_type}
+
+
+def _at_48k(p: np.ndarray, fs_hz: float) -> np.ndarray:
+    if fs_hz == _FS_LOUDNESS_HZ:
+        return p
+    ratio = Fraction(_FS_LOUDNESS_HZ / fs_hz).limit_denominator(1000)
+    if abs(float(ratio) * fs_hz - _FS_LOUDNESS_HZ) > 1e-6 * _FS_LOUDNESS_HZ:
+        raise ParameterError(f"cannot resample {fs_hz} Hz to 48 kHz by a ratio of small integers")
+    return signal.resample_poly(p, ratio.numerator, ratio.denominator)
+
+
+def loudness(pressure_pa: object, fs_hz: float, *, field_type: FieldType = "free") -> Loudness:
+    """ISO 532-1 time-varying loudness (N5, Nmax) and DIN 45692 sharpness of a pressure signal.
+
+    Parameters
+    ----------
+    pressure_pa : array_like
+        Calibrated sound pressure, Pa (at least 0.1 s).
+    fs_hz : float
+        Sampling rate, Hz.
+    field_type : {"free", "diffuse"}
+        Free field (frontal incidence, the default) or diffuse field.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown ``field_type``, a record shorter than 0.1 s or non-finite.
+    """
+    if field_type not in ("free", "diffuse"):
+        raise ParameterError(f"`field_type` must be 'free' or 'diffuse', was {field_type!r}")
+    p = np.asarray(pressure_pa, dtype=float)
+    if p.ndim != 1 or p.size < 0.1 * fs_hz or not np.all(np.isfinite(p)):
+        raise ParameterError("`pressure_pa` must be a finite 1-D signal of at least 0.1 s")
+    from mosqito.sq_metrics import loudness_zwtv, sharpness_din_from_loudness
+
+    n_t, n_spec, _, _ = loudness_zwtv(_at_48k(p, fs_hz), _FS_LOUDNESS_HZ, field_type=field_type)
+    n_t = np.asarray(n_t, dtype=float)
+    spec_mean = np.mean(np.asarray(n_spec, dtype=float), axis=1)
+    n_mean = float(np.sum(spec_mean) * 0.1)  # N' on a 0.1 Bark grid
+    sharp = (float(sharpness_din_from_loudness(n_mean, spec_mean, weighting="din"))
+             if n_mean > 0 else float("nan"))
+    return Loudness(float(np.percentile(n_t, 95.0)), float(np.max(n_t)), sharp, field_type)
+
+
+__all__ = ["FieldType", "Loudness", "loudness"]

@@ -1,0 +1,167 @@
+"""The acoustics of one run with a microphone: levels of the run, of its rattle episodes and of
+its background, loudness and sharpness, and the calibration used.
+
+This is what ``rattle-lab fit --json`` reports per run as ``acoustics`` and
+``calibration`` (:meth:`RunAcoustics.summary`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import RattleLabError
+from ._levels import P_REF_PA, SoundLevels, rattle_episodes, sound_levels
+from ._loudness import FieldType, Loudness, loudness
+
+#: Loudness needs ISO 532-1's 0.1 s at least; shorter stretches get none.
+_MIN_LOUDNESS_S = 0.1
+
+
+@dataclass(frozen=True)
+class RunAcoustics:
+    """Acoustic results of one run.
+
+    Attributes
+    ----------
+    levels : SoundLevels
+        LAeq, LAFmax, LCpeak, third-octave levels of the whole run.
+    loudness : Loudness or None
+        N5, Nmax (sone) and sharpness (acum) of the whole run (None when too short).
+    episodes : tuple of dict
+        Rattle episodes: ``t_start_s``, ``t_end_s`` (s, on the record's time axis) and
+        their levels (the keys of :meth:`SoundLevels.to_dict`).  Plain dicts, so that the
+        pipeline's detection cache stores them as JSON.
+    rattle_bands_db, background_bands_db : dict of str to float
+        Third-octave levels of the rattle episodes together and of the rest of the run
+        (duration-weighted mean square of the pieces), dB; empty when there is none.
+    calibration : dict
+        ``sensitivity``, ``sensitivity_units``, ``source`` ("calibrator", "declared",
+        "none"), ``drift_db`` (None without a pre- and a post-calibration), ``flags`` of the
+        microphone channel.
+    """
+
+    levels: SoundLevels
+    loudness: Loudness | None
+    episodes: tuple[dict[str, Any], ...]
+    rattle_bands_db: dict[str, float]
+    background_bands_db: dict[str, float]
+    calibration: dict[str, Any]
+
+    def summary(self) -> dict[str, Any]:
+        """``{"acoustics": {...}, "calibration": {...}}`` as ``fit --json`` prints them."""
+        lv, ld = self.levels, self.loudness
+        nan = float("nan")
+        acoustics = {
+            "laeq_db": lv.laeq_db, "lafmax_db": lv.lafmax_db, "lcpeak_db": lv.lcpeak_db,
+            "third_octave_db": dict(lv.third_octave_db),
+            "loudness_n5_sone": ld.n5_sone if ld else nan,
+            "loudness_max_sone": ld.nmax_sone if ld else nan,
+            "sharpness_acum": ld.sharpness_acum if ld else nan,
+            "sound_field": ld.field_type if ld else None,
+            "episodes": [dict(e) for e in self.episodes],
+            "rattle_third_octave_db": dict(self.rattle_bands_db),
+            "background_third_octave_db": dict(self.background_bands_db),
+        }
+        return {"acoustics": acoustics, "calibration": dict(self.calibration)}
+
+
+def _finite_or_none(x: Any) -> float | None:
+    """``float(x)``, or None for an absent or non-finite value (JSON-ready, and equal to itself)."""
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+def channel_calibration(channel: Any) -> dict[str, Any]:
+    """The calibration facts of a stored channel (``ingest_calibration_*`` provenance).
+
+    A channel ingested before calibration was recorded has no provenance: its
+    declared sensitivity was used (``source = "declared"``; ``"none"`` when uncalibrated).
+    """
+    ex = channel.extra
+    default = "none" if channel.uncalibrated else "declared"
+    flags = str(ex.get("ingest_calibration_flags", "") or "")
+    return {"sensitivity": channel.sensitivity, "sensitivity_units": channel.sensitivity_units,
+            "units": channel.units,
+            "source": str(ex.get("ingest_calibration_source", default)),
+            "drift_db": _finite_or_none(ex.get("ingest_calibration_drift_db")),
+            "flags": [f for f in flags.split(",") if f]}
+
+
+def _pooled_bands(pieces: list[np.ndarray], fs_hz: float) -> dict[str, float]:
+    from ._filters import band_mean_squares
+
+    total: dict[str, float] = {}
+    dur: dict[str, float] = {}
+    for x in pieces:
+        for k, ms in band_mean_squares(x, fs_hz).items():
+            total[k] = total.get(k, 0.0) + ms * x.size
+            dur[k] = dur.get(k, 0.0) + x.size
+    return {k: float(10 * np.log10(total[k] / dur[k] / P_REF_PA**2)) if total[k] > 0
+            else float("-inf") for k in total}
+
+
+def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
+                  start_time_s: float = 0.0, channel: Any = None,
+                  field_type: FieldType = "free", with_loudness: bool = True,
+                  episode_gap_s: float = 0.5) -> RunAcoustics:
+    """Levels, loudness and band spectra of a run's sound pressure (Pa) and its episodes.
+
+    Parameters
+    ----------
+    pressure_pa : ndarray
+        Calibrated sound pressure of the run, Pa.
+    fs_hz : float
+        Its sampling rate, Hz.
+    impact_t_s : array_like
+        Detected impact times, s (episodes: :func:`~rattle_lab.acoustics.rattle_episodes`).
+    start_time_s : float
+        Time of the first sample, s.
+    channel : Channel, optional
+        The microphone channel, for its calibration provenance.
+    field_type : {"free", "diffuse"}
+        Sound field of the loudness.
+    with_loudness : bool
+        Compute ISO 532-1 loudness (the costly part: about 1 s per second of sound).
+    episode_gap_s : float
+        Impacts further apart than this start a new episode, s.
+    """
+    p = np.asarray(pressure_pa, dtype=float)
+    lv = sound_levels(p, fs_hz)
+    ld = None
+    if with_loudness and p.size >= _MIN_LOUDNESS_S * fs_hz:
+        try:
+            ld = loudness(p, fs_hz, field_type=field_type)
+        except RattleLabError:
+            ld = None
+    eps = rattle_episodes(impact_t_s, start_time_s=start_time_s, duration_s=p.size / fs_hz,
+                          gap_s=episode_gap_s)
+    episodes = []
+    inside = np.zeros(p.size, dtype=bool)
+    rattle_pieces = []
+    for a, b in eps:
+        i0 = max(0, round((a - start_time_s) * fs_hz))
+        i1 = min(p.size, round((b - start_time_s) * fs_hz))
+        if i1 - i0 < 2:
+            continue
+        inside[i0:i1] = True
+        rattle_pieces.append(p[i0:i1])
+        episodes.append({"t_start_s": a, "t_end_s": b,
+                         **sound_levels(p[i0:i1], fs_hz).to_dict()})
+    edges = np.flatnonzero(np.diff(np.concatenate([[1], inside.astype(int), [1]])))
+    background = [p[edges[i]:edges[i + 1]] for i in range(0, edges.size - 1, 2)
+                  if edges[i + 1] - edges[i] >= 2]
+    calib = channel_calibration(channel) if channel is not None else {
+        "sensitivity": None, "sensitivity_units": None, "units": "Pa", "source": "declared",
+        "drift_db": None, "flags": []}
+    return RunAcoustics(lv, ld, tuple(episodes), _pooled_bands(rattle_pieces, fs_hz),
+                        _pooled_bands(background, fs_hz), calib)
+
+
+__all__ = ["RunAcoustics", "channel_calibration", "run_acoustics"]
