@@ -25,7 +25,7 @@ RUN_FIELDS = ("protocol", "excitation_freq_hz", "freq_end_hz", "freq_step_hz", "
 CHANNEL_FIELDS = ("quantity", "units", "sample_rate_hz", "start_time_s", "timestamps",
                   "sensitivity", "sensitivity_units", "sensor_id", "sensor_model", "sensor_serial",
                   "calibration_date", "range_min", "range_max", "units_assumed", "description",
-                  "measurand", "sign_convention", "group_delay_s")
+                  "measurand", "sign_convention", "group_delay_s", "adc_gain", "adc_offset")
 TRUTH_FIELDS = ("gap_m", "f_s_hz", "zeta", "e", "participation", "acoustic_law")
 SCHEMA_NAME = "rattle_record"
 SCHEMA_VERSION = 1
@@ -43,7 +43,8 @@ def schema_version_of(record: Record) -> int:
             return SCHEMA_VERSION_CHAIN
         for ch in run.channels:
             if ch.measurand is not None or ch.sign_convention is not None or \
-                    ch.group_delay_s is not None:
+                    ch.group_delay_s is not None or ch.adc_gain is not None or \
+                    ch.adc_offset is not None:
                 return SCHEMA_VERSION_CHAIN
     return SCHEMA_VERSION
 
