@@ -30,7 +30,7 @@ CHANNEL_DTYPES = frozenset({"f4", "f8", "i1", "i2", "i4", "i8", "u1", "u2", "u4"
 #: Attributes that layout version 2 adds (the measurement chain), by group.
 V2_RIG_ATTRS = ("modal_participation", "plate_poisson_ratio")
 V2_CHANNEL_ATTRS = ("measurand", "sign_convention", "group_delay_s", "adc_gain", "adc_offset")
-V2_RUN_ATTRS = ("detect_channel",)
+V2_RUN_ATTRS = ("detect_channel", "level_peak", "freq_peak_hz", "turn_time_s")
 
 
 @functools.lru_cache(maxsize=1)
@@ -168,6 +168,8 @@ def _check_version(tree: dict[str, Any], label: str) -> None:
     found = [("/rig", k) for k in V2_RIG_ATTRS if k in members["rig"]["attrs"]]
     for run_id, run in _members(members["runs"]).items():
         found += [(f"/runs/{run_id}", k) for k in V2_RUN_ATTRS if k in run["attrs"]]
+        if str(run["attrs"].get("protocol", "")).endswith("_up_down"):
+            found.append((f"/runs/{run_id}", "protocol"))
         for name, channel in _members(_members(run)["channels"]).items():
             found += [(f"/runs/{run_id}/channels/{name}", k) for k in V2_CHANNEL_ATTRS
                       if k in channel["attrs"]]
