@@ -138,3 +138,16 @@ def test_turn_on_a_noisy_drive(kind, f_low_hz):
     noisy = d + 0.04 * np.max(np.abs(d)) * np.random.default_rng(7).standard_normal(d.size)
     assert turn_from_drive(noisy, FS_DRIVE_HZ, 0.0, f_low_hz, kind) == pytest.approx(
         T_UP_S, abs=1.0 / f_low_hz)
+
+
+def test_split_ids_that_collide_with_another_run_are_refused(tmp_path):
+    from rattle_lab.records import DuplicateRunError
+    path = _write(tmp_path / "dup.h5", turn_time_s=1.5)
+    with h5py.File(path, "r+") as fh:
+        fh.copy(fh["runs/r1"], "runs/R1_down")
+        attrs = fh["runs/R1_down"].attrs
+        for key in ("level_peak", "turn_time_s"):
+            del attrs[key]
+        attrs["protocol"] = "amplitude_ramp_down"
+    with pytest.raises(DuplicateRunError, match="'R1_down' and 'r1_down'|'r1_down' and 'R1_down'"):
+        read(path)

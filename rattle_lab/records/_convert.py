@@ -15,6 +15,7 @@ import numpy as np
 
 from ._model import (ArraySource, Channel, ImpactTable, Origin, Record, Rig, Run, Sensor,
                      ThresholdTable, Truth)
+from ._schema import _check_case_duplicates
 from ._updown import UP_DOWN_PROTOCOLS, split_up_down
 
 ROOT_FIELDS = ("campaign_id", "source", "description", "operator", "created_iso", "writer")
@@ -102,6 +103,9 @@ def record_from_tree(tree: Mapping[str, Any], sources: Mapping[str, ArraySource]
         runs.append(Run(run_id=run_id, channels=tuple(channels), timestamps=timestamps,
                         **run_known, extra=run_extra))
 
+    if turns:   # the parts' ids must not collide with the file's other runs
+        _check_case_duplicates([r.run_id for r in runs],
+                               str(origin.path) if origin is not None else "record", "/runs")
     truth = None
     if "truth" in members:
         truth = _truth_from_tree(members["truth"], sources, turns)
