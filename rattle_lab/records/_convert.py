@@ -15,6 +15,8 @@ import numpy as np
 
 from ._model import (ArraySource, Channel, ImpactTable, Origin, Record, Rig, Run, Sensor,
                      ThresholdTable, Truth)
+from ._schema import _check_case_duplicates
+from ._updown import UP_DOWN_PROTOCOLS, split_up_down
 
 ROOT_FIELDS = ("campaign_id", "source", "description", "operator", "created_iso", "writer")
 RIG_FIELDS = ("apparatus", "description", "plate_length_m", "plate_width_m", "plate_thickness_m",
@@ -25,7 +27,9 @@ RUN_FIELDS = ("protocol", "excitation_freq_hz", "freq_end_hz", "freq_step_hz", "
 CHANNEL_FIELDS = ("quantity", "units", "sample_rate_hz", "start_time_s", "timestamps",
                   "sensitivity", "sensitivity_units", "sensor_id", "sensor_model", "sensor_serial",
                   "calibration_date", "range_min", "range_max", "units_assumed", "description",
-                  "measurand", "sign_convention", "group_delay_s")
+                  "measurand", "sign_convention", "group_delay_s", "adc_gain", "adc_offset")
+#: Run attributes of an up-down run (schema v2), consumed when the reader splits it.
+UP_DOWN_FIELDS = ("level_peak", "freq_peak_hz", "turn_time_s")
 TRUTH_FIELDS = ("gap_m", "f_s_hz", "zeta", "e", "participation", "acoustic_law")
 SCHEMA_NAME = "rattle_record"
 SCHEMA_VERSION = 1
@@ -43,7 +47,8 @@ def schema_version_of(record: Record) -> int:
             return SCHEMA_VERSION_CHAIN
         for ch in run.channels:
             if ch.measurand is not None or ch.sign_convention is not None or \
-                    ch.group_delay_s is not None:
+                    ch.group_delay_s is not None or ch.adc_gain is not None or \
+                    ch.adc_offset is not None:
                 return SCHEMA_VERSION_CHAIN
     return SCHEMA_VERSION
 
@@ -76,8 +81,9 @@ def record_from_tree(tree: Mapping[str, Any], sources: Mapping[str, ArraySource]
     rig = Rig(**rig_known, sensors=tuple(sensors), extra=rig_extra)
 
     runs = []
+    turns: dict[str, float] = {}
     for run_id, run_node in members["runs"]["members"].items():
-        run_known, run_extra = _split(run_node["attrs"], RUN_FIELDS)
+        run_known, run_extra = _split(run_node["attrs"], RUN_FIELDS + UP_DOWN_FIELDS)
         channels = []
         for name, ch_node in _members(run_node, "channels").items():
             ch_known, ch_extra = _split(ch_node["attrs"], CHANNEL_FIELDS)
@@ -85,12 +91,24 @@ def record_from_tree(tree: Mapping[str, Any], sources: Mapping[str, ArraySource]
                                     **ch_known, extra=ch_extra))
         timestamps = {name: sources[f"/runs/{run_id}/timestamps/{name}"]
                       for name in _members(run_node, "timestamps")}
+        if run_known["protocol"] in UP_DOWN_PROTOCOLS:
+            # a run that ramps up then down is read as its two parts
+            label = str(origin.path) if origin is not None else "record"
+            turns[run_id], parts = split_up_down(run_id, run_known, channels, timestamps, label)
+            for part_id, attrs, chans, ts in parts:
+                runs.append(Run(run_id=part_id, channels=tuple(chans), timestamps=ts, **{
+                    k: v for k, v in attrs.items() if not k.startswith("x_")},
+                    extra={**run_extra, **{k: v for k, v in attrs.items() if k.startswith("x_")}}))
+            continue
         runs.append(Run(run_id=run_id, channels=tuple(channels), timestamps=timestamps,
                         **run_known, extra=run_extra))
 
+    if turns:   # the parts' ids must not collide with the file's other runs
+        _check_case_duplicates([r.run_id for r in runs],
+                               str(origin.path) if origin is not None else "record", "/runs")
     truth = None
     if "truth" in members:
-        truth = _truth_from_tree(members["truth"], sources)
+        truth = _truth_from_tree(members["truth"], sources, turns)
     return Record(**root_known, rig=rig, runs=tuple(runs), truth=truth, extra=root_extra,
                   origin=origin)
 
@@ -99,13 +117,19 @@ def _read_all(source: ArraySource) -> np.ndarray:
     return np.asarray(source.read(0, source.n_samples), dtype=np.float64)
 
 
-def _truth_from_tree(node: Mapping[str, Any], sources: Mapping[str, ArraySource]) -> Truth:
+def _truth_from_tree(node: Mapping[str, Any], sources: Mapping[str, ArraySource],
+                     turns: Mapping[str, float]) -> Truth:
     known, extra = _split(node["attrs"], TRUTH_FIELDS)
     impacts = {}
     for run_id in _members(node, "impacts"):
         base = f"/truth/impacts/{run_id}"
-        impacts[run_id] = ImpactTable(*(_read_all(sources[f"{base}/{k}"])
-                                        for k in ("t_s", "v_in_m_s", "v_out_m_s")))
+        cols = [_read_all(sources[f"{base}/{k}"]) for k in ("t_s", "v_in_m_s", "v_out_m_s")]
+        if run_id in turns:   # an up-down run read as two: its impacts split at the turn
+            up = cols[0] < turns[run_id]
+            impacts[run_id + "_up"] = ImpactTable(*(c[up] for c in cols))
+            impacts[run_id + "_down"] = ImpactTable(*(c[~up] for c in cols))
+            continue
+        impacts[run_id] = ImpactTable(*cols)
     th_node = node["members"]["thresholds"]
     freq, onset, disappearance = (_read_all(sources[f"/truth/thresholds/{k}"])
                                   for k in ("freq_hz", "onset_level", "disappearance_level"))

@@ -215,6 +215,11 @@ class Channel:
     group_delay_s : float or None
         Known group delay of the channel's filters (vibrometer decoder, anti-alias), s:
         an event shows ``group_delay_s`` late; compensated before channels are paired.
+    adc_gain, adc_offset : float or None
+        Raw ADC counts (schema v2): the stored integers are counts, and
+        ``adc_gain * count + adc_offset`` is the value in :attr:`units` (``adc_gain`` > 0, in
+        units per count; ``adc_offset`` in units, default 0).  :meth:`read` applies them, then
+        the conversion of :attr:`units` to SI; ``range_min``/``range_max`` stay in counts.
     """
 
     name: str
@@ -237,10 +242,17 @@ class Channel:
     measurand: str | None = None
     sign_convention: str | None = None
     group_delay_s: float | None = None
+    adc_gain: float | None = None
+    adc_offset: float | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "data", as_source(self.data))
+        if self.adc_gain is not None and not (np.isfinite(self.adc_gain) and self.adc_gain > 0):
+            raise ParameterError(f"channel {self.name!r}: `adc_gain` must be finite and > 0, "
+                                 f"was {self.adc_gain}")
+        if self.adc_offset is not None and self.adc_gain is None:
+            raise ParameterError(f"channel {self.name!r}: `adc_offset` needs `adc_gain`")
 
     @property
     def n_samples(self) -> int:
@@ -254,8 +266,17 @@ class Channel:
 
     @property
     def scale_to_si(self) -> float:
-        """Factor from stored units to :attr:`si_units`."""
-        return scale_to_si(self.quantity, self.units, self.sensitivity, self.sensitivity_units)[0]
+        """Factor from the stored numbers (ADC counts when :attr:`adc_gain` is set) to :attr:`si_units`."""
+        scale = scale_to_si(self.quantity, self.units, self.sensitivity, self.sensitivity_units)[0]
+        return scale * self.adc_gain if self.adc_gain is not None else scale
+
+    @property
+    def offset_si(self) -> float:
+        """Offset added after :attr:`scale_to_si`, SI units (``adc_offset`` converted; else 0)."""
+        if self.adc_offset is None:
+            return 0.0
+        return scale_to_si(self.quantity, self.units, self.sensitivity,
+                           self.sensitivity_units)[0] * self.adc_offset
 
     @property
     def uncalibrated(self) -> bool:
@@ -274,6 +295,14 @@ class Channel:
         True
         >>> ch.read(si=False).tolist()
         [0.0, 1.0, 2.0]
+
+        Raw 16-bit counts of a +-10 V ADC, 100 mV/g accelerometer, -2 mV offset:
+
+        >>> adc = Channel("acc", "plate_acceleration", "V", np.array([0, 3277], dtype="i2"),
+        ...               sample_rate_hz=1000.0, start_time_s=0.0, sensitivity=100.0,
+        ...               sensitivity_units="mV/g", adc_gain=10.0 / 32768, adc_offset=-0.002)
+        >>> [round(float(x), 4) for x in adc.read()]    # m/s^2: (gain * count + offset) / 0.1 V/g * g0
+        [-0.1961, 97.8764]
         """
         stop = self.n_samples if stop is None else stop
         if not 0 <= start <= stop <= self.n_samples:
@@ -281,7 +310,11 @@ class Channel:
         raw = self.data.read(start, stop)
         if not si:
             return raw
-        return to_si(raw, self.scale_to_si)
+        out = to_si(raw, self.scale_to_si)
+        offset = self.offset_si
+        if offset != 0.0:
+            out = out + out.dtype.type(offset)
+        return out
 
     def iter_chunks(self, n_chunk_samples: int = DEFAULT_CHUNK_SAMPLES, *,
                     si: bool = True) -> Iterator[tuple[int, np.ndarray]]:

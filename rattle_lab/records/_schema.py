@@ -29,8 +29,8 @@ CHANNEL_DTYPES = frozenset({"f4", "f8", "i1", "i2", "i4", "i8", "u1", "u2", "u4"
 
 #: Attributes that layout version 2 adds (the measurement chain), by group.
 V2_RIG_ATTRS = ("modal_participation", "plate_poisson_ratio")
-V2_CHANNEL_ATTRS = ("measurand", "sign_convention", "group_delay_s")
-V2_RUN_ATTRS = ("detect_channel",)
+V2_CHANNEL_ATTRS = ("measurand", "sign_convention", "group_delay_s", "adc_gain", "adc_offset")
+V2_RUN_ATTRS = ("detect_channel", "level_peak", "freq_peak_hz", "turn_time_s")
 
 
 @functools.lru_cache(maxsize=1)
@@ -168,6 +168,8 @@ def _check_version(tree: dict[str, Any], label: str) -> None:
     found = [("/rig", k) for k in V2_RIG_ATTRS if k in members["rig"]["attrs"]]
     for run_id, run in _members(members["runs"]).items():
         found += [(f"/runs/{run_id}", k) for k in V2_RUN_ATTRS if k in run["attrs"]]
+        if str(run["attrs"].get("protocol", "")).endswith("_up_down"):
+            found.append((f"/runs/{run_id}", "protocol"))
         for name, channel in _members(_members(run)["channels"]).items():
             found += [(f"/runs/{run_id}/channels/{name}", k) for k in V2_CHANNEL_ATTRS
                       if k in channel["attrs"]]
@@ -217,6 +219,7 @@ def _check_in_code(tree: dict[str, Any], label: str) -> None:
             if "measurand" in attrs and attrs.get("quantity") != "plate_velocity":
                 raise SchemaError(f"{label}: {path}: attribute 'measurand': only a plate_velocity "
                                   f"channel has one (this is {attrs.get('quantity')!r})")
+            _check_adc(channel, label, path)
             sensor_id = attrs.get("sensor_id")
             if sensor_id is not None and sensor_id not in sensors:
                 raise SchemaError(f"{label}: {path}: attribute 'sensor_id': no sensor "
@@ -237,6 +240,19 @@ def _check_in_code(tree: dict[str, Any], label: str) -> None:
     truth = members.get("truth")
     if truth is not None:
         _check_truth(truth, set(runs), label)
+
+
+def _check_adc(channel: dict[str, Any], label: str, path: str) -> None:
+    """Raw ADC counts: ``adc_gain`` needs an integer dataset; ``adc_offset`` needs ``adc_gain``."""
+    attrs = channel["attrs"]
+    if "adc_offset" in attrs and "adc_gain" not in attrs:
+        raise SchemaError(f"{label}: {path}: attribute 'adc_offset': needs 'adc_gain' (counts "
+                          "are converted as adc_gain * count + adc_offset)")
+    kind = str(channel["dtype"]).lstrip("<>|=")[:1]
+    if "adc_gain" in attrs and kind not in ("i", "u"):
+        raise SchemaError(f"{label}: {path}: attribute 'adc_gain': raw ADC counts are integers; "
+                          f"this dataset is {channel['dtype']!r} (store engineering units without "
+                          "adc_gain, or the counts as an integer dataset)")
 
 
 def _check_case_duplicates(names: Iterable[str], label: str, where: str) -> None:
