@@ -38,13 +38,15 @@ def test_thesis_plate_is_105_5_hz_with_the_thesis_edges_through_the_cli():
     # Thesis sec. 5.1: a = 0.254 m (clamped), b = 0.2286 m (free), 1 mm aluminium, E = 7e10,
     # nu = 0.34, rho = 2710; Table 2.1 (CFCF, "length a sides clamped", b/a = 0.9) lambda =
     # 27.4 (Leissa), which gives f1 = 105.5 Hz by eq. 2.25 (the thesis rounds to 105 Hz).
-    # Tolerance 0.2 %: Leissa's lambda has three digits.
+    # Tolerance 0.5 %: Leissa's lambda has three digits and, like every beam-function Ritz
+    # value with a free edge, sits above the converged value: the converged Ritz solver gives
+    # 27.31 (0.33 % below 27.4; issue 13).  The other edge reading is 20 % away.
     proc = run_cli("model", "plate", *THESIS_PLATE, "--edges", "CFCF", "--modes", "1", "--json")
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["edge_order"] == list(EDGE_ORDER)
-    assert out["modes"][0]["lambda"] == pytest.approx(27.4, rel=2e-3)
-    assert out["modes"][0]["f_hz"] == pytest.approx(105.5, rel=2e-3)
+    assert out["modes"][0]["lambda"] == pytest.approx(27.4, rel=5e-3)
+    assert out["modes"][0]["f_hz"] == pytest.approx(105.5, rel=5e-3)
     # the other reading of the four letters (length-b sides clamped) is another plate
     other = json.loads(run_cli("model", "plate", *THESIS_PLATE, "--edges", "FCFC", "--modes",
                                "1", "--json").stdout)
@@ -72,8 +74,9 @@ def test_rig_participation_from_the_plate_geometry_matches_model_scale():
     got = rig_participation(rig)
     assert got is not None and got.flags == ()
     assert got.value == pytest.approx(expected, rel=1e-12)
-    # Table 2.1 (b/a = 0.9, FEM): Q1 = 0.500, Q2 = 0.402 -> 1.244; three digits -> 0.5 %
-    assert got.value == pytest.approx(0.500 / 0.402, rel=5e-3)
+    # Table 2.1 (b/a = 0.9, FEM): Q1 = 0.500, Q2 = 0.402 -> 1.244.  Three digits give 0.25 %;
+    # the converged Ritz mode (issue 13) gives 1.234, 0.8 % from the thesis's FEM mesh: 1 %.
+    assert got.value == pytest.approx(0.500 / 0.402, rel=1e-2)
     no_nu = rig_participation(dataclasses.replace(rig, plate_poisson_ratio=None))
     assert no_nu is not None and no_nu.flags == (FLAG_POISSON_ASSUMED,)
 
