@@ -105,6 +105,7 @@ def turn_from_drive(drive: np.ndarray, fs_hz: float, start_time_s: float, f_low_
 def _cut_index(ch: Channel, timestamps: Mapping[str, np.ndarray], turn_s: float) -> int:
     if ch.timestamps is not None:
         return int(np.searchsorted(timestamps[ch.timestamps], turn_s, side="left"))
+    assert ch.sample_rate_hz is not None  # a channel has timestamps or a sample rate
     k = int(np.ceil((turn_s - float(ch.start_time_s or 0.0)) * float(ch.sample_rate_hz) - 1e-9))
     return min(max(k, 0), ch.n_samples)
 
@@ -142,6 +143,7 @@ def split_up_down(run_id: str, attrs: Mapping[str, Any], channels: list[Channel]
         f_low = float(attrs["excitation_freq_hz"]) if protocol.startswith("amplitude") else \
             min(float(attrs["excitation_freq_hz"]), float(attrs["freq_end_hz"]))
         try:
+            assert drive.sample_rate_hz is not None  # chosen above for its sample rate
             turn_s = turn_from_drive(drive.read(), float(drive.sample_rate_hz),
                                      float(drive.start_time_s or 0.0), f_low,
                                      "amplitude" if protocol.startswith("amplitude")
@@ -171,6 +173,7 @@ def split_up_down(run_id: str, attrs: Mapping[str, Any], channels: list[Channel]
             lo, hi = (0, k) if up else (k, ch.n_samples)
             new: dict[str, Any] = {"data": SliceSource(ch.data, lo, hi)}
             if ch.timestamps is None and not up:
+                assert ch.sample_rate_hz is not None  # no timestamps: regularly sampled
                 new["start_time_s"] = float(ch.start_time_s or 0.0) + k / float(ch.sample_rate_hz)
             cut.append(_replace(ch, **new))
         ts_cut: dict[str, ArraySource] = {}
