@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from ._data import ReportData
 
@@ -977,6 +978,8 @@ def acoustics_page(data: ReportData) -> list[Figure]:
                   label="N proportional to v^0.6 (SPL law with loudness doubling per 10 dB)")
     ax_n.set_xscale("log")
     ax_n.set_yscale("log")
+    for axis in (ax_l.xaxis, ax_n.xaxis, ax_n.yaxis):
+        _label_log_axis(axis)
     ax_n.set_xlabel("RMS impact velocity of the run (m/s)")
     ax_n.set_ylabel("ISO 532-1 loudness (sone)")
     field = sorted({str(r["acoustics"].get("sound_field") or "free") for r in rows})
@@ -1011,3 +1014,10 @@ def acoustics_page(data: ReportData) -> list[Figure]:
     fig.suptitle("Sound levels, third-octave bands and loudness\n" + calibration_note(rows),
                  fontsize=11)
     return [fig]
+
+
+def _label_log_axis(axis: Any) -> None:
+    """Numbers at 1, 2 and 5 per decade: a log axis inside one decade still has labels."""
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda value, _pos: f"{value:g}"))
+    axis.set_minor_formatter(NullFormatter())
