@@ -12,11 +12,17 @@ is validated here against the standard's anchors (1 kHz tone at 40 dB -> 1 sone,
   (one value for the stretch), acum.
 
 The record is resampled to 48 kHz (MoSQITo's rate) with a polyphase filter when
-it is at another rate.
+it is at another rate.  MoSQITo's nonlinear temporal decay (a Python loop over 48,000
+sub-steps per second, 90 % of its time) is replaced, for the duration of each call, by
+the compiled and bit-identical :func:`~rattle_lab.acoustics._nl_decay.nonlinear_decay`.
 """
 
 from __future__ import annotations
 
+import contextlib
+import importlib
+import threading
+from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Literal
@@ -25,6 +31,7 @@ import numpy as np
 from scipy import signal
 
 from ..exceptions import ParameterError
+from ._nl_decay import nonlinear_decay
 
 FieldType = Literal["free", "diffuse"]
 _FS_LOUDNESS_HZ = 48000
@@ -66,6 +73,22 @@ def _at_48k(p: np.ndarray, fs_hz: float) -> np.ndarray:
     return signal.resample_poly(p, ratio.numerator, ratio.denominator)
 
 
+_PATCH_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def _compiled_decay() -> Iterator[None]:
+    """MoSQITo's time-varying loudness with its nonlinear decay step compiled (same bits)."""
+    module = importlib.import_module("mosqito.sq_metrics.loudness.loudness_zwtv.loudness_zwtv")
+    with _PATCH_LOCK:
+        original = module._nl_loudness
+        module._nl_loudness = nonlinear_decay
+        try:
+            yield
+        finally:
+            module._nl_loudness = original
+
+
 def loudness(pressure_pa: object, fs_hz: float, *, field_type: FieldType = "free") -> Loudness:
     """ISO 532-1 time-varying loudness (N5, Nmax) and DIN 45692 sharpness of a pressure signal.
 
@@ -90,7 +113,9 @@ def loudness(pressure_pa: object, fs_hz: float, *, field_type: FieldType = "free
         raise ParameterError("`pressure_pa` must be a finite 1-D signal of at least 0.1 s")
     from mosqito.sq_metrics import loudness_zwtv, sharpness_din_from_loudness
 
-    n_t, n_spec, _, _ = loudness_zwtv(_at_48k(p, fs_hz), _FS_LOUDNESS_HZ, field_type=field_type)
+    with _compiled_decay():
+        n_t, n_spec, _, _ = loudness_zwtv(_at_48k(p, fs_hz), _FS_LOUDNESS_HZ,
+                                          field_type=field_type)
     n_t = np.asarray(n_t, dtype=float)
     spec_mean = np.mean(np.asarray(n_spec, dtype=float), axis=1)
     n_mean = float(np.sum(spec_mean) * 0.1)  # N' on a 0.1 Bark grid
