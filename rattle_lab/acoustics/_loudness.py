@@ -79,7 +79,8 @@ _PATCH_LOCK = threading.Lock()
 @contextlib.contextmanager
 def _compiled_decay() -> Iterator[None]:
     """MoSQITo's time-varying loudness with its nonlinear decay step compiled (same bits)."""
-    module = importlib.import_module("mosqito.sq_metrics.loudness.loudness_zwtv.loudness_zwtv")
+    module: Any = importlib.import_module(
+        "mosqito.sq_metrics.loudness.loudness_zwtv.loudness_zwtv")
     with _PATCH_LOCK:
         original = module._nl_loudness
         module._nl_loudness = nonlinear_decay

@@ -98,10 +98,10 @@ def nonlinear_decay(core_loudness: np.ndarray) -> np.ndarray:
     ui[:, :, 0] = core
     for k in range(1, NL_ITER):  # the same running sum as the reference, for equal bits
         ui[:, :, k] = ui[:, :, k - 1] + step
-    ui = ui.reshape(core.shape[0], core.shape[1] * NL_ITER)
+    flat = ui.reshape(core.shape[0], core.shape[1] * NL_ITER)
     b = _coefficients()
     u2_first = np.where(core[:, 0] >= 1e-5, core[:, 0] * (1 - b[5]), 0.0)
-    uo = _decay_rows(ui, u2_first, b)
+    uo = _decay_rows(flat, u2_first, b)
     return uo.reshape(core.shape[0], core.shape[1], NL_ITER)[:, :, 0]
 
 
