@@ -54,6 +54,9 @@ def test_loaders_take_names(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> 
     scene = load_scene("thesis_cfcf_1p3mm")
     assert scene == load_scene(CHECKOUT / "synthetic" / "thesis_cfcf_1p3mm.toml")
     assert load_pipeline_file("full_campaign").name == "full_campaign"
+    from rattle_lab.fit import load_pipeline  # `fit --pipeline NAME` reads the same file
+    assert load_pipeline("threshold_campaign") == load_pipeline(
+        CHECKOUT / "pipelines" / "threshold_campaign.toml")
     assert load_mapping("hammer_npy").data == load_mapping(
         CHECKOUT / "data_schema" / "mappings" / "hammer_npy.toml").data
 

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .._progress import progress_bar
+from .._resources import find_resource
 from .._version import __version__
 from ..acoustics import run_acoustics  # [issue 17]
 from ..detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
@@ -76,6 +77,8 @@ def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, An
     out: dict[str, dict[str, Any]] = {"detect": {}, "fit": {}}
     if path is None:
         return out
+    if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
+        path = find_resource("pipelines", str(path)) or path
     try:
         doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
