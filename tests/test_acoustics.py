@@ -241,20 +241,21 @@ def test_sharpness_din45692_reference_sound():
 
 def test_run_acoustics_survives_the_pipeline_detection_cache(tmp_path):
     # The pipeline caches RunResult (with its acoustics) field by field in HDF5 (JSON for
-    # what is not an array): the summary read back must equal the one computed.
+    # what is not an array; the store's one serializer): the summary read back must equal
+    # the one computed.
     import h5py
 
     from rattle_lab.acoustics import run_acoustics
-    from rattle_lab.pipeline import _get, _put
+    from rattle_lab.store._cache import get_dataclass, put_dataclass
     from rattle_lab.results import RunResult
 
     fs = 20000.0
     p = 0.1 * np.sin(2 * np.pi * 500 * np.arange(int(fs)) / fs)
     ra = run_acoustics(p, fs, [0.2, 0.3, 0.9], with_loudness=False)
     with h5py.File(tmp_path / "c.h5", "w") as fh:
-        _put(fh, "r", RunResult("k", "r", "sine_dwell", "ok", acoustics=ra))
+        put_dataclass(fh, "r", RunResult("k", "r", "sine_dwell", "ok", acoustics=ra))
     with h5py.File(tmp_path / "c.h5", "r") as fh:
-        back = _get(fh["r"])
+        back = get_dataclass(fh["r"])
     assert back.acoustics.summary() == ra.summary() or \
         json_equal(back.acoustics.summary(), ra.summary())
     assert len(back.acoustics.episodes) == 2
