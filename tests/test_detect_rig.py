@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rattle_lab.detect import impact_pattern
+from rattle_lab.detect import ImpactParams, impact_pattern
 from rattle_lab.fit import analyse_run
 from rattle_lab.records import read
 from rattle_lab.rig import load_scene
@@ -73,7 +73,11 @@ def test_rig_every_impact_found_and_timed(analysed):
 
 def test_rig_impact_velocities_match_truth(analysed):
     rec, results = analysed
-    rel, abs_err, v_true, e_det = [], [], [], []
+    rel, abs_err, v_true, e_det, whole = [], [], [], [], []
+    # an impact closer to the record's start than one pre-impact fit window (plus its guard)
+    # has a truncated fit: it is held to the absolute bounds below, not to the 5 % one
+    params = ImpactParams()
+    pre_s = params.sine_window_s + params.sine_guard_s + 2 * params.detrend_window_s
     for run_id, (true, k) in _matched(rec, results).items():
         log = results[run_id].impacts
         # the detector reports signed velocities (towards the striker positive), truth speeds
@@ -82,9 +86,10 @@ def test_rig_impact_velocities_match_truth(analysed):
         abs_err.append(log.v_in_m_s[k] - true.v_in_m_s)
         v_true.append(true.v_in_m_s)
         e_det.append(log.e[k])
+        whole.append(true.t_s >= pre_s)
     rel_a, err_a, v_a = np.concatenate(rel), np.concatenate(abs_err), np.concatenate(v_true)
     assert np.median(np.abs(rel_a)) < 0.02
-    assert np.max(np.abs(rel_a[v_a >= 0.03])) < 0.05
+    assert np.max(np.abs(rel_a[(v_a >= 0.03) & np.concatenate(whole)])) < 0.05
     assert np.sqrt(np.mean(err_a ** 2)) < 1e-3
     assert np.max(np.abs(err_a)) < 3.5e-3
     # no bias: the mean error is well inside the noise-limited scatter
