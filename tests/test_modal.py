@@ -65,8 +65,8 @@ def test_one_mode_rigid_limit_is_the_sdf_simulator(freq_hz, e):
     # plate-to-SDF scaling (eq. 2.26-2.33) to 1e-12 (both are exact to rounding; these
     # orbits are stable, so rounding does not grow).
     system = plate_system(THESIS, n_modes=1, gap_m=1e-3, pressure_pa=285.0, freq_hz=freq_hz, zeta=0.05,
-                          n_terms=12)  # the Ritz terms of `THESIS.modes(1)` below
-    modes = THESIS.modes(1)
+                          n_terms=12)  # the same Ritz basis as `THESIS.modes(1, n_terms=12)`
+    modes = THESIS.modes(1, n_terms=12)
     sc = scaling.SDFScaling.from_modal_data(lam=float(modes.lam[0]), Q1=float(modes.Q1[0]),
                                             Q2=float(modes.Q2[0]), gap_m=1e-3 / float(system.shape_at_striker[0]),
                                             a_m=THESIS.a_m, h_p_m=THESIS.h_p_m, E_pa=THESIS.E_pa, nu=THESIS.nu,
@@ -207,7 +207,7 @@ def test_one_mode_chatter_and_sticking_agree_with_the_sdf_simulator():
     # is estimated by both solvers from the geometric tail of unresolved flights
     # (relative accuracy of the tail ~1e-3, tail ~1e-6): agreement to 2e-8 in tau.
     system = plate_system(THESIS, n_modes=1, gap_m=0.1e-3, pressure_pa=285.0, freq_hz=50.0, zeta=0.05, n_terms=12)
-    modes = THESIS.modes(1)
+    modes = THESIS.modes(1, n_terms=12)
     sc = scaling.SDFScaling.from_modal_data(lam=float(modes.lam[0]), Q1=float(modes.Q1[0]), Q2=float(modes.Q2[0]),
                                             gap_m=0.1e-3 / float(system.shape_at_striker[0]), a_m=THESIS.a_m,
                                             h_p_m=THESIS.h_p_m, E_pa=THESIS.E_pa, nu=THESIS.nu,
