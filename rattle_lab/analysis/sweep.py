@@ -374,13 +374,15 @@ def _run_sweep(all_params: Sequence[SDFParams], state: SDFState, discard: int, k
 
     Returns the arrays of :func:`rattle_lab.sdf._kernel.run_sweep`.
     """
-    from ..sdf._compiled import jit_kernel
+    from ..sdf._compiled import jit_kernel, signals_deferred
 
     zeta = all_params[0].zeta
-    out = jit_kernel.run_sweep(np.array([q.F for q in all_params]),
-                               np.array([q.omega for q in all_params]),
-                               np.array([q.e for q in all_params]), zeta, state.t, state.x,
-                               state.v, state.theta, bool(state.stuck), float(discard), float(kept))
+    with signals_deferred():  # a Ctrl-C while the arrays are boxed would crash the process
+        out = jit_kernel.run_sweep(np.array([q.F for q in all_params]),
+                                   np.array([q.omega for q in all_params]),
+                                   np.array([q.e for q in all_params]), zeta, state.t, state.x,
+                                   state.v, state.theta, bool(state.stuck), float(discard),
+                                   float(kept))
     imp, crs, off, ends, info = out
     bad = np.flatnonzero(info[:, 1] != 0)
     if bad.size:

@@ -10,8 +10,12 @@ Compilation is lazy (first call) and cached on disk by numba.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 from types import ModuleType
 
 from . import _kernel as python_kernel
@@ -34,7 +38,39 @@ def _load_jit() -> ModuleType:
 
 jit_kernel = _load_jit()
 
-__all__ = ["python_kernel", "jit_kernel"]
+__all__ = ["python_kernel", "jit_kernel", "signals_deferred"]
+
+_DEFERRED = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def signals_deferred() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM until a long compiled call has returned its arrays.
+
+    A Ctrl-C that arrives during a long compiled call is noticed while numba boxes the
+    call's result (a tuple of arrays); the KeyboardInterrupt raised there left numba a
+    broken tuple and the process died of a segmentation fault.  Inside this block the
+    two signals only record that they came; at its end the previous handlers are back
+    and the first signal that came is raised again, so the interrupt lands at the next
+    Python instruction, as usual.  Handlers can be set in the main thread only; elsewhere
+    nothing changes.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[int] = []
+
+    def _note(signum: int, _frame: object) -> None:
+        came.append(signum)
+
+    previous = {sig: signal.signal(sig, _note) for sig in _DEFERRED}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+        if came:
+            signal.raise_signal(came[0])
 
 
 def warm_cache() -> float:

@@ -298,13 +298,14 @@ def simulate_pieces(F: ArrayLike, *, omega: float, zeta: float, e: float, t_stop
         raise ParameterError(f"`quiet_ok` must have the shape of `F`, had {ok.shape}")
     if int(group_size) != group_size or group_size < 1:
         raise ParameterError(f"`group_size` must be an integer >= 1, was {group_size}")
-    from ._compiled import jit_kernel
+    from ._compiled import jit_kernel, signals_deferred
 
-    imp, off, ends, info = jit_kernel.run_pieces(
-        F_arr, float(omega), float(zeta), float(e), float(state.t), float(state.x),
-        float(state.v), float(state.theta), bool(state.stuck), t_arr,
-        -1.0 if group_gap is None else float(group_gap), int(group_size),
-        -1.0 if quiet_time is None else float(quiet_time), ok, float(last_impact_t))
+    with signals_deferred():  # a Ctrl-C while the arrays are boxed would crash the process
+        imp, off, ends, info = jit_kernel.run_pieces(
+            F_arr, float(omega), float(zeta), float(e), float(state.t), float(state.x),
+            float(state.v), float(state.theta), bool(state.stuck), t_arr,
+            -1.0 if group_gap is None else float(group_gap), int(group_size),
+            -1.0 if quiet_time is None else float(quiet_time), ok, float(last_impact_t))
     n_run = int(np.count_nonzero(info[:, 0] >= 0))
     off = off[:n_run + 1]
     ends = ends[:n_run]
