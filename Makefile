@@ -15,12 +15,12 @@ $(BIN)/python:
 
 $(STAMP_RUN): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e .
-	$(BIN)/python -m rattle_lab.sdf._compiled
+	$(BIN)/python -m rattle_lab.model.sdf._compiled
 	touch $@
 
 $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test]"
-	$(BIN)/python -m rattle_lab.sdf._compiled
+	$(BIN)/python -m rattle_lab.model.sdf._compiled
 	touch $@ $(STAMP_RUN)
 
 $(STAMP_DEV): pyproject.toml | $(BIN)/python

@@ -18,7 +18,7 @@
    (first sound peak against detected ``v_in``).  The ``truth_*`` rows fit the rig's
    own thresholds with eq. (3.4): the floor of the quasi-static method (ramp lag, few
    frequencies), not of the detection.
-2. The detector's own generator (``rattle_lab.detect._synthetic``): hand-built signals
+2. The detector's own generator (``rattle_lab.rig._handbuilt``): hand-built signals
    around chosen impacts, relative noise ``noise_rel``.
 3. The real records (../shared/realdata) when present.
 
@@ -41,12 +41,12 @@ from pathlib import Path
 import numpy as np
 
 from rattle_lab.detect import ImpactParams, cross_correlation_delay, detect_impacts, sound_peaks
-from rattle_lab.detect._synthetic import synthetic_campaign
+from rattle_lab.rig._handbuilt import synthetic_campaign
 from rattle_lab.fit import (analyse_run, fit_grazing, fit_linear_law, fit_restitution_down,
                             fit_zeta_ramp, restitution_from_ratios)
 from rattle_lab.fit._store import _crossing_curve, transient_shocks
 from rattle_lab.rig import load_scene, synthesize
-from rattle_lab.thresholds import tabulate_thresholds
+from rattle_lab.detect.thresholds import tabulate_thresholds
 
 ROOT = Path(__file__).resolve().parents[1]
 REALDATA = (ROOT / ".." / "shared" / "realdata").resolve()
@@ -354,7 +354,7 @@ def main() -> None:
     _table(rig_rows, "scene", REALISTIC_SCENE, RIG_TARGETS)
     levels = (0.0, REALISTIC, 0.03) if not args.quick else (0.0, REALISTIC)
     rows = [run_scene(level, args.quick) for level in levels]
-    print("\ngenerator: rattle_lab.detect._synthetic (hand-built signals, exact truths)")
+    print("\ngenerator: rattle_lab.rig._handbuilt (hand-built signals, exact truths)")
     _table(rows, "noise_rel", str(REALISTIC), TARGETS)
     real = real_records()
     print("\nreal records (../shared/realdata):")

@@ -1,4 +1,4 @@
-"""Benchmark of ``rattle_lab.ingest``: throughput against plain h5py reads, and peak memory.
+"""Benchmark of ``rattle_lab.store``: throughput against plain h5py reads, and peak memory.
 
 Usage::
 
@@ -11,7 +11,7 @@ It writes a long synthetic record (float32 volts and m/s^2, sine plus noise), th
 * a plain h5py read of the same channels, chunk by chunk (the reference);
 * a plain h5py copy into a new file (read + write, no checks: the floor of any copying ingest);
 * SHA-256 of the input file (what a cryptographic content hash costs) and XXH3-128
-  (``rattle_lab.ingest.file_hash``, the content hash used for idempotence);
+  (``rattle_lab.store.file_hash``, the content hash used for idempotence);
 * ``ingest()`` with the default ``storage="link"``: hashing, schema validation, quality checks,
   the SI conversion factors, virtual datasets onto the input, the catalogue, atomically;
 * ``ingest(storage="copy")``: the same, copying every sample into the store;
@@ -40,7 +40,7 @@ import numpy as np
 
 import hashlib
 
-from rattle_lab.ingest import HASH_BLOCK_BYTES, file_hash, ingest
+from rattle_lab.store import HASH_BLOCK_BYTES, file_hash, ingest
 from rattle_lab.records import Channel, GeneratedData, Record, Rig, Run, write_record
 
 FS_HZ = 51200.0
@@ -112,7 +112,7 @@ def fresh_ingest(path: Path, store: Path, storage: str = "link") -> None:
 MEASURE = textwrap.dedent("""
     import json, resource, sys, time
     t0 = time.perf_counter()
-    from rattle_lab.ingest import ingest
+    from rattle_lab.store import ingest
     ingest([sys.argv[1]], sys.argv[2], storage=sys.argv[3])
     print(json.dumps({"seconds": time.perf_counter() - t0,
                       "maxrss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))

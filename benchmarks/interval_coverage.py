@@ -1,7 +1,7 @@
 """Do the reported 95 % intervals mean what they say?  Coverage over seeded campaigns.
 
 For each of N seeds (default 50) a campaign is drawn from the detector's own generator
-(``rattle_lab.detect._synthetic.synthetic_campaign``: ramp thresholds that follow eq. 3.4
+(``rattle_lab.rig._handbuilt.synthetic_campaign``: ramp thresholds that follow eq. 3.4
 and the saddle-node exactly, with relative noise ``noise_rel`` on every channel), detected
 and fitted as ``rattle-lab fit`` does; each parameter's reported 95 % interval is checked
 against the truth.  Target: each covers the truth in >= 90 % of the campaigns.
@@ -22,10 +22,10 @@ import time
 
 import numpy as np
 
-from rattle_lab.detect._synthetic import synthetic_campaign
+from rattle_lab.rig._handbuilt import synthetic_campaign
 from rattle_lab.fit import analyse_run, fit_grazing, restitution_from_ratios
 from rattle_lab.fit._store import _crossing_curve
-from rattle_lab.thresholds import tabulate_thresholds
+from rattle_lab.detect.thresholds import tabulate_thresholds
 
 
 def one(seed: int, noise_rel: float) -> dict[str, tuple[float, float, float]]:

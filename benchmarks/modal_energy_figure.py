@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rattle_lab.modal import KelvinVoigtContact, plate_system, simulate_modal  # noqa: E402
+from rattle_lab.model.modal import KelvinVoigtContact, plate_system, simulate_modal  # noqa: E402
 
 
 def main(out: Path) -> None:

@@ -3,7 +3,7 @@
 The same modal equations (thesis plate, Kelvin-Voigt striker k = 4.4e8 N/m, P = 285 Pa at
 115.6 Hz, h = 1 mm, 2 zeta = 0.1) are solved by
 
-* ``exact``: :func:`rattle_lab.modal.simulate_modal` (closed-form flows, event location
+* ``exact``: :func:`rattle_lab.model.modal.simulate_modal` (closed-form flows, event location
   to rounding);
 * ``solve_ivp``: scipy's DOP853 with terminal events (contact start ``delta = 0`` up,
   contact end ``f_c = 0`` down), restarted at each event with the other right-hand side,
@@ -24,7 +24,7 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from rattle_lab.modal import KelvinVoigtContact, plate_system, simulate_modal
+from rattle_lab.model.modal import KelvinVoigtContact, plate_system, simulate_modal
 
 CYCLES = 20
 FREQ_HZ = 115.6

@@ -20,10 +20,10 @@ import time
 
 import numpy as np
 
-from rattle_lab import scaling
-from rattle_lab.modal import (HertzContact, KelvinVoigtContact, RigidContact, THESIS_PLATE, plate_system,
+from rattle_lab.model import scaling
+from rattle_lab.model.modal import (HertzContact, KelvinVoigtContact, RigidContact, THESIS_PLATE, plate_system,
                               simulate_modal)
-from rattle_lab.sdf import SDFParams, simulate
+from rattle_lab.model.sdf import SDFParams, simulate
 
 CYCLES = 60
 LAST = 20

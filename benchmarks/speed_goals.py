@@ -31,7 +31,7 @@ Goals (issue 13):
    ``git archive main | tar -x -C DIR``) the same fit is also timed with that
    code in a child process (same e to 1e-9: an earlier kernel may place impacts
    differently in the last bits).
-5. ``cold first run``: a fresh process that imports ``rattle_lab.sdf`` and
+5. ``cold first run``: a fresh process that imports ``rattle_lab.model.sdf`` and
    runs one ``simulate()`` (numba's on-disk cache already written, as after
    the first use following an install) <= 5 s.
 """
@@ -60,9 +60,9 @@ if _BASELINE:
 elif str(ROOT) not in sys.path:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
-from rattle_lab.analysis import one_over_n_orbits
-from rattle_lab.analysis.sweep import classify_settled, sweep_up_down, sweep_values
-from rattle_lab.sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.analysis import one_over_n_orbits
+from rattle_lab.model.analysis._sweep import classify_settled, sweep_up_down, sweep_values
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 
 BASE = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6)
 
@@ -98,7 +98,7 @@ def _ramp_thresholds() -> tuple[list[Any], dict[str, float], float]:
     """The two measured-like thresholds of the ramp-fit goal, the plate and its zeta."""
     from rattle_lab.rig._motion import Modal, simulate_run
     from rattle_lab.rig._scene import RunSpec
-    from rattle_lab.thresholds import Threshold, sustained_impact_time
+    from rattle_lab.detect.thresholds import Threshold, sustained_impact_time
 
     plate = dict(gap_m=1.3e-3, f_s_hz=96.0, participation=1.2442)
     zeta = 0.0085
@@ -227,7 +227,7 @@ def main(argv: list[str] | None = None) -> int:
     rows.append(("rattle-lab --version", f"{t_version:.2f} s", "<= 0.3 s", t_version <= 0.3))
 
     cold = [sys.executable, "-c",
-            "from rattle_lab.sdf import SDFParams, simulate; "
+            "from rattle_lab.model.sdf import SDFParams, simulate; "
             "simulate(SDFParams(F=0.2, omega=1.1, zeta=0.05, e=0.6), cycles=10)"]
     t_cold = _fresh(cold, repeat)
     rows.append(("first simulate() in a fresh process", f"{t_cold:.2f} s", "<= 5 s", t_cold <= 5.0))

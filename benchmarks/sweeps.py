@@ -43,8 +43,8 @@ if str(ROOT) not in sys.path:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
 from rattle_lab._atomic import atomic_write_text
-from rattle_lab.analysis import bifurcation_sets, regime_map, sweep_up_down, sweep_values
-from rattle_lab.sdf import SDFParams
+from rattle_lab.model.analysis import bifurcation_sets, regime_map, sweep_up_down, sweep_values
+from rattle_lab.model.sdf import SDFParams
 
 OUT = Path(__file__).resolve().parent / "out"
 SWEEP_TARGET_S = 1.0
@@ -116,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
 
     same = _same(serial, pool_map) and _same(serial, dask_map) and bif_same
 
-    print("Sweep and study benchmark (rattle_lab.analysis), nondimensional units.")
+    print("Sweep and study benchmark (rattle_lab.model.analysis), nondimensional units.")
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; "
           f"python {platform.python_version()}; best of {repeat} after warm-up "
           f"(first call incl. numba cache load: {warm:.2f} s)")

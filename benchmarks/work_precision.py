@@ -2,7 +2,7 @@
 
 Run ``python benchmarks/work_precision.py [--quick]``.  For each case, every
 method's impact log is compared with an independent 40-digit reference (the
-mpmath closed form of :mod:`rattle_lab.sdf._reference`), and a table of run
+mpmath closed form of :mod:`rattle_lab.model.sdf._reference`), and a table of run
 time, largest impact-time and impact-velocity error, and missed / spurious
 impacts is printed; a work-precision plot goes to
 ``benchmarks/out/work_precision.png`` and the numbers to
@@ -11,11 +11,11 @@ impacts is printed; a work-precision plot goes to
 
 Methods:
 
-* ``exact``: ``rattle_lab.sdf.simulate(..., method="exact")``, timed after a
+* ``exact``: ``rattle_lab.model.sdf.simulate(..., method="exact")``, timed after a
   warm-up call; the first call (numba compile or cache load) is reported apart;
 * ``rk4-thesis`` at h = T/50, T/200 (the thesis's), T/1000, T/5000;
 * ``solve_ivp`` RK45 and DOP853 at rtol = atol = 1e-3, 1e-6, 1e-9, 1e-12, with a
-  terminal event and restarts (:func:`rattle_lab.sdf._reference.scipy_impacts`).
+  terminal event and restarts (:func:`rattle_lab.model.sdf._reference.scipy_impacts`).
 
 What is compared (also printed above the table): impacts with ``v_in >= V_MIN``
 in the leading window over which the reference itself is well conditioned:
@@ -47,8 +47,8 @@ if str(ROOT) not in sys.path:  # run from a checkout without installing
 
 import mpmath
 
-from rattle_lab.sdf._reference import mpmath_impacts, scipy_impacts
-from rattle_lab.sdf._rk4_thesis import run_rk4_thesis
+from rattle_lab.model.sdf._reference import mpmath_impacts, scipy_impacts
+from rattle_lab.model.sdf._rk4_thesis import run_rk4_thesis
 
 OUT = Path(__file__).resolve().parent / "out"
 REF_VERSION = "1"  # bump when the reference algorithm changes (invalidates the cache)
@@ -266,7 +266,7 @@ def run(quick: bool) -> tuple[list[Row], dict[str, Window], dict[str, Any]]:
     info: dict[str, Any] = {"cycles": cycles}
 
     try:
-        from rattle_lab.sdf import SDFParams, SDFState, simulate
+        from rattle_lab.model.sdf import SDFParams, SDFState, simulate
     except ImportError as exc:
         simulate = None  # type: ignore[assignment]
         print(f"NOTE: the exact method is not available ({exc}); its rows are skipped.", file=sys.stderr)

@@ -11,37 +11,37 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from ._version import __version__
-from .exceptions import RattleLabError
+from rattle_lab._version import __version__
+from rattle_lab.exceptions import RattleLabError
 
 #: public name -> module that defines it
 _LAZY: dict[str, str] = {
     # the nondimensional SDF model and its exact simulator
-    "SDFParams": "rattle_lab.sdf",
-    "SDFState": "rattle_lab.sdf",
-    "simulate": "rattle_lab.sdf",
+    "SDFParams": "rattle_lab.model.sdf",
+    "SDFState": "rattle_lab.model.sdf",
+    "simulate": "rattle_lab.model.sdf",
     # plate model and scaling
-    "Plate": "rattle_lab.plate",
-    "ritz_modes": "rattle_lab.plate",
-    "table_modes": "rattle_lab.plate",
-    "SDFScaling": "rattle_lab.scaling",
-    "grazing_F": "rattle_lab.linear",
-    "grazing_omegas": "rattle_lab.linear",
-    "linear_impact_velocity": "rattle_lab.linear",
+    "Plate": "rattle_lab.model.plate",
+    "ritz_modes": "rattle_lab.model.plate",
+    "table_modes": "rattle_lab.model.plate",
+    "SDFScaling": "rattle_lab.model.scaling",
+    "grazing_F": "rattle_lab.model.linear",
+    "grazing_omegas": "rattle_lab.model.linear",
+    "linear_impact_velocity": "rattle_lab.model.linear",
     # analysis
-    "one_over_n_orbits": "rattle_lab.analysis",
-    "bifurcation_sets": "rattle_lab.analysis",
-    "sweep": "rattle_lab.analysis",
-    "sweep_up_down": "rattle_lab.analysis",
-    "lyapunov_exponent": "rattle_lab.analysis",
-    "regime_map": "rattle_lab.analysis",
+    "one_over_n_orbits": "rattle_lab.model.analysis",
+    "bifurcation_sets": "rattle_lab.model.analysis",
+    "sweep": "rattle_lab.model.analysis",
+    "sweep_up_down": "rattle_lab.model.analysis",
+    "lyapunov_exponent": "rattle_lab.model.analysis",
+    "regime_map": "rattle_lab.model.analysis",
     # records and ingestion
     "read": "rattle_lab.records",
     "write_record": "rattle_lab.records",
     "Record": "rattle_lab.records",
-    "ingest": "rattle_lab.ingest",
-    "read_catalogue": "rattle_lab.ingest",
-    "open_stored_record": "rattle_lab.ingest",
+    "ingest": "rattle_lab.store",
+    "read_catalogue": "rattle_lab.store",
+    "open_stored_record": "rattle_lab.store",
     # synthetic rigs
     "load_scene": "rattle_lab.rig",
     "synthesize": "rattle_lab.rig",
@@ -51,11 +51,11 @@ _LAZY: dict[str, str] = {
     "sound_peaks": "rattle_lab.detect",
     "fit_grazing": "rattle_lab.fit",
     "fit_store": "rattle_lab.fit",
-    "read_results": "rattle_lab.results",
+    "read_results": "rattle_lab.fit._results",
     # reports and pipelines
     "write_report": "rattle_lab.report",
-    "load_pipeline_file": "rattle_lab.pipeline",
-    "run_pipeline": "rattle_lab.pipeline",
+    "load_pipeline_file": "rattle_lab.workflow.pipeline",
+    "run_pipeline": "rattle_lab.workflow.pipeline",
 }
 
 __all__ = ["__version__", "RattleLabError", *_LAZY]

@@ -22,7 +22,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from .exceptions import OutputError
+from rattle_lab.exceptions import OutputError
 
 #: Marker in the name of every temporary file this package writes.
 TMP_MARKER = ".rattle-tmp-"

@@ -247,7 +247,7 @@ def test_run_acoustics_survives_the_pipeline_detection_cache(tmp_path):
 
     from rattle_lab.acoustics import run_acoustics
     from rattle_lab.store._cache import get_dataclass, put_dataclass
-    from rattle_lab.results import RunResult
+    from rattle_lab.fit._results import RunResult
 
     fs = 20000.0
     p = 0.1 * np.sin(2 * np.pi * 500 * np.arange(int(fs)) / fs)

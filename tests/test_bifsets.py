@@ -1,4 +1,4 @@
-"""Tests of rattle_lab.analysis.bifsets: traced boundary curves, regions, plot.
+"""Tests of rattle_lab.model.analysis.bifsets: traced boundary curves, regions, plot.
 
 The traced curves are checked against the condition each one stands for,
 evaluated independently (multipliers, clearance, eq. 3.4, eq. 3.11), against
@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rattle_lab.analysis import bifsets
-from rattle_lab.analysis.bifsets import BifurcationSets, bifurcation_sets, plot_bifurcation_sets
-from rattle_lab.analysis.orbits import (
+from rattle_lab.model.analysis import bifsets
+from rattle_lab.model.analysis.bifsets import BifurcationSets, bifurcation_sets, plot_bifurcation_sets
+from rattle_lab.model.analysis.orbits import (
     branch_events,
     floquet_multipliers,
     grazing_forcing,
@@ -26,7 +26,7 @@ from rattle_lab.analysis.orbits import (
     saddle_node_forcing,
 )
 from rattle_lab.exceptions import OutputError, ParameterError
-from rattle_lab.sdf import SDFParams
+from rattle_lab.model.sdf import SDFParams
 
 ZETA, E = 0.05, 0.6
 
@@ -131,7 +131,7 @@ def test_to_dict_is_json(sets: BifurcationSets) -> None:
     assert doc["ns"] == [1, 2, 3]
     assert np.array(doc["exists"]).shape == sets.exists.shape
     assert {c["kind"] for c in doc["curves"]} == set(bifsets.KINDS)
-    assert doc["provenance"]["function"] == "rattle_lab.analysis.bifurcation_sets"
+    assert doc["provenance"]["function"] == "rattle_lab.model.analysis.bifurcation_sets"
 
 
 def test_plot_pdf_structure(sets: BifurcationSets, tmp_path: Path) -> None:

@@ -18,7 +18,7 @@ import pytest
 from rattle_lab.acoustics.calibration import (apply_campaign_calibration, campaign_calibration,
                                               tone_rms)
 from rattle_lab.exceptions import SchemaError
-from rattle_lab.ingest import ingest, open_stored_record, read_catalogue
+from rattle_lab.store import ingest, open_stored_record, read_catalogue
 from rattle_lab.records import Channel, Record, Run, write_record
 
 from record_factory import plate_rig

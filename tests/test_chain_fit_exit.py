@@ -12,7 +12,7 @@ import json
 import h5py
 import pytest
 
-from rattle_lab.ingest import ingest
+from rattle_lab.store import ingest
 from record_factory import run_cli
 
 

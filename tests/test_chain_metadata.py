@@ -17,10 +17,10 @@ from pathlib import Path
 import h5py
 import pytest
 
-from rattle_lab.detect._synthetic import synthetic_campaign
+from rattle_lab.rig._handbuilt import synthetic_campaign
 from rattle_lab.exceptions import SchemaError
-from rattle_lab.ingest import ingest
-from rattle_lab.plate import EDGE_ORDER
+from rattle_lab.store import ingest
+from rattle_lab.model.plate import EDGE_ORDER
 from rattle_lab.records import read, write_record
 from rattle_lab.records._chain import (FLAG_PARTICIPATION_ASSUMED, FLAG_POISSON_ASSUMED,
                                        participation_from_plate, resolve_participation,

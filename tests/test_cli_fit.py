@@ -1,6 +1,6 @@
 """``rattle-lab fit``: run the installed entry point on a small synthetic store.
 
-The store is built from :func:`rattle_lab.detect._synthetic.synthetic_campaign`
+The store is built from :func:`rattle_lab.rig._handbuilt.synthetic_campaign`
 (ramp runs whose thresholds follow eq. 3.4 with the thesis values, a quiet dwell
 run and a run without plate channels).  Its thresholds are quasi-static by
 construction, so its pipeline asks for ``restitution_method = "quasi-static"``; the
@@ -17,13 +17,13 @@ import h5py
 import numpy as np
 import pytest
 
-from rattle_lab.detect._synthetic import synthetic_campaign
+from rattle_lab.rig._handbuilt import synthetic_campaign
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.fit import fit_store, load_pipeline
-from rattle_lab.ingest import ingest
+from rattle_lab.store import ingest
 from rattle_lab.records import write_record
 from rattle_lab.records._errors import StoreError
-from rattle_lab.results import read_results
+from rattle_lab.fit._results import read_results
 from record_factory import run_cli, run_cli_on_terminal
 
 

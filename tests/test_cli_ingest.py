@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from record_factory import RATTLE_LAB, make_record, replace_channel, run_cli, write
 
-from rattle_lab.ingest import read_catalogue
+from rattle_lab.store import read_catalogue
 
 LVM = ("LabVIEW Measurement\t\nSeparator\tTab\nDecimal_Separator\t.\nX_Columns\tOne\n"
        "***End_of_Header***\t\n\nChannels\t2\t\t\nSamples\t400\t3\t\nY_Unit_Label\tm/s^2\t\t\n"

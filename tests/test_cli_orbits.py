@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from rattle_lab.analysis.orbits import one_over_n_orbits, saddle_node_forcing
-from rattle_lab.sdf import SDFParams
+from rattle_lab.model.analysis.orbits import one_over_n_orbits, saddle_node_forcing
+from rattle_lab.model.sdf import SDFParams
 
 from conftest import RATTLE_LAB as EXE
 

@@ -7,7 +7,7 @@ import subprocess
 
 import pytest
 
-from rattle_lab.plate import ritz_modes
+from rattle_lab.model.plate import ritz_modes
 
 from conftest import RATTLE_LAB
 

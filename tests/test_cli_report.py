@@ -7,7 +7,7 @@ from pathlib import Path
 import pypdf
 import pytest
 
-from rattle_lab.ingest import ingest
+from rattle_lab.store import ingest
 from record_factory import run_cli
 
 PIPELINES = Path(__file__).resolve().parents[1] / "pipelines"

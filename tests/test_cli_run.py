@@ -14,7 +14,7 @@ from conftest import RATTLE_LAB
 from record_factory import run_cli_on_terminal
 
 from rattle_lab import __version__
-from rattle_lab.sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 
 
 def _exe() -> str:

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from rattle_lab.analysis import one_over_n_orbits
-from rattle_lab.sdf import SDFParams
+from rattle_lab.model.analysis import one_over_n_orbits
+from rattle_lab.model.sdf import SDFParams
 
 from conftest import RATTLE_LAB as EXE
 

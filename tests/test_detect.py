@@ -1,7 +1,7 @@
 """Detection: impacts, triggers, sound peaks, delays, SPL and A-weighting, impact patterns.
 
 Hand-built signals with exact answers; the synthetic scenes come from
-:mod:`rattle_lab.detect._synthetic` (analytic signals around chosen impacts).
+:mod:`rattle_lab.rig._handbuilt` (analytic signals around chosen impacts).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pytest
 from rattle_lab.detect import (ImpactParams, a_weight, a_weighting_db, cross_correlation_delay,
                                detect_impacts, impact_pattern, impulse_train, n_samples_of,
                                parabolic_peak, rms_spl_db, sound_peaks, spl_db, trigger_onsets)
-from rattle_lab.detect._synthetic import Acoustics, synthetic_signals
+from rattle_lab.rig._handbuilt import Acoustics, synthetic_signals
 from rattle_lab.exceptions import ParameterError
 
 FS_HZ = 25600.0

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from rattle_lab.detect import ImpactParams, detect_impacts
-from rattle_lab.detect._synthetic import synthetic_signals
+from rattle_lab.rig._handbuilt import synthetic_signals
 from rattle_lab.exceptions import ParameterError
 
 FS, F_HZ, E = 25600.0, 96.0, 0.6
@@ -85,7 +85,7 @@ def test_crossing_level_is_half_a_period_before_the_first_impact():
     # Impacts at most once a forcing period: a ramp crossing its threshold A_c at a uniform
     # instant of a period shows its first impact at the end of that period.  The level at
     # the first impact is then A_c + U(0, 1) rate/f; crossing_level_ms2 takes off rate/(2f).
-    from rattle_lab.thresholds import Threshold, crossing_level_ms2
+    from rattle_lab.detect.thresholds import Threshold, crossing_level_ms2
 
     f, rate, a_c = 96.0, 20.0, 10.0           # m/s^2 per s: 0.21 m/s^2 per period
     rng = np.random.default_rng(1)

@@ -123,7 +123,7 @@ def test_rig_truth_thresholds_follow_the_grazing_curve(synthetic_campaign_record
     """The rig's onsets lie between eq. (3.4) and eq. (3.4) plus the ramp's lag: the mode's
     amplitude trails a ramp by at most ``rate / (zeta omega_s)`` (its time constant, reached
     at resonance), plus one ramp step (the truth's resolution)."""
-    from rattle_lab.linear import threshold_accel_ms2
+    from rattle_lab.model.linear import threshold_accel_ms2
 
     rec = read(synthetic_campaign_record)
     t = rec.truth

@@ -1,7 +1,7 @@
 """The explorer (``rattle-lab explore``), driven headless through its widgets (Agg).
 
-The plotted data are checked against :func:`rattle_lab.sdf.simulate` and
-:func:`rattle_lab.analysis.sweep` called directly, and the forced parts against
+The plotted data are checked against :func:`rattle_lab.model.sdf.simulate` and
+:func:`rattle_lab.model.analysis.sweep` called directly, and the forced parts against
 the closed-form particular solution.  The CLI is run through the installed
 entry point without a display.
 """
@@ -21,7 +21,7 @@ import pytest
 
 matplotlib.use("Agg")
 
-from rattle_lab.analysis import sweep  # noqa: E402
+from rattle_lab.model.analysis import sweep  # noqa: E402
 from rattle_lab.exceptions import OutputError, ParameterError  # noqa: E402
 from rattle_lab.explorer import (  # noqa: E402
     HISTORY_COLUMNS,
@@ -31,7 +31,7 @@ from rattle_lab.explorer import (  # noqa: E402
     impacts_path,
     save_histories,
 )
-from rattle_lab.sdf import SDFParams, SDFState, simulate  # noqa: E402
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate  # noqa: E402
 
 from conftest import RATTLE_LAB as EXE  # noqa: E402
 

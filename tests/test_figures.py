@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 import pypdf
 
-from rattle_lab.analysis import sweep_up_down
-from rattle_lab.analysis.sweep import plot_sweeps, sweep_values
-from rattle_lab.sdf import SDFParams
+from rattle_lab.model.analysis import sweep_up_down
+from rattle_lab.model.analysis._sweep import plot_sweeps, sweep_values
+from rattle_lab.model.sdf import SDFParams
 
 from record_factory import run_cli
 

@@ -11,13 +11,13 @@ import pytest
 
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.fit import (fit_db_law, fit_grazing, fit_linear_law, fit_restitution_down,
-                            fit_zeta_ramp, grazing_threshold_ms2, restitution_from_ratios,
+                            fit_zeta_ramp, restitution_from_ratios,
                             saddle_node_threshold_ms2)
 from rattle_lab.fit._restitution import profile_interval, profile_parabola
-from rattle_lab.linear import threshold_accel_ms2
+from rattle_lab.model.linear import threshold_accel_ms2
 from rattle_lab.rig._motion import Modal, simulate_run
 from rattle_lab.rig._scene import RunSpec
-from rattle_lab.thresholds import Threshold, sustained_impact_time
+from rattle_lab.detect.thresholds import Threshold, sustained_impact_time
 
 # Thesis Fig. 6-2: fitted gap 0.35 mm, 2 zeta = 0.017; f_s near the 94-98 Hz resonance.
 GAP_MM, ZETA, F_S_HZ, Q = 0.35, 0.017 / 2, 96.0, 1.2
@@ -27,14 +27,20 @@ FREQ_HZ = np.unique(np.r_[np.linspace(70.0, 130.0, 13), np.linspace(93.0, 99.0, 
 
 
 def test_model_is_the_linear_module_formula():
-    np.testing.assert_allclose(grazing_threshold_ms2(FREQ_HZ, GAP_MM, F_S_HZ, ZETA, Q),
-                               threshold_accel_ms2(FREQ_HZ, GAP_MM * 1e-3, F_S_HZ, ZETA, Q),
-                               rtol=1e-14)
+    # One formula: the fit's model and its predictions are eq. (3.4) of the linear module
+    # (the same function, so equal to rounding: rtol 1e-13 allows the mm/m scaling of the gap).
+    a = threshold_accel_ms2(FREQ_HZ, GAP_MM * 1e-3, F_S_HZ, ZETA, Q)
+    fit = fit_grazing(FREQ_HZ, a, participation=Q)
+    p = {name: est.value for name, est in fit.params.items()}
+    np.testing.assert_allclose(fit.predict(FREQ_HZ),
+                               threshold_accel_ms2(FREQ_HZ, p["gap_m"], p["f_s_hz"], p["zeta"],
+                                                   p["participation"]), rtol=1e-13)
+    np.testing.assert_allclose(p["gap_m"], GAP_MM * 1e-3, rtol=1e-6)
 
 
 def _thesis_thresholds(noise_rel: float, seed: int = 0) -> np.ndarray:
     rng = np.random.default_rng(seed)
-    a = grazing_threshold_ms2(FREQ_HZ, GAP_MM, F_S_HZ, ZETA, Q)
+    a = threshold_accel_ms2(FREQ_HZ, GAP_MM * 1e-3, F_S_HZ, ZETA, Q)
     return a * (1.0 + noise_rel * rng.standard_normal(a.size))
 
 
@@ -76,7 +82,7 @@ def test_grazing_keeps_a_2_percent_deviation_among_few_exact_points():
     # five thresholds, three of them exact: the robust scale of the residuals is ~0, and
     # without the 1 % floor two points 2 % off would be thrown out as outliers
     f = np.array([95.0, 96.0, 97.0, 98.0, 100.0])
-    a = grazing_threshold_ms2(f, GAP_MM, F_S_HZ, ZETA, Q) * np.array([1.0, 1.0, 1.02, 1.0, 0.98])
+    a = threshold_accel_ms2(f, GAP_MM * 1e-3, F_S_HZ, ZETA, Q) * np.array([1.0, 1.0, 1.02, 1.0, 0.98])
     fit = fit_grazing(f, a, participation=Q, conf_interval=False)
     assert not fit.outlier.any()  # (a real outlier is still found: the planted-outlier test)
     assert fit.params["gap_m"].value == pytest.approx(GAP_MM * 1e-3, rel=0.05)
@@ -123,7 +129,7 @@ def test_restitution_quasi_static_from_saddle_node():
     f = np.linspace(100.0, 125.0, 6)
     down = saddle_node_threshold_ms2(f, 0.75, GAP_MM * 1e-3, F_S_HZ, ZETA, Q)
     # the saddle-node lies far below the grazing curve above resonance (hysteresis, Fig. 6-5)
-    assert np.all(down < grazing_threshold_ms2(f, GAP_MM, F_S_HZ, ZETA, Q))
+    assert np.all(down < threshold_accel_ms2(f, GAP_MM * 1e-3, F_S_HZ, ZETA, Q))
     noisy = down * (1 + 0.01 * np.random.default_rng(1).standard_normal(f.size))
     ths = [_down(fi, ai) for fi, ai in zip(f, noisy)] + [_down(90.0, 1.0)]   # 90 Hz: not used
     fit = fit_restitution_down(ths, gap_m=GAP_MM * 1e-3, f_s_hz=F_S_HZ, zeta=ZETA,
@@ -294,7 +300,7 @@ def test_spl_law_errors(v, p, match):
 
 
 @pytest.mark.parametrize("module", ["rattle_lab.fit._ramp_model", "rattle_lab.fit._restitution",
-                                    "rattle_lab.fit._damping", "rattle_lab.thresholds"])
+                                    "rattle_lab.fit._damping", "rattle_lab.detect.thresholds"])
 def test_module_doctests(module):
     import doctest
     import importlib

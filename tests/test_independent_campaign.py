@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 from independent_campaign import Chain, Plant, write_campaign
-from rattle_lab.ingest import ingest
+from rattle_lab.store import ingest
 from record_factory import run_cli
 
 FREQS_HZ = (93.0, 99.0)
@@ -53,7 +53,7 @@ def _campaign(tmp_path, chain: Chain, seed: int = 3):
 
 def _matched(store, truth):
     """Per run: (true t, detected t, detected e) of matched impacts; false and missed counts."""
-    from rattle_lab.results import read_results
+    from rattle_lab.fit._results import read_results
 
     res = read_results(store)
     out = {}

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from record_factory import FS_HZ, N_SAMPLES, make_record, replace_channel, write
 
 from rattle_lab.exceptions import OutputError, ParameterError
-from rattle_lab.ingest import (CATALOGUE_COLUMNS, file_hash, ingest, input_key,
+from rattle_lab.store import (CATALOGUE_COLUMNS, file_hash, ingest, input_key,
                                open_stored_record, read_catalogue)
 from rattle_lab.records import (ClippingWarning, DuplicateRunError, NaNGapError, NaNGapWarning,
                                 StoreError, UncalibratedWarning)
@@ -481,7 +481,7 @@ LONG_RECORD_SCRIPT = textwrap.dedent("""
 
 MEASURE_SCRIPT = textwrap.dedent("""
     import json, resource, sys
-    from rattle_lab.ingest import ingest
+    from rattle_lab.store import ingest
     report = ingest([sys.argv[1]], sys.argv[2])
     print(json.dumps({"maxrss_kib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
                       "n": int(report.catalogue["n_samples"].sum())}))

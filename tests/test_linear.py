@@ -9,8 +9,8 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from rattle_lab import linear as lin
-from rattle_lab import scaling as sc
+from rattle_lab.model import linear as lin
+from rattle_lab.model import scaling as sc
 from rattle_lab.exceptions import ParameterError
 
 

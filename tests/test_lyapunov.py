@@ -1,8 +1,8 @@
-"""Tests of rattle_lab.analysis.lyapunov: the largest Lyapunov exponent from the impact log.
+"""Tests of rattle_lab.model.analysis.lyapunov: the largest Lyapunov exponent from the impact log.
 
 References: the Floquet multipliers of the closed-form 1/1 orbits
-(rattle_lab.analysis.one_over_n_orbits), an explicit numpy product of the
-saltation and transition matrices (rattle_lab.analysis._saltation), and
+(rattle_lab.model.analysis.one_over_n_orbits), an explicit numpy product of the
+saltation and transition matrices (rattle_lab.model.analysis._saltation), and
 central finite differences of the simulator itself.
 """
 
@@ -14,16 +14,16 @@ import math
 import numpy as np
 import pytest
 
-from rattle_lab.analysis import OneOverNOrbit, one_over_n_orbits
-from rattle_lab.analysis._saltation import impact_saltation, transition_matrix
-from rattle_lab.analysis.lyapunov import (
+from rattle_lab.model.analysis import OneOverNOrbit, one_over_n_orbits
+from rattle_lab.model.analysis._saltation import impact_saltation, transition_matrix
+from rattle_lab.model.analysis.lyapunov import (
     _tangent,
     lyapunov_exponent,
     lyapunov_from_result,
     tangent_log_growth,
 )
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 
 BASE = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6)
 
@@ -136,7 +136,7 @@ def test_chaotic_case_matches_central_finite_differences() -> None:
 def test_chaotic_case_has_positive_exponent_and_periodic_window_negative() -> None:
     # Thesis Fig. 4-3: chaos after the 1/4 orbit's secondary grazing (0.9284);
     # inside the 1/4 window (stable between its period doubling 0.91183 and 0.9284,
-    # rattle_lab.analysis.branch_events) the exponent is negative.
+    # rattle_lab.model.analysis.branch_events) the exponent is negative.
     chaos = lyapunov_exponent(BASE.replace(omega=0.94), cycles=2000, warmup_cycles=500)
     assert chaos.status == "ok" and chaos.exponent > 0.01
     p4 = BASE.replace(omega=0.92)

@@ -21,7 +21,7 @@ from record_factory import make_record, replace_channel, run_cli, write
 
 from rattle_lab.cli import main
 from rattle_lab.exceptions import FileFormatError, RattleLabError, SchemaError
-from rattle_lab.ingest import ingest
+from rattle_lab.store import ingest
 from rattle_lab.records import (Channel, ClippingError, DropoutError, DuplicateRunError,
                                 EmptyChannelError, InfValueError, MappingError, NaNGapError,
                                 NonMonotonicTimestampsError, Record, Rig, Run,

@@ -1,6 +1,6 @@
-"""Tests of rattle_lab.analysis.maps: regime maps, basins and the disturbance study.
+"""Tests of rattle_lab.model.analysis.maps: regime maps, basins and the disturbance study.
 
-References: the closed-form 1/n orbits and their stability (rattle_lab.analysis),
+References: the closed-form 1/n orbits and their stability (rattle_lab.model.analysis),
 the grazing forcing (eq. 3.4), and the unstable 1/1 orbit, which the
 trajectory at the disturbance threshold must visit (it lies on the boundary
 of the impact-free response's basin).
@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rattle_lab.analysis import one_over_n_orbits
-from rattle_lab.analysis.maps import (
+from rattle_lab.model.analysis import one_over_n_orbits
+from rattle_lab.model.analysis.maps import (
     _impact_free_start,
     basin_map,
     disturbance_map,
@@ -26,7 +26,7 @@ from rattle_lab.analysis.maps import (
     regime_map,
 )
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 
 P_HYST = SDFParams(F=0.2, omega=1.15, zeta=0.05, e=0.6)
 

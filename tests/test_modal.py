@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from rattle_lab import scaling
+from rattle_lab.model import scaling
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.modal import (HertzContact, KelvinVoigtContact, ModalState, ModalSystem, RigidContact,
+from rattle_lab.model.modal import (HertzContact, KelvinVoigtContact, ModalState, ModalSystem, RigidContact,
                               plate_system, simulate_modal)
-from rattle_lab.plate import Plate
-from rattle_lab.sdf import SDFParams, simulate
+from rattle_lab.model.plate import Plate
+from rattle_lab.model.sdf import SDFParams, simulate
 
 THESIS = Plate(a_m=0.254, b_m=0.2286, h_p_m=1e-3, E_pa=7e10, nu=0.34, rho_kg_m3=2710.0, edges="CFCF")
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.modal import KelvinVoigtContact, plate_system, simulate_modal
-from rattle_lab.modal._sound import (C_AIR_M_S, RHO_AIR_KG_M3, piston_surface, plate_surface,
+from rattle_lab.model.modal import KelvinVoigtContact, plate_system, simulate_modal
+from rattle_lab.model.modal._sound import (C_AIR_M_S, RHO_AIR_KG_M3, piston_surface, plate_surface,
                                      rayleigh_pressure)
 
 
@@ -72,7 +72,7 @@ def test_predicted_spl_slope_against_the_law_fitted_on_a_model_campaign():
     # previous impact's ringing and the forced shape, so the campaign's slope scatters
     # about S: 25 % on the slope, 2 dB/decade on the dB law.
     from rattle_lab.fit import fit_db_law, fit_linear_law
-    from rattle_lab.modal import modal_channels, predicted_spl_slope
+    from rattle_lab.model.modal import modal_channels, predicted_spl_slope
 
     # N = 8: with fewer modes the arrival shape is far from mode 1 alone (N = 4: slope 300
     # against S = 210); from N = 8 on the campaign's slope is within ~15 % of S.
@@ -98,7 +98,7 @@ def test_modal_channels_signals_are_consistent():
     # of the displacement there (independent finite-difference check), the plate
     # penetrates the striker only by the Kelvin-Voigt compression, and every impact
     # has a microphone peak.
-    from rattle_lab.modal import modal_channels
+    from rattle_lab.model.modal import modal_channels
 
     system = plate_system(n_modes=6, freq_hz=115.6, skip_unexcited=True)
     fs = 200000.0

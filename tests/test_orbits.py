@@ -1,13 +1,13 @@
-"""Tests of rattle_lab.analysis.orbits: closed-form 1/n orbits, stability, shooting.
+"""Tests of rattle_lab.model.analysis.orbits: closed-form 1/n orbits, stability, shooting.
 
 References used (each independent of the code under test):
 
-* the lead's closed-form flight ``rattle_lab.sdf.flow`` (periodicity of orbits);
+* the lead's closed-form flight ``rattle_lab.model.sdf.flow`` (periodicity of orbits);
 * the thesis's numbers (section 4.2, zeta = 0.05, e = 0.6, F = 0.2), given to
   3 digits: tolerance +-0.002 on omega;
 * central finite differences of the numerically iterated impact map (Floquet
   multipliers, rtol 1e-6);
-* the event-driven simulator ``rattle_lab.sdf.simulate`` (stable orbits are
+* the event-driven simulator ``rattle_lab.model.sdf.simulate`` (stable orbits are
   what it converges to; impact times);
 * dense sampling of x (local maxima).
 """
@@ -20,9 +20,9 @@ import math
 import numpy as np
 import pytest
 
-from rattle_lab.analysis import _motion, _saltation, orbits
-from rattle_lab.analysis import _one_over_n as _on
-from rattle_lab.analysis.orbits import (
+from rattle_lab.model.analysis import _motion, _saltation, orbits
+from rattle_lab.model.analysis import _one_over_n as _on
+from rattle_lab.model.analysis.orbits import (
     branch_events,
     find_periodic_orbit,
     floquet_multipliers,
@@ -37,15 +37,15 @@ from rattle_lab.analysis.orbits import (
     saddle_node_forcing,
 )
 from rattle_lab.exceptions import ConvergenceError, ParameterError, SimulationError
-from rattle_lab.sdf import SDFParams, SDFState, flow
+from rattle_lab.model.sdf import SDFParams, SDFState, flow
 
 try:  # the lead's simulator; the tests that need it say so when it is missing
-    from rattle_lab.sdf import simulate
+    from rattle_lab.model.sdf import simulate
 except ImportError:  # pragma: no cover - only while the simulator is being written
     simulate = None
 
 needs_simulate = pytest.mark.skipif(simulate is None,
-                                    reason="rattle_lab.sdf.simulate not available yet")
+                                    reason="rattle_lab.model.sdf.simulate not available yet")
 
 ZETA, E = 0.05, 0.6
 TWO_PI = 2.0 * math.pi
@@ -427,7 +427,7 @@ def test_bad_arguments() -> None:
         find_periodic_orbit(params(0.2, 1.0), 0.0, 0.3, 0, 1)
     with pytest.raises(ParameterError, match=r"`v_im` must be finite and > 0, was -0.3"):
         find_periodic_orbit(params(0.2, 1.0), 0.0, -0.3, 1, 1)
-    with pytest.raises(ParameterError, match=r"`impacts` must be an ImpactLog, was list"):
+    with pytest.raises(ParameterError, match=r"`impacts` must be a SimImpacts, was list"):
         periodic_orbit_from_impacts(params(0.2, 1.0), [])  # type: ignore[arg-type]
 
 
@@ -442,8 +442,8 @@ def test_impact_map_errors() -> None:
 
 
 def test_module_doctests() -> None:
-    from rattle_lab.analysis import _saltation as sal
-    from rattle_lab.analysis import _shooting as sh
+    from rattle_lab.model.analysis import _saltation as sal
+    from rattle_lab.model.analysis import _shooting as sh
 
     for mod in (orbits, sal, sh):
         result = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)
@@ -471,7 +471,7 @@ def test_secondary_grazing_ends_the_simulated_orbit(events_F02: dict, n: int) ->
 
 
 def test_public_surface_is_pinned() -> None:
-    import rattle_lab.analysis as analysis
+    import rattle_lab.model.analysis as analysis
 
     assert analysis.__all__ == [
         "OneOverNOrbit", "BranchEvent", "PeriodicOrbit", "BifurcationSets", "BoundaryCurve",
@@ -527,7 +527,7 @@ def test_existence_is_checked_independently_and_nonexistent_orbits_have_no_stabi
     # below the stop between impacts; the reference samples an independent closed
     # form at 4e5 points per flight (crossings deeper than 1e-6 are unambiguous at
     # that spacing).  A non-existent orbit gets no stability verdict (None / null).
-    from rattle_lab.analysis.orbits import one_over_n_orbits as orbits
+    from rattle_lab.model.analysis.orbits import one_over_n_orbits as orbits
 
     zeta, e, F = 0.05, 0.6, 0.2
     seen = set()

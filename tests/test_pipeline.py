@@ -1,4 +1,4 @@
-"""Pipelines (:mod:`rattle_lab.pipeline`): lazy DAG, content-hash cache, Dask scale-out.
+"""Pipelines (:mod:`rattle_lab.workflow.pipeline`): lazy DAG, content-hash cache, Dask scale-out.
 
 Stage executions are counted through :attr:`PipelineRun.executed`.
 """
@@ -20,12 +20,12 @@ import pytest
 import pypdf
 from conftest import RATTLE_LAB
 
-import rattle_lab.pipeline as pipeline_module
+import rattle_lab.workflow.pipeline as pipeline_module
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.fit import fit_store
-from rattle_lab.pipeline import (Pipeline, code_fingerprint, load_pipeline_file, needed_stages,
+from rattle_lab.workflow.pipeline import (Pipeline, code_fingerprint, load_pipeline_file, needed_stages,
                                  parse_pipeline, read_detections, run_pipeline)
-from rattle_lab.results import read_results
+from rattle_lab.fit._results import read_results
 
 PIPELINES = Path(__file__).resolve().parents[1] / "pipelines"
 
@@ -126,7 +126,7 @@ def test_report_parameter_reruns_only_the_report_and_outside_fits_are_noticed(
     fit_store(store, fit={"outlier_k": 3.0})
     after = run_pipeline(_pipe(["results"]), rec, store=store, out_dir=tmp_path)
     assert after.executed == ["fit"] and after.cached == ["ingest", "detect", "thresholds"]
-    assert read_results(store).provenance["via"] == "rattle_lab.pipeline"
+    assert read_results(store).provenance["via"] == "rattle_lab.workflow.pipeline"
 
 
 @pytest.mark.slow  # > 8 s (measured under load)
@@ -163,7 +163,7 @@ def test_scene_input_is_simulated_once(tmp_path: Path) -> None:
     assert run_pipeline(pipe, ["default"], out_dir=tmp_path).executed == []
     seeded = run_pipeline(_pipe(["store"], simulate={"seed": 5}), ["default"], out_dir=tmp_path)
     assert seeded.executed == ["simulate", "ingest"]  # same run ids, new data: store rebuilt
-    from rattle_lab.ingest import read_catalogue
+    from rattle_lab.store import read_catalogue
 
     assert read_catalogue(seeded.store, level="runs")["input_key"].nunique() == 1
 
@@ -200,7 +200,7 @@ def _as_plain(obj: Any) -> Any:
 def pinned_sources(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A copy of the rattle_lab package: PYTHONPATH for every process of the Dask tests."""
     root = tmp_path_factory.mktemp("pinned")
-    shutil.copytree(Path(pipeline_module.__file__).parent, root / "rattle_lab",
+    shutil.copytree(Path(pipeline_module.__file__).parents[1], root / "rattle_lab",
                     ignore=shutil.ignore_patterns("__pycache__"))
     return root
 
@@ -230,7 +230,7 @@ def _pinned_cli(pinned: Path, *args: str) -> subprocess.CompletedProcess[str]:
 def test_dask_local_cluster_equals_serial(synthetic_campaign_record: Path, tmp_path: Path,
                                           cluster: Any, pinned_sources: Path) -> None:
     workers = set(cluster.run(code_fingerprint).values())
-    probe = subprocess.run([sys.executable, "-c", "import rattle_lab.pipeline as p; "
+    probe = subprocess.run([sys.executable, "-c", "import rattle_lab.workflow.pipeline as p; "
                             "print(p.__file__, p.code_fingerprint())"], capture_output=True,
                            text=True, env={**os.environ, "PYTHONPATH": str(pinned_sources)},
                            cwd=tmp_path, check=True)  # not the checkout (first on sys.path)

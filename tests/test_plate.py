@@ -12,7 +12,7 @@ import scipy.linalg
 from scipy import integrate
 
 from rattle_lab.exceptions import ConvergenceError, ParameterError
-from rattle_lab.plate import (
+from rattle_lab.model.plate import (
     DEFAULT_N_TERMS,
     EDGE_ORDER,
     TABLE_ASPECT_RATIOS,
@@ -25,9 +25,9 @@ from rattle_lab.plate import (
     simply_supported_modes,
     table_modes,
 )
-from rattle_lab.plate import _beam
-from rattle_lab.plate import _ritz as ritz_module
-from rattle_lab.plate._edges import check_edges
+from rattle_lab.model.plate import _beam
+from rattle_lab.model.plate import _ritz as ritz_module
+from rattle_lab.model.plate._edges import check_edges
 
 #: Leissa's free-edge values are for nu = 0.3.
 NU_LEISSA = 0.3

@@ -58,7 +58,7 @@ PACKAGES: dict[str, list[str]] = {
         "run_acoustics", "sound_levels", "weighting_db", "weighting_response",
     ],
     "rattle_lab.exchange": ["UFF_TYPE_OF_QUANTITY", "export_uff", "uff_sets"],
-    "rattle_lab.analysis": [
+    "rattle_lab.model.analysis": [
         "OneOverNOrbit", "BranchEvent", "PeriodicOrbit", "BifurcationSets", "BoundaryCurve",
         "one_over_n_orbits", "impact_quadratic", "impact_velocities", "orbit_forcing",
         "floquet_multipliers", "orbit_clearance", "grazing_forcing", "saddle_node_forcing",
@@ -87,24 +87,26 @@ PACKAGES: dict[str, list[str]] = {
         "DbLaw", "GrazingFit", "analyse_run", "fit_store", "json_ready", "load_pipeline",
         "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
         "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
-        "grazing_threshold_ms2", "restitution_from_ratios", "saddle_node_threshold_ms2",
-        "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold"
+        "restitution_from_ratios", "saddle_node_threshold_ms2",
+        "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
+        "RunResult", "StoreFit"
     ],
-    "rattle_lab.ingest": [
-        "ingest", "read_catalogue", "open_stored_record", "IngestReport", "InputResult",
-        "CATALOGUE_COLUMNS", "file_hash", "input_key"
-    ],
-    "rattle_lab.modal": [
+    "rattle_lab.model.modal": [
         "CONTACT_NAMES", "THESIS_HERTZ_N_M15", "THESIS_PLATE", "THESIS_STRIKER_STIFFNESS_N_M",
         "ContactLog", "EpisodeLog", "HertzContact", "KelvinVoigtContact", "ModalChannels",
         "ModalResult", "ModalState", "ModalSystem", "RadiatingSurface", "RigidContact",
         "contact_from_name", "modal_channels", "plate_surface", "plate_system",
         "predicted_spl_slope", "rayleigh_pressure", "rayleigh_zeta", "simulate_modal"
     ],
-    "rattle_lab.plate": [
+    "rattle_lab.model.plate": [
         "Plate", "PlateMode", "PlateModes", "TableMode", "EDGE_ORDER", "DEFAULT_N_TERMS",
         "TABLE_ASPECT_RATIOS", "simply_supported_mode", "simply_supported_modes", "table_modes",
         "ritz_modes"
+    ],
+    "rattle_lab.model": [],
+    "rattle_lab.plot": ["check_figure_path", "save_figure", "plot_time_history"],
+    "rattle_lab.workflow": [
+        "STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline", "run_pipeline"
     ],
     "rattle_lab.records": [
         "read", "write_record", "detect_format", "load_schema", "validate_tree", "load_mapping",
@@ -123,10 +125,10 @@ PACKAGES: dict[str, list[str]] = {
     "rattle_lab.rig": [
         "load_scene", "parse_scene", "synthesize", "write_synthetic", "Scene", "SceneError",
         "StageCounter", "Synthesis", "RunSummary", "Modal", "Piece", "RunMotion", "schedule",
-        "simulate_run", "thresholds", "resolve_modal"
+        "simulate_run", "true_thresholds", "resolve_modal"
     ],
-    "rattle_lab.sdf": [
-        "SDFParams", "SDFState", "ImpactLog", "Crossings", "DenseSamples", "SimResult",
+    "rattle_lab.model.sdf": [
+        "SDFParams", "SDFState", "SimImpacts", "Crossings", "DenseSamples", "SimResult",
         "simulate", "flow", "particular_coeffs", "particular_state", "homogeneous_transition"
     ],
     "rattle_lab.store": [

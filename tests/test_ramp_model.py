@@ -14,12 +14,13 @@ import numpy as np
 import pytest
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.fit import (RampSpec, grazing_threshold_ms2, model_threshold,
+from rattle_lab.model.linear import threshold_accel_ms2
+from rattle_lab.fit import (RampSpec, model_threshold,
                             saddle_node_threshold_ms2)
 from rattle_lab.fit._ramp_model import threshold_sigma_ms2
 from rattle_lab.rig._motion import Modal, simulate_run
 from rattle_lab.rig._scene import RunSpec
-from rattle_lab.thresholds import Threshold, sustained_impact_time
+from rattle_lab.detect.thresholds import Threshold, sustained_impact_time
 
 # the thesis plate of the scenes: 96 Hz mode, 2 zeta = 0.017, 1.3 mm gap, Ritz participation
 GAP_M, F_S_HZ, ZETA, Q = 1.3e-3, 96.0, 0.0085, 1.2442
@@ -81,7 +82,7 @@ def test_onset_at_resonance_lags_by_rate_times_time_constant(rate_ms2_s):
     """Linear theory: at omega = 1 the envelope of a ramped drive lags the quasi-static one
     by ``dA/dt / (zeta omega_s)`` (particular solution of a linearly ramped forcing); the
     first impact then comes on average half a cycle after the envelope reaches the gap."""
-    g = float(grazing_threshold_ms2(np.array([F_S_HZ]), 1e3 * GAP_M, F_S_HZ, ZETA, Q)[0])
+    g = float(threshold_accel_ms2(np.array([F_S_HZ]), GAP_M, F_S_HZ, ZETA, Q)[0])
     ramp = RampSpec(F_S_HZ, "up", g - 2.0, g + 2.0, 4.0 / rate_ms2_s)
     m = model_threshold(ramp, e=0.6, anchor_ms2=g, **MODAL)
     expected = rate_ms2_s * TAU_S + ramp.step_ms2 / 2

@@ -3,7 +3,7 @@
 The reference is the per-piece loop the ramp model used before
 (``rattle_lab.fit._ramp_model._replay_per_piece``, one ``simulate`` call per forcing
 period, kept for this comparison) and the plain ``simulate`` loop for
-``rattle_lab.sdf.simulate.simulate_pieces``.  Tolerance: zero (bit for bit), since both run the
+``rattle_lab.model.sdf._simulate.simulate_pieces``.  Tolerance: zero (bit for bit), since both run the
 same compiled kernel on the same durations and event budgets; only the number of Python
 calls differs.
 """
@@ -18,9 +18,9 @@ import pytest
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.fit import RampSpec, fit_restitution_down, model_threshold
 from rattle_lab.fit import _ramp_model
-from rattle_lab.sdf import SDFParams, SDFState, simulate
-from rattle_lab.sdf.simulate import simulate_pieces
-from rattle_lab.thresholds import Threshold
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.sdf._simulate import simulate_pieces
+from rattle_lab.detect.thresholds import Threshold
 
 MODAL = dict(gap_m=1.3e-3, f_s_hz=96.0, zeta=0.0085, participation=1.2442)
 

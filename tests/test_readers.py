@@ -13,7 +13,7 @@ from nptdms import ChannelObject, GroupObject, RootObject, TdmsWriter
 from record_factory import write
 
 from rattle_lab.exceptions import FileFormatError, SchemaError
-from rattle_lab.ingest import ingest, read_catalogue
+from rattle_lab.store import ingest, read_catalogue
 from rattle_lab.records import (DuplicateRunError, MappingError, NaNGapError, detect_format,
                                 load_mapping, read)
 from rattle_lab.records._readers.lvm import iso_from_lvm, parse_lvm

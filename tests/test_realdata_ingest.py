@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rattle_lab.ingest import ingest, open_stored_record, read_catalogue
+from rattle_lab.store import ingest, open_stored_record, read_catalogue
 from rattle_lab.records import UncalibratedWarning, read
 
 REPO = Path(__file__).resolve().parents[1]

@@ -17,7 +17,7 @@ import pytest
 
 from rattle_lab.exceptions import OutputError, ParameterError, RattleLabError
 from rattle_lab.fit import fit_store
-from rattle_lab.ingest import ingest
+from rattle_lab.store import ingest
 from rattle_lab.records._errors import StoreError
 from rattle_lab.report import ReportResult, build_pages, gather, write_report
 from rattle_lab.report._pages import (TEXT_WIDTH, band_quantile, grazing_band_ms2,
@@ -328,10 +328,10 @@ def test_negative_hysteresis_is_flagged(stores: dict[str, Path], tmp_path: Path)
 def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -> None:
     from matplotlib.lines import Line2D
 
-    from rattle_lab.analysis.bifsets import _LINESTYLES
+    from rattle_lab.model.analysis.bifsets import _LINESTYLES
     from rattle_lab.report._pages import model_pages
 
-    import rattle_lab.analysis as analysis
+    import rattle_lab.model.analysis as analysis
 
     captured = {}
     real = analysis.bifurcation_sets

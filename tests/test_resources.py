@@ -12,7 +12,7 @@ import pytest
 from conftest import CHECKOUT, RATTLE_LAB
 
 from rattle_lab._resources import RESOURCE_KINDS, find_resource, resource_names
-from rattle_lab.pipeline import load_pipeline_file
+from rattle_lab.workflow.pipeline import load_pipeline_file
 from rattle_lab.records import load_mapping
 from rattle_lab.rig import load_scene
 
@@ -105,7 +105,7 @@ def test_the_wheel_ships_every_resource(tmp_path: Path) -> None:
 
 def test_a_pipeline_takes_a_scene_by_name(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from rattle_lab import read_catalogue
-    from rattle_lab.pipeline import parse_pipeline, run_pipeline
+    from rattle_lab.workflow.pipeline import parse_pipeline, run_pipeline
 
     monkeypatch.chdir(tmp_path)  # the scene name resolves from any folder
     pipeline = parse_pipeline({"pipeline": {"name": "t", "outputs": ["store"]}}, "t.toml")

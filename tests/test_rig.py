@@ -14,15 +14,15 @@ import h5py
 import numpy as np
 import pytest
 
-from rattle_lab.ingest import ingest
-from rattle_lab.linear import threshold_accel_ms2
+from rattle_lab.store import ingest
+from rattle_lab.model.linear import threshold_accel_ms2
 from rattle_lab.records import read
 from rattle_lab.rig import (Piece, RunMotion, StageCounter, parse_scene, schedule,
                             synthesize, write_synthetic)
 from rattle_lab.rig._channels import (contact_kernel, plate_acceleration, sound_pressure,
                                       vibrometer_velocity)
 from rattle_lab.rig._scene import AcousticSpec, ArtefactSpec, ModelSpec, RunSpec
-from rattle_lab.sdf import SDFParams, simulate
+from rattle_lab.model.sdf import SDFParams, simulate
 
 TWO_PI = 2 * math.pi
 

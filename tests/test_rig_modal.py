@@ -1,7 +1,7 @@
 """The rig's opt-in multi-mode model (``[model] kind = "modal"``, issue 14 item 5).
 
 The scene synthetic/modal_lab.toml is written through the installed ``rattle-lab
-simulate``; its truth is checked against a direct run of :mod:`rattle_lab.modal` built
+simulate``; its truth is checked against a direct run of :mod:`rattle_lab.model.modal` built
 here from the scene's numbers (the inertial pressure ``rho h A`` and the settling time
 computed independently), and ``rattle-lab ingest`` + ``fit`` must find its impacts.
 """
@@ -18,8 +18,8 @@ import pytest
 from scipy import signal
 
 from record_factory import run_cli
-from rattle_lab.modal import KelvinVoigtContact, modal_channels, plate_system, simulate_modal
-from rattle_lab.plate import Plate
+from rattle_lab.model.modal import KelvinVoigtContact, modal_channels, plate_system, simulate_modal
+from rattle_lab.model.plate import Plate
 from rattle_lab.rig import load_scene
 from rattle_lab.rig._scene import SceneError, parse_scene
 

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rattle_lab import scaling as sc
+from rattle_lab.model import scaling as sc
 from rattle_lab.exceptions import ParameterError
 
 # The thesis's FEM plate (section 5.1.1) with Table 2.1's b/a = 0.9 data.

@@ -15,8 +15,8 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from rattle_lab.sdf import flow, homogeneous_transition, particular_coeffs
-from rattle_lab.sdf._compiled import jit_kernel, python_kernel
+from rattle_lab.model.sdf import flow, homogeneous_transition, particular_coeffs
+from rattle_lab.model.sdf._compiled import jit_kernel, python_kernel
 
 mp.mp.dps = 50
 EPS = np.finfo(float).eps

@@ -7,7 +7,7 @@ plain ``t += s`` it replaces was off by 1.2e-8 after 1e4 forcing periods and
 is biased).
 
 Reference: a run started on the impact of a stable 1/n orbit (closed form,
-:func:`rattle_lab.analysis.one_over_n_orbits`) impacts at ``t0 + k n T`` with
+:func:`rattle_lab.model.analysis.one_over_n_orbits`) impacts at ``t0 + k n T`` with
 ``T = 2 pi / omega`` exactly; the reference times are computed in mpmath at 40
 digits, independently of the kernel.  The orbit's phase from the closed form
 is accurate to ~1e-15 and any offset it makes decays (both multipliers inside
@@ -23,8 +23,8 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from rattle_lab.analysis import one_over_n_orbits
-from rattle_lab.sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.analysis import one_over_n_orbits
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 
 
 @pytest.mark.parametrize("n, omega", [(1, 1.1), (3, 0.952)])

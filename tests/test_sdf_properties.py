@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rattle_lab.sdf import SDFParams, SDFState, flow, simulate
+from rattle_lab.model.sdf import SDFParams, SDFState, flow, simulate
 
 PROFILE = settings(max_examples=120, deadline=None, derandomize=True,
                    suppress_health_check=[HealthCheck.too_slow])

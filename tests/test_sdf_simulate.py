@@ -1,6 +1,6 @@
 """The exact event-driven simulator: references, grazing, chatter, sticking, invariants.
 
-Reference for impacts: :func:`rattle_lab.sdf._reference.mpmath_impacts`, an
+Reference for impacts: :func:`rattle_lab.model.sdf._reference.mpmath_impacts`, an
 independent event-driven solver that evaluates the closed form at 30 digits and
 locates impacts with its own root scan.  Tolerance for impact times and
 velocities: 1e-11.  The double-precision closed form has an absolute error of a
@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from rattle_lab.exceptions import ParameterError, SimulationError
-from rattle_lab.sdf import SDFParams, SDFState, particular_state, simulate
-from rattle_lab.sdf._reference import mpmath_impacts
+from rattle_lab.model.sdf import SDFParams, SDFState, particular_state, simulate
+from rattle_lab.model.sdf._reference import mpmath_impacts
 
 REF_CASES = {
     "1/1 orbit": (0.2, 1.0, 0.05, 0.6, 0.0, 0.0, 0.0, 40.0),
@@ -323,11 +323,11 @@ def test_packed_result_unpacks_to_the_kernels_arrays():
     """simulate() reads the kernel's one-buffer result (``run_packed``): the same impacts,
     crossings, sticking, accumulations, dense motion and end state as ``run``'s six arrays,
     exactly (same kernel); a run with chatter, sticking and crossings."""
-    from rattle_lab.sdf import _kernel
+    from rattle_lab.model.sdf import _kernel
     import importlib
 
-    simulate_module = importlib.import_module("rattle_lab.sdf.simulate")
-    from rattle_lab.sdf._compiled import jit_kernel
+    simulate_module = importlib.import_module("rattle_lab.model.sdf.simulate")
+    from rattle_lab.model.sdf._compiled import jit_kernel
 
     assert simulate_module._N_HEAD == _kernel.N_HEAD
     p = SDFParams(F=2.0, omega=0.3, zeta=0.05, e=0.5)

@@ -363,7 +363,7 @@ def test_simulate_to_a_directory_is_one_line_exit_2(tmp_path):
 
 def test_run_pipeline_creates_its_output_folder(tmp_path):
     # `rattle-lab run pipelines/full_campaign.toml default --out build/` in a fresh clone
-    from rattle_lab.pipeline import parse_pipeline, run_pipeline
+    from rattle_lab.workflow.pipeline import parse_pipeline, run_pipeline
 
     src = write(tmp_path, "rec.h5")
     out = tmp_path / "build" / "nested"

@@ -1,9 +1,9 @@
-"""Tests of rattle_lab.analysis.sweep: slow sweeps (thesis 4.2-4.3, Fig. 4-3 to 4-5).
+"""Tests of rattle_lab.model.analysis.sweep: slow sweeps (thesis 4.2-4.3, Fig. 4-3 to 4-5).
 
 The acceptance test reproduces the narrative of thesis Fig. 4-3 (F = 0.2,
 zeta = 0.05, e = 0.6, omega from 0.85 to 1.3 in steps of 0.001, 100 periods
 per value, the first 70 discarded) and checks every transition against the
-closed-form bifurcations of the 1/n orbits (rattle_lab.analysis.branch_events).
+closed-form bifurcations of the 1/n orbits (rattle_lab.model.analysis.branch_events).
 
 Tolerance of the transitions: two steps (0.002).  One step is the grid
 itself (an event between two grid values is seen at the next one); the
@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rattle_lab.analysis import branch_events, one_over_n_orbits
-from rattle_lab.analysis.sweep import (
+from rattle_lab.model.analysis import branch_events, one_over_n_orbits
+from rattle_lab.model.analysis._sweep import (
     SETTLE_CYCLES,
     Regime,
     Sweep,
@@ -41,7 +41,7 @@ from rattle_lab.analysis.sweep import (
     write_sweeps_csv,
 )
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 
 BASE = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6)
 STEP = 0.001

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from rattle_lab.detect import detect_impacts
-from rattle_lab.detect._synthetic import ramp_impacts, synthetic_signals
+from rattle_lab.rig._handbuilt import ramp_impacts, synthetic_signals
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.thresholds import (Threshold, fundamental_amplitude, ramp_line, ramp_threshold,
+from rattle_lab.detect.thresholds import (Threshold, fundamental_amplitude, ramp_line, ramp_threshold,
                                    sustained_impact_time, tabulate_thresholds)
 
 FS_HZ = 12800.0

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from rattle_lab.exceptions import FileFormatError
-from rattle_lab.ingest import open_stored_record, read_catalogue
+from rattle_lab.store import open_stored_record, read_catalogue
 from rattle_lab.records import Channel, Record, Run, detect_format, read, write_record
 
 from record_factory import plate_rig, run_cli

@@ -30,7 +30,7 @@ from typing import Literal
 import numpy as np
 from scipy import signal
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 
 Weighting = Literal["A", "C", "Z"]
 

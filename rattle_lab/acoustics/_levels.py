@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 from ._filters import apply_weighting, band_mean_squares
 
 P_REF_PA = 20e-6

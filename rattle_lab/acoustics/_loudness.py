@@ -30,7 +30,7 @@ from typing import Any, Literal
 import numpy as np
 from scipy import signal
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 from ._nl_decay import nonlinear_decay
 
 FieldType = Literal["free", "diffuse"]

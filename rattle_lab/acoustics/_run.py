@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import RattleLabError
+from rattle_lab.exceptions import RattleLabError
 from ._levels import P_REF_PA, SoundLevels, rattle_episodes, sound_levels
 from ._loudness import FieldType, Loudness, loudness
 

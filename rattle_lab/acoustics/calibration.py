@@ -37,7 +37,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..exceptions import SchemaError
+from rattle_lab.exceptions import SchemaError
 
 P_REF_PA = 20e-6
 #: Largest pre/post difference accepted, dB (IEC 61672-3 / ISO 1996-2 practice: 0.5 dB).

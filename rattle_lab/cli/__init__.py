@@ -28,8 +28,8 @@ import sys
 from collections.abc import Iterator, Sequence
 from types import FrameType
 
-from .._version import __version__
-from ..exceptions import RattleLabError
+from rattle_lab._version import __version__
+from rattle_lab.exceptions import RattleLabError
 from ._types import OneLineParser
 
 __all__ = ["COMMAND_MODULES", "build_parser", "main"]

@@ -1,4 +1,4 @@
-"""``rattle-lab demo``: the main job on the embedded default scene (see :mod:`rattle_lab.demo`)."""
+"""``rattle-lab demo``: the main job on the embedded default scene (see :mod:`rattle_lab.workflow.demo`)."""
 
 from __future__ import annotations
 
@@ -18,6 +18,6 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..demo import run_demo
+    from rattle_lab.workflow.demo import run_demo
 
     return run_demo(args.out, quiet=args.quiet)

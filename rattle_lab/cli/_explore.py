@@ -52,10 +52,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..explorer import Explorer, display_available
-    from ..plots import check_figure_path
-    from ..scaling import F_from_accel
-    from ..sdf import SDFParams
+    from rattle_lab.explorer import Explorer, display_available
+    from rattle_lab.plot import check_figure_path
+    from rattle_lab.model.scaling import F_from_accel
+    from rattle_lab.model.sdf import SDFParams
 
     if args.save_png:
         check_figure_path(args.save_png)

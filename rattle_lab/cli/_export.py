@@ -28,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..exchange import export_uff
+    from rattle_lab.exchange import export_uff
 
     n = export_uff(args.store, args.output, channels=not args.no_channels,
                    results=not args.no_results)

@@ -42,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..fit import fit_store, load_pipeline
+    from rattle_lab.fit import fit_store, load_pipeline
 
     params = load_pipeline(args.pipeline)
     source = "pipeline"

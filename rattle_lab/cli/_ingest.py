@@ -1,4 +1,4 @@
-"""``rattle-lab ingest FILE... -o store.h5``: a thin layer over :func:`rattle_lab.ingest.ingest`.
+"""``rattle-lab ingest FILE... -o store.h5``: a thin layer over :func:`rattle_lab.store.ingest`.
 
 Prints the catalogue rows of the given inputs as a table (or JSON with
 ``--json``) on stdout; data-quality warnings go to stderr, one line each.
@@ -56,8 +56,8 @@ def _warn(finding: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..exceptions import RattleLabWarning
-    from ..store import ingest
+    from rattle_lab.exceptions import RattleLabWarning
+    from rattle_lab.store import ingest
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RattleLabWarning)

@@ -13,7 +13,7 @@ import json
 import math
 import sys
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 
 #: Damping ratio and coefficient of restitution used when the command line gives none.
 DEFAULT_ZETA = "0.05"

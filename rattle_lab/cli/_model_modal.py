@@ -1,6 +1,6 @@
 """``rattle-lab model modal-impact``: the multi-mode plate impact model and its sound.
 
-A thin layer over :func:`rattle_lab.modal.modal_channels`.  Defaults run the thesis's
+A thin layer over :func:`rattle_lab.model.modal.modal_channels`.  Defaults run the thesis's
 FEM plate (section 5.1: CFCF, 0.254 x 0.2286 x 0.001 m aluminium, striker at the centre
 1 mm behind it, 285 Pa at 99.8 Hz, 2 zeta = 0.1).
 """
@@ -63,8 +63,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run_modal_impact(args: argparse.Namespace) -> int:
-    from ..exceptions import ParameterError
-    from ..modal import contact_from_name, modal_channels, plate_system
+    from rattle_lab.exceptions import ParameterError
+    from rattle_lab.model.modal import contact_from_name, modal_channels, plate_system
 
     plate = _plate_from_args(args, args.b, args.edges)
     if not (args.cycles > 0 and math.isfinite(args.cycles)):

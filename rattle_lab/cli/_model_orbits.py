@@ -1,7 +1,7 @@
 """``rattle-lab model orbits`` and ``rattle-lab model bifsets``: 1/n orbits and bifurcation sets.
 
-Thin layers over :func:`rattle_lab.analysis.one_over_n_orbits` and
-:func:`rattle_lab.analysis.bifurcation_sets`.  Arguments are parsed here and
+Thin layers over :func:`rattle_lab.model.analysis.one_over_n_orbits` and
+:func:`rattle_lab.model.analysis.bifurcation_sets`.  Arguments are parsed here and
 every invalid one raises :class:`~rattle_lab.exceptions.ParameterError` naming
 the option and the value (the CLI prints it on one line, exit status 2).
 """
@@ -12,7 +12,7 @@ import argparse
 import math
 import sys
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 from ._model_args import add_damping_restitution, dump_json, parse_float, parse_int, parse_range
 
 #: Largest n accepted on the command line (the cost grows with n).
@@ -81,8 +81,8 @@ def _num(x: float) -> float | None:
 # ---------------------------------------------------------------------------
 
 def _run_orbits(args: argparse.Namespace) -> int:
-    from ..analysis.orbits import one_over_n_orbits
-    from ..sdf._types import SDFParams
+    from rattle_lab.model.analysis.orbits import one_over_n_orbits
+    from rattle_lab.model.sdf._types import SDFParams
 
     ns = parse_n(args.n)
     params = SDFParams(F=parse_float("--F", args.F), omega=parse_float("--omega", args.omega),
@@ -114,7 +114,7 @@ def _run_orbits(args: argparse.Namespace) -> int:
 
 
 def _run_bifsets(args: argparse.Namespace) -> int:
-    from ..analysis.bifsets import bifurcation_sets, check_plot_path, plot_bifurcation_sets
+    from rattle_lab.model.analysis.bifsets import bifurcation_sets, check_plot_path, plot_bifurcation_sets
 
     ns = parse_n(args.n)
     if args.plot:

@@ -1,7 +1,7 @@
 """``rattle-lab model plate | scale | grazing``: plate modal data, scaling, grazing curve.
 
-Thin layers over :func:`rattle_lab.plate.ritz_modes` (and the closed form for SSSS),
-:class:`rattle_lab.scaling.SDFScaling` and :mod:`rattle_lab.linear`.  A human table
+Thin layers over :func:`rattle_lab.model.plate.ritz_modes` (and the closed form for SSSS),
+:class:`rattle_lab.model.scaling.SDFScaling` and :mod:`rattle_lab.model.linear`.  A human table
 goes to stdout by default, JSON with ``--json``.
 """
 
@@ -126,13 +126,13 @@ def _table(headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
 
 # --------------------------------------------------------------------------- commands
 def _plate_from_args(args: argparse.Namespace, b_m: float, edges: str) -> Any:
-    from ..plate import Plate
+    from rattle_lab.model.plate import Plate
 
     return Plate(a_m=args.a, b_m=b_m, h_p_m=args.h, E_pa=args.E, nu=args.nu, rho_kg_m3=args.rho, edges=edges)
 
 
 def _solve(plate: Any, n_modes: int, n_terms: int | None) -> tuple[str, list[dict[str, Any]]]:
-    from ..plate import simply_supported_modes
+    from rattle_lab.model.plate import simply_supported_modes
 
     if plate.edges == "SSSS":
         modes = list(simply_supported_modes(plate.aspect_ratio, n_modes))
@@ -168,8 +168,8 @@ def _run_plate(args: argparse.Namespace) -> int:
 
 
 def _run_scale(args: argparse.Namespace) -> int:
-    from .. import scaling
-    from ..exceptions import ParameterError
+    from rattle_lab.model import scaling
+    from rattle_lab.exceptions import ParameterError
 
     given = [args.lam, args.Q1, args.Q2]
     if any(v is not None for v in given):
@@ -219,7 +219,7 @@ def _run_scale(args: argparse.Namespace) -> int:
 
 
 def _run_grazing(args: argparse.Namespace) -> int:
-    from .. import linear
+    from rattle_lab.model import linear
 
     out: dict[str, Any] = {"zeta": args.zeta}
     if args.F is not None:

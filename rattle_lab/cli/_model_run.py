@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 
-from ..sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 from ._types import cycles, finite, non_negative, positive, probability
 
 
@@ -42,7 +42,7 @@ def _run(args: argparse.Namespace) -> int:
     params = SDFParams(F=args.F, omega=args.omega, zeta=args.zeta, e=args.e)
     state = SDFState(x=args.x0, v=args.v0, theta=args.phase)
     if args.plot:
-        from ..plots import check_figure_path
+        from rattle_lab.plot import check_figure_path
 
         check_figure_path(args.plot)
     dense_t = None
@@ -53,7 +53,7 @@ def _run(args: argparse.Namespace) -> int:
                    dense_t=dense_t, crossings=False,
                    dense_fields=("x", "v", "a", "forced", "transient", "excitation"))
     if args.plot:
-        from ..plots import plot_time_history
+        from rattle_lab.plot import plot_time_history
 
         plot_time_history(res, args.plot)
     imp = res.impacts

@@ -1,8 +1,8 @@
 """``rattle-lab model sweep`` and ``rattle-lab model map``: slow sweeps, regime maps, basins.
 
-Thin layers over :func:`rattle_lab.analysis.sweep.sweep_up_down` /
-:func:`~rattle_lab.analysis.sweep.sweep` and the study functions of
-:mod:`rattle_lab.analysis.maps`.  Every invalid argument raises
+Thin layers over :func:`rattle_lab.model.analysis._sweep.sweep_up_down` /
+:func:`~rattle_lab.model.analysis._sweep.sweep` and the study functions of
+:mod:`rattle_lab.model.analysis.maps`.  Every invalid argument raises
 :class:`~rattle_lab.exceptions.ParameterError` naming the option and the value
 (the CLI prints it on one line, exit status 2).  Data go to stdout (a table,
 or JSON with ``--json``) or to ``--csv`` / ``--plot`` files; messages go to
@@ -16,7 +16,7 @@ import math
 import sys
 from typing import Any
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 from ._model_args import add_damping_restitution, dump_json, parse_float, parse_int, parse_range
 
 _GAP_HELP = ("gap: the gap h in units of the static deflection F_es / omega_s^2, i.e. "
@@ -149,8 +149,8 @@ def _fmt(x: float) -> str:
 # ---------------------------------------------------------------------------
 
 def _run_sweep(args: argparse.Namespace) -> int:
-    from ..analysis.bifsets import check_plot_path
-    from ..analysis.sweep import (
+    from rattle_lab.model.analysis.bifsets import check_plot_path
+    from rattle_lab.model.analysis._sweep import (
         LYAPUNOV_MODES,
         SWEEP_PARAMS,
         plot_sweeps,
@@ -159,7 +159,7 @@ def _run_sweep(args: argparse.Namespace) -> int:
         sweep_values,
         write_sweeps_csv,
     )
-    from ..sdf._types import SDFParams
+    from rattle_lab.model.sdf._types import SDFParams
 
     param = _choice("--param", args.param, SWEEP_PARAMS)
     direction = _choice("--direction", args.direction, ("up", "down", "both"))
@@ -241,7 +241,7 @@ def _grid(option: str, text: str, n_option: str, n_text: str) -> Any:
 
 
 def _run_map(args: argparse.Namespace) -> int:
-    from ..analysis.bifsets import check_plot_path
+    from rattle_lab.model.analysis.bifsets import check_plot_path
 
     kind = _choice("--kind", args.kind, ("regime", "basin", "disturbance"))
     if args.plot:
@@ -251,8 +251,8 @@ def _run_map(args: argparse.Namespace) -> int:
     zeta, e = parse_float("--zeta", args.zeta), parse_float("--e", args.e)
     if kind == "disturbance":
         return _run_disturbance(args, zeta, e, common)
-    from ..analysis.maps import basin_map, plot_attractor_map, regime_map
-    from ..sdf._types import SDFParams
+    from rattle_lab.model.analysis.maps import basin_map, plot_attractor_map, regime_map
+    from rattle_lab.model.sdf._types import SDFParams
 
     opts: dict[str, Any] = dict(
         cycles=parse_int("--cycles", args.cycles or "150"),
@@ -289,7 +289,7 @@ def _run_disturbance(args: argparse.Namespace, zeta: float, e: float,
                      common: dict[str, Any]) -> int:
     import numpy as np
 
-    from ..analysis.maps import disturbance_map, plot_disturbance_map
+    from rattle_lab.model.analysis.maps import disturbance_map, plot_disturbance_map
 
     levels = tuple(parse_float("--levels", t) for t in args.levels.split(","))
     if any(v <= 0 for v in levels):

@@ -28,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..report import write_report
+    from rattle_lab.report import write_report
 
     result = write_report(args.store, args.output, model=not args.no_model, quiet=args.quiet)
     for name, why in result.missing.items():

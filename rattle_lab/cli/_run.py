@@ -1,5 +1,5 @@
 """``rattle-lab run PIPELINE INPUT...``: a thin layer over
-:func:`rattle_lab.pipeline.run_pipeline`.
+:func:`rattle_lab.workflow.pipeline.run_pipeline`.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..pipeline import load_pipeline_file, run_pipeline
+    from rattle_lab.workflow.pipeline import load_pipeline_file, run_pipeline
 
     def say(line: str) -> None:
         if not args.quiet:

@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..rig import write_synthetic
+    from rattle_lab.rig import write_synthetic
 
     result = write_synthetic(args.scene, args.output, seed=args.seed, quiet=args.quiet)
     for run in result.runs:

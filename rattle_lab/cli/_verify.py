@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..store import record_attrs_count, verify_store
+    from rattle_lab.store import record_attrs_count, verify_store
 
     mismatches = verify_store(args.store)
     n_inputs = record_attrs_count(args.store)

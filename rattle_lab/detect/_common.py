@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 
 
 def n_samples_of(duration_s: float, fs_hz: float, *, name: str = "duration_s") -> int:

@@ -33,7 +33,7 @@ from typing import Literal
 
 import numpy as np
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, detrended_abs, n_samples_of, robust_sigma
 
 

@@ -21,7 +21,7 @@ from fractions import Fraction
 import numpy as np
 from scipy import signal
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 
 #: Largest numerator/denominator of the rational rate ratio of :func:`onto_grid`.
 MAX_RATIO_TERMS = 1000

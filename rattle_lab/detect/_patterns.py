@@ -7,7 +7,7 @@ from typing import Literal
 
 import numpy as np
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 
 Pattern = Literal["no impact", "1/1", "1/n", "several per cycle", "irregular"]
 

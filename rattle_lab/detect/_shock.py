@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, robust_sigma
 
 #: Blocks the record is cut into to find its quietest stretch (the noise floor).

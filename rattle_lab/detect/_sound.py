@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, n_samples_of, parabolic_peak
 from ._impacts import _LocalFit
 from ._spl import spl_db

@@ -65,7 +65,7 @@ def rms_spl_db(pressure_pa: object, fs_hz: float | None = None, *, a_weighted: b
     p = as_signal(pressure_pa, "pressure_pa")
     if a_weighted:
         if fs_hz is None:
-            from ..exceptions import ParameterError
+            from rattle_lab.exceptions import ParameterError
             raise ParameterError("`fs_hz` is needed for an A-weighted level, was None")
         p = a_weight(p, fs_hz)
     if p.size == 0:

@@ -32,8 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from .._atomic import atomic_path
-from ..exceptions import OutputError
+from rattle_lab._atomic import atomic_path
+from rattle_lab.exceptions import OutputError
 
 #: UFF specific data types (records 8/9, field 1) of the record quantities.
 UFF_TYPE_OF_QUANTITY = {"sound_pressure": 15, "base_acceleration": 12, "plate_acceleration": 12,
@@ -72,9 +72,9 @@ def _set(data: np.ndarray, x: np.ndarray | None, *, dt: float | None, t0: float,
 def uff_sets(store: str | os.PathLike[str], *, channels: bool = True,
              results: bool = True) -> list[dict[str, Any]]:
     """The UFF 58 datasets (pyuff dicts) of a store's runs and, if fitted, its results."""
-    from ..ingest import open_stored_record, read_catalogue
-    from ..records._errors import StoreError
-    from ..results import read_results
+    from rattle_lab.store import open_stored_record, read_catalogue
+    from rattle_lab.records._errors import StoreError
+    from rattle_lab.fit._results import read_results
 
     store = Path(store)
     catalogue = read_catalogue(store, level="runs")

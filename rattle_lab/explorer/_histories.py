@@ -1,6 +1,6 @@
 """What the explorer shows, as pure data: time histories split into parts, and impacts.
 
-:func:`compute_histories` runs the exact simulator (:func:`rattle_lab.sdf.simulate`)
+:func:`compute_histories` runs the exact simulator (:func:`rattle_lab.model.sdf.simulate`)
 and splits each of displacement, velocity and acceleration into its forced
 (particular, steady-state linear) and transient (homogeneous) parts, as the
 thesis's applet does (Appendix A.3, ``Screen.java``: ``X_FORCED``,
@@ -28,11 +28,11 @@ from typing import Literal
 
 import numpy as np
 
-from .._atomic import atomic_path
-from .._version import __version__
-from ..exceptions import ParameterError
-from ..scaling import accel_ms2_from_F
-from ..sdf import ImpactLog, SDFParams, SDFState, SimResult, particular_state, simulate
+from rattle_lab._atomic import atomic_path
+from rattle_lab._version import __version__
+from rattle_lab.exceptions import ParameterError
+from rattle_lab.model.scaling import accel_ms2_from_F
+from rattle_lab.model.sdf import SimImpacts, SDFParams, SDFState, SimResult, particular_state, simulate
 
 TWO_PI = 2.0 * math.pi
 
@@ -89,7 +89,7 @@ class Histories:
     start_state : SDFState
         The state the run started from.
     result : SimResult
-        What :func:`rattle_lab.sdf.simulate` returned (``result.dense`` holds
+        What :func:`rattle_lab.model.sdf.simulate` returned (``result.dense`` holds
         ``x``, ``v``, ``a``, ``forced``, ``transient`` and ``excitation``).
     t, x, v, a : ndarray
         Sample times and the total displacement, velocity, acceleration
@@ -125,7 +125,7 @@ class Histories:
     excitation: np.ndarray
 
     @property
-    def impacts(self) -> ImpactLog:
+    def impacts(self) -> SimImpacts:
         """Every impact of the run (nondimensional)."""
         return self.result.impacts
 
@@ -181,7 +181,7 @@ class Histories:
             "provenance": json.dumps({
                 "package": "rattle_lab", "version": __version__,
                 "function": "rattle_lab.explorer.compute_histories",
-                "simulator": f"rattle_lab.sdf.simulate(method={self.result.method!r})",
+                "simulator": f"rattle_lab.model.sdf.simulate(method={self.result.method!r})",
             }),
         }
 
@@ -224,7 +224,7 @@ def compute_histories(params: SDFParams, *, cycles: float = 20.0, n_per_cycle: i
     Examples
     --------
     >>> import numpy as np
-    >>> from rattle_lab.sdf import SDFParams
+    >>> from rattle_lab.model.sdf import SDFParams
     >>> h = compute_histories(SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6), cycles=5)
     >>> bool(np.allclose(h.x, h.x_forced + h.x_transient))
     True

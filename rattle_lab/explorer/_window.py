@@ -22,10 +22,10 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from ..analysis.sweep import Sweep, sweep
-from ..exceptions import ParameterError, RattleLabError
-from ..scaling import F_from_accel, accel_ms2_from_F
-from ..sdf import SDFParams, SDFState
+from rattle_lab.model.analysis._sweep import Sweep, sweep
+from rattle_lab.exceptions import ParameterError, RattleLabError
+from rattle_lab.model.scaling import F_from_accel, accel_ms2_from_F
+from rattle_lab.model.sdf import SDFParams, SDFState
 from ._histories import TWO_PI, Histories, compute_histories, save_histories
 
 if TYPE_CHECKING:
@@ -119,7 +119,7 @@ class Explorer:
     acceleration with their forced, transient and excitation parts
     (check boxes), the phase portrait, the impacts (incoming velocity against
     time or forcing phase), and a slow sweep of the impact velocity against
-    ``omega``, the amplitude or ``e`` (:func:`rattle_lab.analysis.sweep`).
+    ``omega``, the amplitude or ``e`` (:func:`rattle_lab.model.analysis.sweep`).
     Sliders set ``F`` (or the base acceleration ``A_e`` in m/s^2, through the
     gap and ``f_s``), ``omega``, ``zeta``, ``e`` and the gap.
 
@@ -359,7 +359,7 @@ class Explorer:
     def run_sweep(self, param: SweepChoice | None = None) -> Sweep:
         """Sweep ``param`` up over its slider's range and plot ``v_im`` against it.
 
-        A slow up-sweep (:func:`rattle_lab.analysis.sweep`) from the current
+        A slow up-sweep (:func:`rattle_lab.model.analysis.sweep`) from the current
         state, the other parameters held at their current values, with
         ``sweep_cycles`` periods per value of which ``sweep_discard`` are
         discarded; no Lyapunov exponents (for speed).
@@ -414,7 +414,7 @@ class Explorer:
         """Render the window as it is to an image (png/pdf/svg), atomically."""
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-        from ..plots import save_figure
+        from rattle_lab.plot import save_figure
 
         canvas = self.figure.canvas
         if not hasattr(canvas, "print_png"):

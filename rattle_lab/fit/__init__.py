@@ -7,17 +7,19 @@ saddle-node) or by replaying the measured ramp through the exact simulator
 
 from ._common import ParamEstimate
 from ._damping import RampDampingFit, fit_zeta_ramp
-from ._grazing import GrazingFit, fit_grazing, grazing_threshold_ms2
+from ._grazing import GrazingFit, fit_grazing
 from ._ramp_model import ModelThreshold, RampSpec, model_threshold
 from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_down,
                            restitution_from_ratios, saddle_node_threshold_ms2)
+from ._results import RunResult, StoreFit
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
 from ._store import analyse_run, fit_store, json_ready, load_pipeline, summarise_fits
 
 __all__ = [
     "DbLaw", "GrazingFit", "analyse_run", "fit_store", "json_ready", "load_pipeline",
     "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
-    "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down", "grazing_threshold_ms2",
+    "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
     "restitution_from_ratios", "saddle_node_threshold_ms2",
     "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
+    "RunResult", "StoreFit",
 ]

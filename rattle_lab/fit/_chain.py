@@ -16,13 +16,13 @@ from typing import Any
 
 import numpy as np
 
-from ..detect._pairing import base_velocity_at, onto_grid
-from ..detect._shock import detect_shock
-from ..exceptions import ParameterError
-from ..records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
+from rattle_lab.detect._pairing import base_velocity_at, onto_grid
+from rattle_lab.detect._shock import detect_shock
+from rattle_lab.exceptions import ParameterError
+from rattle_lab.records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
                               channel_time_offset_s)
-from ..results import RunResult
-from ..thresholds import Threshold, crossing_level_ms2
+from rattle_lab.fit._results import RunResult
+from rattle_lab.detect.thresholds import Threshold, crossing_level_ms2
 
 #: Quantities that cause a shock (the hammer's force, the drop table or shaker base), in the
 #: order a transient record's cause is chosen; the other channels are its responses.
@@ -172,9 +172,9 @@ def runs_thresholds(runs: list[RunResult]) -> list[Threshold]:
 
 
 def _crossing_curve(thresholds: list[Threshold], freq_hz: np.ndarray) -> np.ndarray:
-    """Upward crossing levels (:func:`~rattle_lab.thresholds.crossing_level_ms2`) per frequency.
+    """Upward crossing levels (:func:`~rattle_lab.detect.thresholds.crossing_level_ms2`) per frequency.
 
-    Mean over the runs at each frequency, as :func:`~rattle_lab.thresholds.tabulate_thresholds`;
+    Mean over the runs at each frequency, as :func:`~rattle_lab.detect.thresholds.tabulate_thresholds`;
     a threshold without a measured ramp keeps its impact level.
     """
     out = np.full(freq_hz.size, np.nan)

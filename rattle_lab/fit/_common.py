@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 
 
 def check_positive(**values: float) -> None:

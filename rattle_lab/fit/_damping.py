@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
-from ..exceptions import ConvergenceError, ParameterError
-from ..thresholds import Threshold
+from rattle_lab.exceptions import ConvergenceError, ParameterError
+from rattle_lab.detect.thresholds import Threshold
 from ._common import ParamEstimate, check_positive
 from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
 
@@ -110,7 +110,7 @@ def fit_zeta_ramp(thresholds: Sequence[Threshold], *, gap_m: float, f_s_hz: floa
 
     Examples
     --------
-    >>> from rattle_lab.thresholds import Threshold
+    >>> from rattle_lab.detect.thresholds import Threshold
     >>> up = Threshold("up_096", 96.0, "up", 6.92, 1.68, ramp_start_ms2=3.0, ramp_end_ms2=10.0,
     ...                ramp_duration_s=3.0, ramp_rms_ms2=0.001)
     >>> fit = fit_zeta_ramp([up], gap_m=1.3e-3, f_s_hz=96.0, zeta0=0.0091, participation=1.2442)

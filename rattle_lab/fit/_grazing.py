@@ -1,6 +1,6 @@
 """Grazing fit: the dimensional form of eq. (3.4) fitted to upward thresholds (thesis Fig. 6-2).
 
-Model, :func:`rattle_lab.linear.threshold_accel_ms2`::
+Model, :func:`rattle_lab.model.linear.threshold_accel_ms2`::
 
     A_up(f) = h omega_s^2 sqrt((1 - (f/f_s)^2)^2 + (2 zeta f/f_s)^2) / q
 
@@ -25,9 +25,9 @@ from typing import Any
 import lmfit
 import numpy as np
 
-from ..detect._common import robust_sigma
-from ..exceptions import ConvergenceError, ParameterError
-from ..linear import grazing_F
+from rattle_lab.detect._common import robust_sigma
+from rattle_lab.exceptions import ConvergenceError, ParameterError
+from rattle_lab.model.linear import threshold_accel_unchecked
 from ._common import ParamEstimate, correlation_matrix
 
 _CORR_LIMIT = 0.995
@@ -36,11 +36,10 @@ _CORR_LIMIT = 0.995
 REL_SCATTER_FLOOR = 0.01
 
 
-def grazing_threshold_ms2(freq_hz: np.ndarray, gap_mm: float, f_s_hz: float, zeta: float,
-                          participation: float) -> np.ndarray:
-    """Eq. (3.4), dimensional: threshold base acceleration [m/s^2] (pure model function)."""
-    omega_s = 2.0 * np.pi * f_s_hz
-    return 1e-3 * gap_mm * omega_s**2 * np.asarray(grazing_F(freq_hz / f_s_hz, abs(zeta))) / participation
+def _model_ms2(freq_hz: np.ndarray, gap_mm: float, f_s_hz: float, zeta: float,
+               participation: float) -> np.ndarray:
+    """lmfit's model: eq. (3.4) with the gap in mm (conditioning); the formula is the linear module's."""
+    return threshold_accel_unchecked(freq_hz, 1e-3 * gap_mm, f_s_hz, zeta, participation)
 
 
 @dataclass(frozen=True)
@@ -80,8 +79,9 @@ class GrazingFit:
     def predict(self, freq_hz: object) -> np.ndarray:
         """Threshold acceleration of the fitted model at ``freq_hz``, m/s^2."""
         p = self.params
-        return grazing_threshold_ms2(np.asarray(freq_hz, dtype=float), 1e3 * p["gap_m"].value,
-                                     p["f_s_hz"].value, p["zeta"].value, p["participation"].value)
+        return threshold_accel_unchecked(np.asarray(freq_hz, dtype=float), p["gap_m"].value,
+                                         p["f_s_hz"].value, p["zeta"].value,
+                                         p["participation"].value)
 
 
 def _initial(freq: np.ndarray, acc: np.ndarray, q: float) -> tuple[float, float, float]:
@@ -136,7 +136,7 @@ def fit_grazing(freq_hz: object, accel_ms2: object, *, participation: float = 1.
     gap0_mm, fs0, zeta0 = _initial(fo, ao, participation)
     if gap_m is not None:
         gap0_mm = 1e3 * gap_m
-    model = lmfit.Model(grazing_threshold_ms2, independent_vars=["freq_hz"])
+    model = lmfit.Model(_model_ms2, independent_vars=["freq_hz"])
     pars = model.make_params(gap_mm=dict(value=gap0_mm, min=0.0, vary=vary_gap),
                              f_s_hz=dict(value=fs0, min=0.0),
                              zeta=dict(value=zeta0, min=0.0, max=1.0),

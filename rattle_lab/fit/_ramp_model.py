@@ -7,13 +7,13 @@ saddle-node of the 1/1 orbit (eq. 3.11) with the delay of a slow passage through
 fold.  On the 3-6 s ramps of the thesis campaign both move the disappearance level by
 more than its whole dependence on ``e``.  So this module simulates the protocol itself:
 the measured ramp (frequency, start and end level, duration) at candidate model
-parameters, with the exact event-driven simulator (:func:`rattle_lab.sdf.simulate.simulate_pieces`:
+parameters, with the exact event-driven simulator (:func:`rattle_lab.model.sdf._simulate.simulate_pieces`:
 one compiled call per replay, carrying the state and forcing phase from one forcing
 period to the next; the same motion, bit for bit, as one ``simulate`` call per period,
 5-7x faster over a fit of ``e``: ``benchmarks/speed_goals.py``), and reads
-the threshold off the simulated impacts exactly as :mod:`rattle_lab.thresholds` reads
+the threshold off the simulated impacts exactly as :mod:`rattle_lab.detect.thresholds` reads
 it off detected ones: the impact that starts (up) or ends (down) the first/last
-sustained group (:func:`~rattle_lab.thresholds.sustained_impact_time`), censored
+sustained group (:func:`~rattle_lab.detect.thresholds.sustained_impact_time`), censored
 within ``edge_cycles`` of the record's ends, and the ramp level at that instant.
 
 Nondimensional form (thesis eq. 2.27-2.32): ``tau = omega_s t``, ``F = q A / (omega_s^2 h)``,
@@ -37,11 +37,11 @@ from typing import Literal
 
 import numpy as np
 
-from ..analysis import one_over_n_orbits
-from ..exceptions import ParameterError
-from ..sdf import SDFParams, SDFState, simulate
-from ..sdf.simulate import simulate_pieces
-from ..thresholds import Threshold, sustained_impact_time
+from rattle_lab.model.analysis import one_over_n_orbits
+from rattle_lab.exceptions import ParameterError
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.sdf._simulate import simulate_pieces
+from rattle_lab.detect.thresholds import Threshold, sustained_impact_time
 from ._common import check_positive
 
 Direction = Literal["up", "down"]
@@ -86,7 +86,7 @@ class RampSpec:
 
     @classmethod
     def from_threshold(cls, threshold: Threshold) -> RampSpec:
-        """The measured ramp of a :class:`~rattle_lab.thresholds.Threshold`.
+        """The measured ramp of a :class:`~rattle_lab.detect.thresholds.Threshold`.
 
         Raises
         ------
@@ -239,7 +239,7 @@ def _replay(ramp: RampSpec, t_w_s: float, phase: float, *, F_per_ms2: float, ome
     has decayed by ``exp(-quiet_s zeta omega_s)`` and the level only falls, so the motion
     cannot reach the stop again.
 
-    All pieces run in one compiled call (:func:`~rattle_lab.sdf.simulate.simulate_pieces`), which
+    All pieces run in one compiled call (:func:`~rattle_lab.model.sdf._simulate.simulate_pieces`), which
     stops where the stopping rule surely holds; the rule is then applied piece by piece
     to the impacts: the same threshold, bit for bit, as one ``simulate`` call per piece
     (:func:`_replay_per_piece`, tested), without its fixed cost per call.
@@ -318,7 +318,7 @@ def _replay_per_piece(ramp: RampSpec, t_w_s: float, phase: float, *, F_per_ms2: 
                       omega_s: float, omega: float, zeta: float, e: float, settle_tau: float,
                       quiet_s: float, hold: int, n_confirm: int, max_gap_cycles: float,
                       edge_cycles: float) -> float:
-    """:func:`_replay` with one :func:`~rattle_lab.sdf.simulate` call per piece.
+    """:func:`_replay` with one :func:`~rattle_lab.model.sdf.simulate` call per piece.
 
     The reference the one-call replay is tested against (same threshold, bit for bit).
 
@@ -384,7 +384,7 @@ def model_threshold(ramp: RampSpec, *, e: float, gap_m: float, f_s_hz: float, ze
     n_phases : int
         Replays, with the forcing phase at the ramp start spread evenly over a period.
     n_confirm, max_gap_cycles, edge_cycles
-        As in :func:`rattle_lab.thresholds.ramp_threshold`; pass the values used on the data.
+        As in :func:`rattle_lab.detect.thresholds.ramp_threshold`; pass the values used on the data.
     level_hold_periods : int
         Forcing periods over which the drive holds its level (1: continuous ramp), counted
         from the record's start.

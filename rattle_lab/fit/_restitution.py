@@ -7,10 +7,10 @@ downward ramp carries ``e`` and the onset does not.  Two models of that threshol
 ``method="ramp"`` (default)
     The measured ramp replayed through the exact simulator at candidate ``e``
     (:func:`rattle_lab.fit._ramp_model.model_threshold`), the threshold read off as
-    :mod:`rattle_lab.thresholds` reads it off the data.  Valid at any ramp rate.
+    :mod:`rattle_lab.detect.thresholds` reads it off the data.  Valid at any ramp rate.
 ``method="quasi-static"``
     The fold itself, dimensionally ``A_down(f) = h omega_s^2 F_sn(f / f_s, zeta, e) / q``
-    with ``F_sn`` from :func:`rattle_lab.analysis.saddle_node_forcing`.  Valid only when
+    with ``F_sn`` from :func:`rattle_lab.model.analysis.saddle_node_forcing`.  Valid only when
     the ramp passes the fold slowly: the plate lags a ramp by about ``|dA/dt|`` times its
     time constant ``1 / (zeta omega_s)``, and a fold is left with the delay of a slow
     passage, whose level lag grows like ``|dA/dt|^(2/3)``.  For the thesis plate
@@ -37,9 +37,9 @@ from typing import Any, Literal
 import lmfit
 import numpy as np
 
-from ..analysis import saddle_node_forcing
-from ..exceptions import ConvergenceError, ParameterError
-from ..thresholds import Threshold
+from rattle_lab.model.analysis import saddle_node_forcing
+from rattle_lab.exceptions import ConvergenceError, ParameterError
+from rattle_lab.detect.thresholds import Threshold
 from ._common import ParamEstimate, check_positive
 from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
 
@@ -287,7 +287,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
     Parameters
     ----------
     thresholds : sequence of Threshold
-        Measured thresholds (:func:`rattle_lab.thresholds.ramp_threshold`); the finite
+        Measured thresholds (:func:`rattle_lab.detect.thresholds.ramp_threshold`); the finite
         downward ones above ``f_s (1 + zeta)`` are used, others ignored.  The ramp method
         needs their measured ramp (``ramp_start_ms2`` ...).
     gap_m, f_s_hz, zeta, participation : float
@@ -336,7 +336,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
 
     Examples
     --------
-    >>> from rattle_lab.thresholds import Threshold
+    >>> from rattle_lab.detect.thresholds import Threshold
     >>> down = Threshold("down_100", 100.0, "down", 6.90, 5.5, ramp_start_ms2=50.0,
     ...                  ramp_end_ms2=3.0, ramp_duration_s=6.0, ramp_rms_ms2=0.005)
     >>> fit = fit_restitution_down([down], gap_m=1.3e-3, f_s_hz=96.0, zeta=0.0085,

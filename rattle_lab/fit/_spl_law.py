@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from ..detect._spl import spl_db
-from ..exceptions import ParameterError
+from rattle_lab.detect._spl import spl_db
+from rattle_lab.exceptions import ParameterError
 
 
 @dataclass(frozen=True)

@@ -22,18 +22,18 @@ from typing import Any
 
 import numpy as np
 
-from .._progress import progress_bar
-from .._resources import find_resource
-from .._version import __version__
-from ..acoustics import run_acoustics  # [issue 17]
-from ..detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
+from rattle_lab._progress import progress_bar
+from rattle_lab._resources import find_resource
+from rattle_lab._version import __version__
+from rattle_lab.acoustics import run_acoustics  # [issue 17]
+from rattle_lab.detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
                       impact_pattern, impulse_train, rms_spl_db, sound_peaks)
-from ..exceptions import ParameterError, RattleLabError
-from ..records._chain import Participation, resolve_participation
-from ..results import RunResult, StoreFit
-from ..store import (check_linked_inputs, input_hashes, open_stored_record, read_catalogue,
+from rattle_lab.exceptions import ParameterError, RattleLabError
+from rattle_lab.records._chain import Participation, resolve_participation
+from rattle_lab.fit._results import RunResult, StoreFit
+from rattle_lab.store import (check_linked_inputs, input_hashes, open_stored_record, read_catalogue,
                      write_results)
-from ..thresholds import Threshold, ramp_threshold, tabulate_thresholds
+from rattle_lab.detect.thresholds import Threshold, ramp_threshold, tabulate_thresholds
 from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
                      transient_shocks)
@@ -288,7 +288,7 @@ def store_participation(store: str | os.PathLike[str], given: float | None,
 def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None = None,
               fit: Mapping[str, Any] | None = None, write: bool = True,
               quiet: bool = True, participation_source: str = "pipeline") -> StoreFit:
-    """Detect and fit everything in an ingest store; write ``/results`` (see :mod:`rattle_lab.results`).
+    """Detect and fit everything in an ingest store; write ``/results`` (see :mod:`rattle_lab.fit._results`).
 
     Parameters
     ----------
@@ -434,7 +434,7 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     """Fit the store-level models to per-run detections; the summary ``/results`` stores.
 
     From the per-run results of :func:`analyse_run` and the threshold table of
-    :func:`rattle_lab.thresholds.tabulate_thresholds`: the eq. (3.4) grazing fit
+    :func:`rattle_lab.detect.thresholds.tabulate_thresholds`: the eq. (3.4) grazing fit
     (gap, f_s, zeta; needs >= 4 upward thresholds), the coefficient of restitution
     from velocity ratios and from the disappearance thresholds, and the SPL laws
     (first peak, maximum peak, RMS per impact) against impact velocity.  A fit that

@@ -5,7 +5,7 @@ What a fit needs to know about the chain and that v1 records could not say:
 * the modal participation factor ``Q1/Q2`` at the measurement point (rig attribute
   ``modal_participation``), or the plate geometry from which the plate model computes it
   (``plate_length_m``, ``plate_width_m``, ``edge_conditions`` in the order of
-  :data:`rattle_lab.plate.EDGE_ORDER`, ``plate_poisson_ratio``);
+  :data:`rattle_lab.model.plate.EDGE_ORDER`, ``plate_poisson_ratio``);
 * per velocity channel its ``measurand`` (:data:`MEASURANDS`) and ``sign_convention``;
 * per channel the known ``group_delay_s`` of its filters (vibrometer decoder, anti-alias),
   which :func:`channel_time_offset_s` subtracts together with ``start_time_s`` before two
@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 
 #: What a velocity channel measures: the panel alone, or the panel relative to the striker.
 MEASURANDS = ("panel_absolute", "panel_relative_to_striker")
@@ -66,11 +66,11 @@ def participation_from_plate(length_m: float, width_m: float, edges: str,
     """``Q1/Q2`` of the first plate mode (Rayleigh-Ritz; closed form for SSSS).
 
     ``edges`` are four letters for the edges in the order of
-    :data:`rattle_lab.plate.EDGE_ORDER` (y=0, x=a, y=b, x=0).  ``Q1`` and ``Q2`` do not
+    :data:`rattle_lab.model.plate.EDGE_ORDER` (y=0, x=a, y=b, x=0).  ``Q1`` and ``Q2`` do not
     depend on the plate's thickness, modulus or density, only on its shape, edges and
     Poisson's ratio (the free edges' conditions carry it).
     """
-    from ..plate import Plate, simply_supported_modes
+    from rattle_lab.model.plate import Plate, simply_supported_modes
 
     plate = Plate(a_m=length_m, b_m=width_m, h_p_m=1e-3, E_pa=7e10, nu=poisson_ratio,
                   rho_kg_m3=2700.0, edges=edges)

@@ -14,7 +14,7 @@ amplitude, assumed units) are never fatal: they are flagged and warned.
 
 from __future__ import annotations
 
-from ..exceptions import DataError, DataQualityWarning, SchemaError
+from rattle_lab.exceptions import DataError, DataQualityWarning, SchemaError
 
 
 class MappingError(SchemaError):

@@ -19,7 +19,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from ..exceptions import DataError, FileFormatError, SchemaError
+from rattle_lab.exceptions import DataError, FileFormatError, SchemaError
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 

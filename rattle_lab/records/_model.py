@@ -20,7 +20,7 @@ from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
-from ..exceptions import ParameterError
+from rattle_lab.exceptions import ParameterError
 from ._units import scale_to_si
 
 Protocol_ = Literal["sine_dwell", "amplitude_ramp_up", "amplitude_ramp_down", "stepped_frequency",
@@ -143,7 +143,7 @@ class Rig:
         E.g. ``"aluminium 6061"``.
     edge_conditions : str
         Four letters C/S/F for the edges y=0, x=length, y=width, x=0 (the order of
-        :data:`rattle_lab.plate.EDGE_ORDER`; ``"CFCF"`` clamps the two edges of length
+        :data:`rattle_lab.model.plate.EDGE_ORDER`; ``"CFCF"`` clamps the two edges of length
         ``plate_length_m``, the thesis plate).
     striker_x_m, striker_y_m : float
         Striker position in plate coordinates, m.

@@ -40,7 +40,7 @@ from ._errors import (ClippingError, ClippingWarning, DataQualityError, DropoutE
                       InfValueWarning, NaNGapError, NaNGapWarning, NonMonotonicTimestampsError,
                       NonMonotonicTimestampsWarning, SampleRateMismatchError,
                       SampleRateMismatchWarning, UncalibratedWarning)
-from ..exceptions import DataQualityWarning
+from rattle_lab.exceptions import DataQualityWarning
 
 Flag = Literal["nan", "inf", "clipping", "dropout", "rate_mismatch", "nonmonotonic_timestamps",
                "empty", "uncalibrated", "units_assumed"]

@@ -8,7 +8,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
 
-from ..exceptions import FileFormatError
+from rattle_lab.exceptions import FileFormatError
 from ._convert import record_from_tree
 from ._h5 import hdf5_signature_offset
 from ._model import Origin, Record

@@ -19,7 +19,7 @@ from typing import Any
 
 import jsonschema
 
-from ..exceptions import SchemaError
+from rattle_lab.exceptions import SchemaError
 from ._errors import DuplicateRunError
 
 SCHEMA_RESOURCE = ("rattle_lab", "data/schema/rattle_record.v1.schema.json")

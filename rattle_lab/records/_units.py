@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from ..exceptions import SchemaError
+from rattle_lab.exceptions import SchemaError
 
 #: Standard acceleration of gravity, m/s^2 (3rd CGPM, 1901; exact by definition).
 G0_MS2 = 9.80665

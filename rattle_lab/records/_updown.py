@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import SchemaError
+from rattle_lab.exceptions import SchemaError
 from ._model import ArraySource, Channel
 
 #: Protocols split by the reader, and the protocols of their (up, down) parts.

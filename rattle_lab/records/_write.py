@@ -15,7 +15,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .._atomic import atomic_path
+from rattle_lab._atomic import atomic_path
 from ._convert import record_to_tree
 from ._model import DEFAULT_CHUNK_SAMPLES, ArraySource, Record
 from ._schema import validate_tree

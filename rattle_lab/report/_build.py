@@ -9,9 +9,9 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from .._atomic import atomic_path
-from .._version import __version__
-from ..exceptions import ParameterError
+from rattle_lab._atomic import atomic_path
+from rattle_lab._version import __version__
+from rattle_lab.exceptions import ParameterError
 from . import _pages
 from ._data import ReportData, gather
 

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import RattleLabError
-from ..records._errors import StoreError
+from rattle_lab.exceptions import RattleLabError
+from rattle_lab.records._errors import StoreError
 
 
 @dataclass(frozen=True)
@@ -87,7 +87,7 @@ def _s(value: Any) -> str:
 
 
 def _record_info(store: Path, key: str) -> RecordInfo:
-    from ..store import open_stored_record
+    from rattle_lab.store import open_stored_record
 
     with open_stored_record(store, key) as record:
         rig = record.rig
@@ -124,7 +124,7 @@ def _record_info(store: Path, key: str) -> RecordInfo:
 
 
 def _provenance_log(store: Path) -> list[dict[str, Any]]:
-    from ..store import provenance_log
+    from rattle_lab.store import provenance_log
 
     return provenance_log(store)
 
@@ -138,7 +138,7 @@ def gather(store: str | os.PathLike[str]) -> ReportData:
         If ``store`` does not exist or is not an ingest store, or an input it
         reads samples from has changed or gone since it was ingested.
     """
-    from ..store import check_linked_inputs, read_catalogue
+    from rattle_lab.store import check_linked_inputs, read_catalogue
 
     store = Path(store)
     if not store.is_file():
@@ -159,7 +159,7 @@ def gather(store: str | os.PathLike[str]) -> ReportData:
         log, missing["provenance log"] = [], str(exc)
     results = None
     try:
-        from ..store import read_results
+        from rattle_lab.store import read_results
 
         results = read_results(store)
     except ImportError as exc:

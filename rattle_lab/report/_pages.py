@@ -380,7 +380,7 @@ def grazing_band_ms2(freq_hz: np.ndarray, g: Mapping[str, Any]) -> tuple[np.ndar
     (ndarray, ndarray)
         The threshold and the half-width of the band, m/s^2 (NaN without a covariance).
     """
-    from ..linear import threshold_accel_ms2
+    from rattle_lab.model.linear import threshold_accel_ms2
 
     names = ("gap_m", "f_s_hz", "zeta", "participation")
     p0 = {n: _pval(g, n, 1.0 if n == "participation" else float("nan")) for n in names}
@@ -571,7 +571,7 @@ def pattern_page(data: ReportData) -> list[Figure]:
 
 def waveform_page(data: ReportData, *, n_examples: int = 2, n_cycles: int = 5) -> list[Figure]:
     """Short windows of plate acceleration, velocity and sound pressure with events marked."""
-    from ..ingest import open_stored_record
+    from rattle_lab.store import open_stored_record
 
     if data.results is None:
         raise Missing(data.missing.get("results", "no results"))
@@ -740,8 +740,8 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     forcing periods each): the model's onset and disappearance against the measured
     ones, each with the sweep step as its resolution.  ``quiet``: no progress bar.
     """
-    from ..analysis import bifurcation_sets, sweep_up_down
-    from ..sdf import SDFParams
+    from rattle_lab.model.analysis import bifurcation_sets, sweep_up_down
+    from rattle_lab.model.sdf import SDFParams
 
     if data.results is None:
         raise Missing(data.missing.get("results", "no results"))
@@ -780,7 +780,7 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from ..analysis.bifsets import _LINESTYLES  # the same styles as `model bifsets`' plot
+    from rattle_lab.model.analysis.bifsets import _LINESTYLES  # the same styles as `model bifsets`' plot
 
     fig = landscape_figure()
     ax = fig.add_subplot()
@@ -827,7 +827,7 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     # F sweeps up and down at each measured frequency: model onset/disappearance
     sel = np.flatnonzero(np.isfinite(w_up) | np.isfinite(w_dn))[:max_freqs]
     if sel.size:
-        from .._progress import progress
+        from rattle_lab._progress import progress
 
         grid = np.linspace(F_hi / n_sweep, F_hi, n_sweep)
         step = float(grid[1] - grid[0]) if grid.size > 1 else float(grid[0])

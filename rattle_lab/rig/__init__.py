@@ -5,14 +5,14 @@
   protocol and synthesises the channels the scene records; :func:`write_synthetic` also
   writes the record.  Everything the rig knows goes into ``/truth``.
   ``[model] kind = "modal"`` (opt-in) simulates the plate's lowest modes against a point
-  striker with :mod:`rattle_lab.modal` instead: physical ringing in the vibrometer and the
+  striker with :mod:`rattle_lab.model.modal` instead: physical ringing in the vibrometer and the
   plate accelerometer, the Rayleigh-integral sound at the microphone (see ``_modal``).
 * :class:`StageCounter` counts the stages evaluated (skipped stages never run).
 """
 
 from ._build import RunSummary, Synthesis, resolve_modal, synthesize, write_synthetic
 from ._counter import StageCounter
-from ._motion import Modal, Piece, RunMotion, schedule, simulate_run, thresholds
+from ._motion import Modal, Piece, RunMotion, schedule, simulate_run, true_thresholds
 from ._scene import Scene, SceneError, load_scene, parse_scene
 
 __all__ = [
@@ -30,6 +30,6 @@ __all__ = [
     "RunMotion",
     "schedule",
     "simulate_run",
-    "thresholds",
+    "true_thresholds",
     "resolve_modal",
 ]

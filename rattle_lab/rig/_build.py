@@ -12,19 +12,19 @@ from pathlib import Path
 
 import numpy as np
 
-from .._progress import progress
-from .._version import __version__
-from ..exceptions import OutputError
-from ..plate import Plate
-from ..records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable, Truth,
+from rattle_lab._progress import progress
+from rattle_lab._version import __version__
+from rattle_lab.exceptions import OutputError
+from rattle_lab.model.plate import Plate
+from rattle_lab.records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable, Truth,
                        scale_to_si, write_record)
-from ..modal._sound import C_AIR_M_S
-from ..records._model import as_source
+from rattle_lab.model.modal._sound import C_AIR_M_S
+from rattle_lab.records._model import as_source
 from . import _chain as cc
 from . import _modal as md
 from . import _channels as ch
 from ._counter import StageCounter
-from ._motion import Modal, RunMotion, simulate_run, thresholds
+from ._motion import Modal, RunMotion, simulate_run, true_thresholds
 from ._scene import SENSOR_QUANTITIES, RunSpec, Scene, SceneError, SensorSpec, load_scene
 
 #: Seconds between the end of one run and the start of the next (start_time_iso).
@@ -303,7 +303,7 @@ def synthesize(scene: Scene | str | os.PathLike[str], *, seed: int | None = None
                           mic_pa)
         runs.append(_run(spec, chans, start))
         start += timedelta(seconds=spec.duration_s + RUN_GAP_S)
-        onset, gone = thresholds(spec, motion)
+        onset, gone = true_thresholds(spec, motion)
         if spec.protocol == "amplitude_ramp_up":
             onsets.setdefault(spec.freq_hz, []).append(onset)
         if spec.protocol == "amplitude_ramp_down":

@@ -1,7 +1,7 @@
 """The rig's opt-in multi-mode model (``[model] kind = "modal"``, issue 14).
 
 Instead of the single-mode (SDF) simulator with canned contact pulses, ringing and
-acoustic law, a run is simulated by :mod:`rattle_lab.modal`: the plate's lowest
+acoustic law, a run is simulated by :mod:`rattle_lab.model.modal`: the plate's lowest
 ``modes`` Ritz modes against a point striker with a compliant (Kelvin-Voigt, Hertz) or
 rigid contact.  The base-excited plate relative to its frame obeys the modal equations
 under the uniform inertial pressure ``rho h_p A cos(theta)`` (``A`` the base
@@ -39,12 +39,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..modal import (ModalResult, ModalState, ModalSystem, contact_from_name, plate_system,
+from rattle_lab.model.modal import (ModalResult, ModalState, ModalSystem, contact_from_name, plate_system,
                      rayleigh_pressure, simulate_modal)
-from ..modal._sound import C_AIR_M_S, plate_surface
-from ..modal._system import Contact
-from ..plate import Plate
-from ..records import Rig
+from rattle_lab.model.modal._sound import C_AIR_M_S, plate_surface
+from rattle_lab.model.modal._system import Contact
+from rattle_lab.model.plate import Plate
+from rattle_lab.records import Rig
 from ._counter import StageCounter
 from ._motion import Modal, RunMotion, schedule
 from ._scene import RunSpec, Scene, SceneError
@@ -97,7 +97,7 @@ def parse_modal(reader: Any) -> ModalRigSpec:
 
 
 def plate_of(scene: Scene) -> Plate:
-    """The scene's plate as a :class:`rattle_lab.plate.Plate`."""
+    """The scene's plate as a :class:`rattle_lab.model.plate.Plate`."""
     p = scene.plate
     if p is None:
         raise SceneError(f"{scene.source}: `model.kind` = \"modal\" needs a [plate], was None")

@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import scaling
-from ..sdf import SDFParams, SDFState, simulate
-from ..sdf._flow import particular_state
+from rattle_lab.model import scaling
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
+from rattle_lab.model.sdf._flow import particular_state
 from ._counter import StageCounter
 from ._scene import RunSpec
 
@@ -223,7 +223,7 @@ def simulate_run(modal: Modal, run: RunSpec, *, piece_periods: int, settle_time_
                      v_rel_m_s=v_rel, a_rel_m_s2=a_rel)
 
 
-def thresholds(run: RunSpec, motion: RunMotion) -> tuple[float, float]:
+def true_thresholds(run: RunSpec, motion: RunMotion) -> tuple[float, float]:
     """``(onset, disappearance)`` levels, m/s^2, of a ramp run (NaN where not seen).
 
     Onset (ramp up): the level of the piece with the first impact; NaN if the run impacts

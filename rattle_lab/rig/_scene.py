@@ -17,8 +17,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
-from .._resources import find_resource
-from ..exceptions import ParameterError
+from rattle_lab._resources import find_resource
+from rattle_lab.exceptions import ParameterError
 
 __all__ = ["SceneError", "Scene", "PlateSpec", "ModelSpec", "AcousticSpec", "SensorSpec",
            "RunSpec", "ArtefactSpec", "SimulationSpec", "load_scene", "parse_scene",

@@ -28,8 +28,8 @@ from typing import Any
 import h5py
 import numpy as np
 
-from ..exceptions import DataError
-from ..records._errors import StoreError
+from rattle_lab.exceptions import DataError
+from rattle_lab.records._errors import StoreError
 from ._layout import edit_store, open_store
 
 CACHE_GROUP = "pipeline_cache"

@@ -73,20 +73,20 @@ import h5py
 import numpy as np
 import xxhash
 
-from .._progress import progress_bar
-from .._version import __version__
-from ..exceptions import ParameterError, RattleLabWarning
-from ..records import read
-from ..records._convert import record_to_tree
-from ..records._errors import DuplicateRunError, StoreError
-from ..records._h5 import LinkPolicy, link_policy
-from ..records._model import DEFAULT_CHUNK_SAMPLES, ArraySource, Channel, Record, Skipped
-from ..records._quality import ChannelChecker, Finding, QualityLimits, TimestampChecker
-from ..records._read import detect_format
-from ..records._readers.mapping import MappingSpec, load_mapping
-from ..records._readers.native import load_group
-from ..records._schema import validate_tree
-from ..records._write import write_tree
+from rattle_lab._progress import progress_bar
+from rattle_lab._version import __version__
+from rattle_lab.exceptions import ParameterError, RattleLabWarning
+from rattle_lab.records import read
+from rattle_lab.records._convert import record_to_tree
+from rattle_lab.records._errors import DuplicateRunError, StoreError
+from rattle_lab.records._h5 import LinkPolicy, link_policy
+from rattle_lab.records._model import DEFAULT_CHUNK_SAMPLES, ArraySource, Channel, Record, Skipped
+from rattle_lab.records._quality import ChannelChecker, Finding, QualityLimits, TimestampChecker
+from rattle_lab.records._read import detect_format
+from rattle_lab.records._readers.mapping import MappingSpec, load_mapping
+from rattle_lab.records._readers.native import load_group
+from rattle_lab.records._schema import validate_tree
+from rattle_lab.records._write import write_tree
 from ._layout import (STORE_FORMAT, STORE_VERSION, edit_store, open_store,  # noqa: F401
                       store_lock, text)
 
@@ -492,7 +492,7 @@ def _ingest_record(out: h5py.Group, record: Record, label: str, *, storage: Stor
 
 
 def _si_name(ch: Channel) -> str:
-    from ..records._units import SI_UNITS
+    from rattle_lab.records._units import SI_UNITS
 
     return SI_UNITS[ch.quantity]
 
@@ -757,7 +757,7 @@ def _write_store(store: Path, index: _StoreIndex, new: list[_Input], spec: Mappi
                  unchanged: list[_Input], replace: bool = False, allow_links: bool = False
                  ) -> tuple[dict[_Input, InputResult], dict[str, list[Any]]]:
     """Write the new inputs into (a copy of) the store; return their results and the catalogue."""
-    from ..acoustics.calibration import apply_campaign_calibration  # [issue 17 calibration hook]
+    from rattle_lab.acoustics.calibration import apply_campaign_calibration  # [issue 17 calibration hook]
 
     when = _now_iso()
     added: dict[_Input, InputResult] = {}
@@ -929,8 +929,8 @@ def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
         input is linked (``storage="link"``) and its file has moved or changed
         since it was ingested.
     """
-    from ..records._convert import record_from_tree
-    from ..records._model import Origin
+    from rattle_lab.records._convert import record_from_tree
+    from rattle_lab.records._model import Origin
 
     store = Path(store)
     with _open_store(store) as fh:

@@ -37,9 +37,9 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .._atomic import atomic_path
-from ..exceptions import OutputError
-from ..records._errors import StoreError
+from rattle_lab._atomic import atomic_path
+from rattle_lab.exceptions import OutputError
+from rattle_lab.records._errors import StoreError
 
 STORE_FORMAT = "rattle_store"
 STORE_VERSION = 3

@@ -38,8 +38,8 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .._version import __version__
-from ..records._errors import StoreError
+from rattle_lab._version import __version__
+from rattle_lab.records._errors import StoreError
 from ._layout import check_store, edit_store, open_store
 
 RESULTS_VERSION = 1
@@ -125,7 +125,7 @@ def _write(fh: h5py.File, fit: Any) -> None:
 
 
 def write_results(store: str | os.PathLike[str], fit: Any) -> None:
-    """Replace ``/results`` of ``store`` with ``fit`` (a :class:`rattle_lab.results.StoreFit`).
+    """Replace ``/results`` of ``store`` with ``fit`` (a :class:`rattle_lab.fit._results.StoreFit`).
 
     Raises
     ------

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from ..records._errors import StoreError
+from rattle_lab.records._errors import StoreError
 from ._ingest import REINGEST_ADVICE, file_hash
 from ._layout import record_attrs
 

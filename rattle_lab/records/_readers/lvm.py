@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from ...exceptions import FileFormatError, RattleLabWarning
+from rattle_lab.exceptions import FileFormatError, RattleLabWarning
 from .._errors import MappingError
 from .._model import ArrayData, ArraySource
 from . import RawRecord

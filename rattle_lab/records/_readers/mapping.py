@@ -59,8 +59,8 @@ from typing import Any, Protocol
 import h5py
 import numpy as np
 
-from ..._resources import find_resource
-from ...exceptions import FileFormatError
+from rattle_lab._resources import find_resource
+from rattle_lab.exceptions import FileFormatError
 from .._convert import (CHANNEL_FIELDS, RIG_FIELDS, ROOT_FIELDS, RUN_FIELDS, SCHEMA_NAME,
                         SCHEMA_VERSION, SCHEMA_VERSION_CHAIN)
 from .._errors import DuplicateRunError, MappingError

@@ -8,7 +8,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from ...exceptions import FileFormatError
+from rattle_lab.exceptions import FileFormatError
 from .._h5 import H5Handle, H5Source, hdf5_signature_offset, node_tree, open_readonly
 from .._model import ArraySource
 from . import RawRecord

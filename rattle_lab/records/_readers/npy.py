@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ...exceptions import FileFormatError
+from rattle_lab.exceptions import FileFormatError
 from .._errors import MappingError
 from .._model import ArraySource
 from . import RawRecord

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import soundfile as sf
 
-from ...exceptions import FileFormatError
+from rattle_lab.exceptions import FileFormatError
 from .._errors import MappingError
 from .._model import ArraySource
 from . import RawRecord

@@ -1,0 +1,702 @@
+"""Slow parameter sweeps of the SDF impact oscillator (thesis 4.2-4.3, Fig. 4-3 to 4-5).
+
+A sweep steps one parameter (``omega``, ``F``, ``e`` or the gap) through a
+grid.  At each value the exact simulator (:func:`rattle_lab.model.sdf.simulate`)
+runs ``cycles`` forcing periods from the state the previous value ended in,
+with the forcing phase continuous (the state's ``theta`` carries over), which
+is the thesis's model of a slow sweep experiment (4.2; Appendix A.1,
+``fillv_impbuffer``).  The first ``discard`` periods are discarded (thesis:
+100 and 70).  Over the kept periods it records
+
+* the incoming impact velocities ``v_im`` and their forcing phases;
+* the velocities ``v_{x=0}^+`` of the upward crossings of ``x = 0``;
+* the average impact velocity per forcing cycle, ``sum(v_im) / n_kept``
+  (the thesis's ``v_average += vm / periods``, Appendix A.1), so a 1/n orbit
+  has ``v_im / n``;
+* the regime: no impact, ``m/n`` periodic, or aperiodic
+  (:func:`classify_impacts`), and for aperiodic motion its largest Lyapunov
+  exponent (:mod:`rattle_lab.model.analysis.lyapunov`), so that chaos is a measured
+  statement.  An ``m/n`` match must be settled (:func:`classify_settled`): a
+  transient still converging to a shorter period (a 1/3 orbit near its period
+  doubling matches 2/6 first) is run longer on a side run until it settles,
+  else it is called ``"unsettled"``; a wrong period is never reported;
+* the linear estimate of the impact velocity (eq. 4.7-4.11,
+  :func:`rattle_lab.model.linear.linear_impact_velocity`), NaN where linear theory
+  predicts no impact.
+
+The gap
+    At fixed dimensional forcing ``F_es`` the nondimensional forcing is
+    ``F = F_es / (omega_s^2 h)`` (eq. 2.31), so ``1/F = omega_s^2 h / F_es`` is
+    the gap in units of the static deflection ``F_es / omega_s^2``, and
+    ``v_im / F = omega_s v_sim / F_es`` is proportional to the dimensional
+    impact velocity (eq. 4.5).  A ``"gap"`` sweep steps ``gap = 1/F`` with
+    ``omega``, ``zeta`` and ``e`` (and the dimensional forcing) held fixed, and
+    its results are presented as ``v_im / F`` against ``1/F`` (Fig. 4-4).  The
+    nondimensional state ``(x, v)`` is carried to the next value unchanged, as
+    for the other parameters.
+
+One compiled call
+    A whole sweep direction (all values, discarded and kept periods) is one call
+    of the compiled kernel (:func:`rattle_lab.model.sdf._kernel.run_sweep`), the same
+    motion bit for bit as one ``simulate`` call per window; the
+    classification, Lyapunov exponents and settle runs follow from the recorded
+    end states.
+
+All quantities are nondimensional.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from rattle_lab._progress import progress
+from rattle_lab._version import __version__
+from rattle_lab.exceptions import NumericalWarning, ParameterError, SimulationError
+from rattle_lab.model.linear import linear_impact_velocity
+from rattle_lab.model.sdf._types import SDFParams, SDFState
+from ._periods import (  # re-exported: the period detection lived here before the split
+    KIND_CODES,  # noqa: F401
+    KIND_NAMES,  # noqa: F401
+    PERIOD_RTOL,
+    SETTLE_CYCLES,
+    Regime,
+    RegimeKind,  # noqa: F401
+    _check_int,
+    _classify,  # noqa: F401
+    classify_impacts,
+    classify_settled,
+    periodic_label_settled,
+)
+from .lyapunov import LyapunovResult, lyapunov_exponent
+
+SweepParam = Literal["omega", "F", "e", "gap"]
+Direction = Literal["up", "down"]
+LyapunovMode = Literal["aperiodic", "all", "none"]
+SWEEP_PARAMS: tuple[SweepParam, ...] = ("omega", "F", "e", "gap")
+DIRECTIONS: tuple[Direction, ...] = ("up", "down")
+LYAPUNOV_MODES: tuple[LyapunovMode, ...] = ("aperiodic", "all", "none")
+
+__all__ = [
+    "Regime",
+    "SweepPoint",
+    "Sweep",
+    "classify_impacts",
+    "classify_settled",
+    "periodic_label_settled",
+    "sweep_values",
+    "sweep",
+    "sweep_up_down",
+    "plot_sweeps",
+    "write_sweeps_csv",
+]
+
+
+# ---------------------------------------------------------------------------
+# Results
+# ---------------------------------------------------------------------------
+
+def _num(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """What a sweep records at one parameter value (all nondimensional).
+
+    Attributes
+    ----------
+    value : float
+        The swept parameter's value (for ``"gap"``: ``1/F``).
+    params : SDFParams
+        The full parameter set simulated.
+    impact_velocities : ndarray
+        Incoming velocity ``v_im`` of every impact in the kept periods.
+    impact_phases : ndarray
+        Forcing phase at those impacts, in ``[0, 2 pi)``.
+    crossing_velocities : ndarray
+        Velocity ``v_{x=0}^+`` of every upward crossing of ``x = 0`` in the kept periods.
+    mean_impact_velocity : float
+        ``sum(v_im) / n_kept``: average impact velocity per forcing cycle
+        (thesis Appendix A.1); 0 without impacts.
+    regime : Regime
+        No impact, ``m/n`` periodic or aperiodic (:func:`classify_impacts`).
+    sticking : bool
+        The mass stuck to the stop (after complete chatter) in the kept periods.
+    lyapunov : LyapunovResult or None
+        Largest Lyapunov exponent, where computed (see ``sweep(lyapunov=...)``).
+    linear_impact_velocity : float
+        Linear estimate of the impact velocity, eq. (4.7)-(4.11)
+        (``omega sqrt(x_max^2 - 1)``); NaN where linear theory predicts no impact.
+    settle_cycles : float
+        Extra forcing periods run (on a side run from the value's end state) to
+        settle a periodic match that was still converging in the kept window
+        (:func:`classify_settled`); 0 when it was settled at once.  The
+        recorded impacts are those of the kept window either way.
+    """
+
+    value: float
+    params: SDFParams
+    impact_velocities: np.ndarray
+    impact_phases: np.ndarray
+    crossing_velocities: np.ndarray
+    mean_impact_velocity: float
+    regime: Regime
+    sticking: bool
+    lyapunov: LyapunovResult | None
+    linear_impact_velocity: float
+    settle_cycles: float = 0.0
+
+    @property
+    def chaotic(self) -> bool:
+        """Aperiodic with a measured positive largest Lyapunov exponent."""
+        return (self.regime.kind == "aperiodic" and self.lyapunov is not None
+                and self.lyapunov.exponent > 0.0)
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dictionary (non-finite numbers become None)."""
+        return {
+            "value": self.value,
+            "params": {"F": self.params.F, "omega": self.params.omega,
+                       "zeta": self.params.zeta, "e": self.params.e},
+            "impact_velocities": [float(x) for x in self.impact_velocities],
+            "impact_phases": [float(x) for x in self.impact_phases],
+            "crossing_velocities": [float(x) for x in self.crossing_velocities],
+            "mean_impact_velocity": self.mean_impact_velocity,
+            "classification": self.regime.label,
+            "regime": self.regime.to_dict(),
+            "sticking": self.sticking,
+            "lyapunov": None if self.lyapunov is None else self.lyapunov.to_dict(),
+            "chaotic": self.chaotic,
+            "linear_impact_velocity": _num(self.linear_impact_velocity),
+            "settle_cycles": self.settle_cycles,
+        }
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A slow sweep in one direction.
+
+    Attributes
+    ----------
+    param : {"omega", "F", "e", "gap"}
+        The swept parameter.
+    direction : {"up", "down"}
+        Increasing or decreasing values.
+    points : tuple of SweepPoint
+        One per value, in sweep order.
+    base : SDFParams
+        The fixed parameters (the swept one, and ``F`` for ``"gap"``, are
+        replaced at each value).
+    cycles, discard : int
+        Forcing periods simulated and discarded at each value.
+    initial_state, final_state : SDFState
+        The state the sweep started from and ended in (continue from it).
+    provenance : dict
+        Package, version, function and arguments that made it.
+    """
+
+    param: SweepParam
+    direction: Direction
+    points: tuple[SweepPoint, ...]
+    base: SDFParams
+    cycles: int
+    discard: int
+    initial_state: SDFState
+    final_state: SDFState
+    provenance: dict[str, object] = field(default_factory=dict)
+
+    @property
+    def values(self) -> np.ndarray:
+        """The swept values, in sweep order."""
+        return np.array([p.value for p in self.points])
+
+    @property
+    def labels(self) -> list[str]:
+        """Regime label at each value."""
+        return [p.regime.label for p in self.points]
+
+    @property
+    def mean_impact_velocity(self) -> np.ndarray:
+        """Average impact velocity per forcing cycle at each value."""
+        return np.array([p.mean_impact_velocity for p in self.points])
+
+    def transitions(self) -> list[dict[str, object]]:
+        """Where the regime label changes: ``{"from", "to", "before", "after"}`` (values)."""
+        out: list[dict[str, object]] = []
+        for a, b in zip(self.points[:-1], self.points[1:]):
+            if a.regime.label != b.regime.label:
+                out.append({"from": a.regime.label, "to": b.regime.label,
+                            "before": a.value, "after": b.value})
+        return out
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dictionary: settings and one entry per value.
+
+        For a ``"gap"`` sweep each entry also carries the velocities divided by
+        ``F`` (``*_over_F``), the quantities of thesis Fig. 4-4 (eq. 4.5), and
+        ``inv_F`` (= ``value``).
+        """
+        points = []
+        for p in self.points:
+            d = p.to_dict()
+            if self.param == "gap":
+                F = p.params.F
+                d["inv_F"] = p.value
+                d["impact_velocities_over_F"] = [float(v) / F for v in p.impact_velocities]
+                d["crossing_velocities_over_F"] = [float(v) / F for v in p.crossing_velocities]
+                d["mean_impact_velocity_over_F"] = p.mean_impact_velocity / F
+                d["linear_impact_velocity_over_F"] = _num(p.linear_impact_velocity / F)
+            points.append(d)
+        return {"param": self.param, "direction": self.direction,
+                "base": {"F": self.base.F, "omega": self.base.omega, "zeta": self.base.zeta,
+                         "e": self.base.e},
+                "cycles": self.cycles, "discard": self.discard, "points": points,
+                "provenance": self.provenance}
+
+
+# ---------------------------------------------------------------------------
+# The sweep
+# ---------------------------------------------------------------------------
+
+def sweep_values(start: float, stop: float, step: float) -> np.ndarray:
+    """The grid ``start, start + step, ..., stop`` (ascending, ``stop`` included).
+
+    ``(stop - start) / step`` must be an integer to within 1e-9 of a step, so
+    that up and down sweeps visit exactly the same values.
+
+    Raises
+    ------
+    ParameterError
+        If ``step <= 0``, ``stop <= start`` or the step does not divide the range.
+
+    Examples
+    --------
+    >>> v = sweep_values(0.85, 1.3, 0.001)
+    >>> v.size, bool(abs(v[-1] - 1.3) < 1e-12)
+    (451, True)
+    """
+    start, stop, step = float(start), float(stop), float(step)
+    for name, x in (("start", start), ("stop", stop), ("step", step)):
+        if not math.isfinite(x):
+            raise ParameterError(f"`{name}` must be finite, was {x}")
+    if step <= 0:
+        raise ParameterError(f"`step` must be > 0, was {step}")
+    if stop <= start:
+        raise ParameterError(f"`stop` must be > start = {start}, was {stop}")
+    k = (stop - start) / step
+    n = round(k)
+    if abs(k - n) > 1e-9 * max(1.0, k):
+        raise ParameterError(f"`step` = {step} must divide stop - start = {stop - start}")
+    if n + 1 > 10**7:
+        raise ParameterError(f"`step` = {step} gives {n + 1} values (at most 10**7)")
+    return start + step * np.arange(n + 1)
+
+
+def _params_at(param: SweepParam, base: SDFParams, value: float) -> SDFParams:
+    if param == "gap":
+        if not value > 0:
+            raise ParameterError(f"`gap` values must be > 0, was {value}")
+        return base.replace(F=1.0 / value)
+    try:
+        return base.replace(**{param: value})
+    except ParameterError as exc:
+        raise ParameterError(f"sweep of `{param}`: {exc}") from None
+
+
+def _check_classification_window(cycles: object, discard: object, n_max: object,
+                                 rtol: float) -> tuple[int, int, int]:
+    """Validate the simulated and discarded forcing periods and the period detection.
+
+    Shared by the sweeps and the maps (:mod:`rattle_lab.model.analysis.maps`).
+
+    Parameters
+    ----------
+    cycles, discard : object
+        Forcing periods simulated (>= 1) and discarded (>= 0, < ``cycles``); integers.
+    n_max : object
+        Largest period looked for, in forcing periods: an integer with two periods
+        fitting in the kept ``cycles - discard``.
+    rtol : float
+        Tolerance of :func:`classify_impacts`, finite and > 0.
+
+    Returns
+    -------
+    cycles, discard, n_max : int
+
+    Raises
+    ------
+    ParameterError
+        On an invalid argument, naming it and its value.
+    """
+    cycles_i = _check_int("cycles", cycles, 1)
+    discard_i = _check_int("discard", discard, 0)
+    if discard_i >= cycles_i:
+        raise ParameterError(f"`discard` must be < cycles = {cycles_i}, was {discard_i}")
+    n_max_i = _check_int("n_max", n_max, 1)
+    if 2 * n_max_i > cycles_i - discard_i:
+        raise ParameterError(
+            f"`n_max` must be <= (cycles - discard) / 2 = {(cycles_i - discard_i) // 2} "
+            f"(two periods must fit in the kept cycles), was {n_max_i}")
+    if not (math.isfinite(rtol) and rtol > 0):
+        raise ParameterError(f"`rtol` must be finite and > 0, was {rtol}")
+    return cycles_i, discard_i, n_max_i
+
+
+def _check_settings(param: object, cycles: object, discard: object, n_max: object,
+                    rtol: float, lyapunov: object, lyapunov_cycles: float,
+                    lyapunov_warmup: float) -> tuple[int, int, int]:
+    if param not in SWEEP_PARAMS:
+        raise ParameterError(f"`param` must be one of {SWEEP_PARAMS}, was {param!r}")
+    cycles_i, discard_i, n_max_i = _check_classification_window(cycles, discard, n_max, rtol)
+    if lyapunov not in LYAPUNOV_MODES:
+        raise ParameterError(f"`lyapunov` must be one of {LYAPUNOV_MODES}, was {lyapunov!r}")
+    if not (math.isfinite(lyapunov_warmup) and lyapunov_warmup >= 0):
+        raise ParameterError(f"`lyapunov_warmup` must be >= 0, was {lyapunov_warmup}")
+    if not (math.isfinite(lyapunov_cycles) and lyapunov_cycles > lyapunov_warmup):
+        raise ParameterError(
+            f"`lyapunov_cycles` must be > lyapunov_warmup = {lyapunov_warmup}, was {lyapunov_cycles}")
+    return cycles_i, discard_i, n_max_i
+
+
+def _run_sweep(all_params: Sequence[SDFParams], state: SDFState, discard: int, kept: int
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Run a sweep direction in one compiled call; raise and warn as ``simulate`` does.
+
+    Returns the arrays of :func:`rattle_lab.model.sdf._kernel.run_sweep`.
+    """
+    from rattle_lab.model.sdf._compiled import jit_kernel, signals_deferred
+
+    zeta = all_params[0].zeta
+    with signals_deferred():  # a Ctrl-C while the arrays are boxed would crash the process
+        out = jit_kernel.run_sweep(np.array([q.F for q in all_params]),
+                                   np.array([q.omega for q in all_params]),
+                                   np.array([q.e for q in all_params]), zeta, state.t, state.x,
+                                   state.v, state.theta, bool(state.stuck), float(discard),
+                                   float(kept))
+    imp, crs, off, ends, info = out
+    bad = np.flatnonzero(info[:, 1] != 0)
+    if bad.size:
+        q = all_params[int(bad[0])]
+        raise SimulationError(
+            f"event budget exhausted in the sweep at F={q.F}, omega={q.omega}, zeta={q.zeta}, "
+            f"e={q.e}; shorten `cycles`")
+    unresolved = int(np.sum(info[:, 2]))
+    if unresolved:
+        warnings.warn(f"{unresolved} event searches of the sweep were settled at the work cap; "
+                      "impacts in them are located only to the resolution reached",
+                      NumericalWarning, stacklevel=3)
+    return imp, crs, off, ends, info
+
+
+def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: Direction = "up",
+          cycles: int = 100, discard: int = 70, state: SDFState | None = None, n_max: int = 12,
+          rtol: float = PERIOD_RTOL, lyapunov: LyapunovMode = "aperiodic",
+          lyapunov_cycles: float = 300.0, lyapunov_warmup: float = 50.0,
+          settle_cycles: float = SETTLE_CYCLES, quiet: bool = True) -> Sweep:
+    """Slow sweep of one parameter with the state carried from value to value (thesis 4.2).
+
+    Parameters
+    ----------
+    param : {"omega", "F", "e", "gap"}
+        The swept parameter.  ``"gap"`` is ``1/F`` at fixed dimensional
+        forcing (module docstring): each value sets ``F = 1 / value``.
+    values : array_like
+        The grid, ascending (e.g. :func:`sweep_values`); visited in ascending
+        order for ``direction="up"`` and descending for ``"down"``.
+    base : SDFParams
+        The fixed parameters (nondimensional); its value of the swept
+        parameter (and of ``F`` for ``"gap"``) is ignored.
+    direction : {"up", "down"}
+        Sweep direction.
+    cycles : int
+        Forcing periods simulated at each value (thesis: 100).
+    discard : int
+        Of which the first are discarded (thesis: 70).
+    state : SDFState, optional
+        State at the first value (default: at rest at x = 0, phase 0).
+    n_max : int
+        Largest period (in forcing periods) the classification looks for;
+        at most ``(cycles - discard) / 2``.
+    rtol : float
+        Tolerance of the period detection (:func:`classify_impacts`).
+    lyapunov : {"aperiodic", "all", "none"}
+        Where to compute the largest Lyapunov exponent: at aperiodic values
+        (default), everywhere, or nowhere.  It is measured on a side run of
+        ``lyapunov_cycles`` periods from the value's end state (the sweep
+        itself continues from that end state, unaffected), the first
+        ``lyapunov_warmup`` of them aligning the tangent vector.
+    lyapunov_cycles, lyapunov_warmup : float
+        See ``lyapunov``.
+    settle_cycles : float
+        A periodic match in the kept window that is still converging (to a
+        shorter period, say a 1/3 orbit near its period doubling that matches
+        2/6 first) is not reported: the motion is run longer, on a side run of
+        at most this many forcing periods, until it settles, else the regime
+        is ``"unsettled"`` (:func:`classify_settled`).
+    quiet : bool
+        No progress bar (one is drawn on a terminal otherwise).
+
+    Returns
+    -------
+    Sweep
+
+    Raises
+    ------
+    ParameterError
+        On an invalid argument, naming it and its value.
+
+    Examples
+    --------
+    >>> from rattle_lab.model.sdf import SDFParams
+    >>> base = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6)
+    >>> sw = sweep("omega", [1.0, 1.1, 1.2], base=base)
+    >>> sw.labels
+    ['1/1', '1/1', '1/1']
+    """
+    if not isinstance(base, SDFParams):
+        raise ParameterError(f"`base` must be an SDFParams, was {type(base).__name__}")
+    if direction not in DIRECTIONS:
+        raise ParameterError(f"`direction` must be one of {DIRECTIONS}, was {direction!r}")
+    cycles_i, discard_i, n_max_i = _check_settings(param, cycles, discard, n_max, rtol,
+                                                   lyapunov, lyapunov_cycles, lyapunov_warmup)
+    settle_cycles = float(settle_cycles)
+    if not (math.isfinite(settle_cycles) and settle_cycles >= 0):
+        raise ParameterError(f"`settle_cycles` must be finite and >= 0, was {settle_cycles}")
+    grid = np.asarray(values, dtype=float).ravel()
+    if grid.size == 0:
+        raise ParameterError("`values` must not be empty")
+    if not np.all(np.isfinite(grid)):
+        raise ParameterError(f"`values` must be finite, was {grid[~np.isfinite(grid)][0]}")
+    if grid.size > 1 and np.any(np.diff(grid) <= 0):
+        raise ParameterError("`values` must be strictly ascending (use `direction` to sweep down)")
+    order = grid if direction == "up" else grid[::-1]
+    all_params = [_params_at(param, base, float(x)) for x in order]  # validate all first
+    state = SDFState() if state is None else state
+    if not isinstance(state, SDFState):
+        raise ParameterError(f"`state` must be an SDFState, was {type(state).__name__}")
+    initial = state
+    kept = cycles_i - discard_i
+    # Eq. (4.7)-(4.11), once for the whole grid (NaN where linear theory has no impact)
+    linear = np.atleast_1d(linear_impact_velocity(np.array([q.F for q in all_params]),
+                                                  np.array([q.omega for q in all_params]),
+                                                  base.zeta))
+    # The whole direction in one compiled call (rattle_lab.model.sdf._kernel.run_sweep): at each
+    # value `discard` periods without crossings (a second call from the same state and
+    # forcing phase is the same motion, and the cheaper one), then the kept periods.
+    imp_all, crs_all, off, ends, info = _run_sweep(all_params, state, discard_i, kept)
+    points: list[SweepPoint] = []
+    for i, (value, p, v_lin) in enumerate(progress(
+            zip(order, all_params, linear), total=len(all_params),
+            desc=f"{direction}-sweep of {param}", quiet=quiet, unit="value")):
+        imp = imp_all[off[i, 0]:off[i + 1, 0]]
+        t0 = float(ends[i, 0])
+        state = SDFState(t=float(ends[i, 1]), x=float(ends[i, 2]), v=float(ends[i, 3]),
+                         theta=float(ends[i, 4]), stuck=bool(ends[i, 5]))
+        regime, extra = classify_settled(p, imp[:, 0], imp[:, 2], t_start=t0, end_state=state,
+                                         n_max=n_max_i, rtol=float(rtol),
+                                         settle_cycles=settle_cycles)
+        lyap = None
+        if lyapunov == "all" or (lyapunov == "aperiodic" and regime.kind == "aperiodic"):
+            lyap = lyapunov_exponent(p, cycles=lyapunov_cycles, warmup_cycles=lyapunov_warmup,
+                                     state=state)
+        points.append(SweepPoint(
+            value=float(value), params=p,
+            impact_velocities=np.array(imp[:, 2]), impact_phases=np.array(imp[:, 1]),
+            crossing_velocities=np.array(crs_all[off[i, 1]:off[i + 1, 1], 1]),
+            mean_impact_velocity=float(np.sum(imp[:, 2]) / kept),
+            regime=regime, sticking=bool(info[i, 0]),
+            lyapunov=lyap,
+            linear_impact_velocity=float(v_lin), settle_cycles=extra))
+    provenance: dict[str, object] = {
+        "package": "rattle_lab", "version": __version__,
+        "function": "rattle_lab.model.analysis.sweep",
+        "arguments": {"param": param, "direction": direction, "n_values": int(grid.size),
+                      "first": float(grid[0]), "last": float(grid[-1]),
+                      "base": {"F": base.F, "omega": base.omega, "zeta": base.zeta, "e": base.e},
+                      "cycles": cycles_i, "discard": discard_i, "n_max": n_max_i,
+                      "rtol": float(rtol), "lyapunov": lyapunov,
+                      "lyapunov_cycles": float(lyapunov_cycles),
+                      "lyapunov_warmup": float(lyapunov_warmup),
+                      "settle_cycles": settle_cycles,
+                      "initial_state": {"t": initial.t, "x": initial.x, "v": initial.v,
+                                        "theta": initial.theta, "stuck": initial.stuck}},
+    }
+    return Sweep(param=param, direction=direction, points=tuple(points), base=base,
+                 cycles=cycles_i, discard=discard_i, initial_state=initial, final_state=state,
+                 provenance=provenance)
+
+
+def sweep_up_down(param: SweepParam, values: ArrayLike, *, base: SDFParams,
+                  state: SDFState | None = None, **options: object) -> tuple[Sweep, Sweep]:
+    """An up-sweep followed by a down-sweep that starts from the up-sweep's final state.
+
+    Like a slow experiment that goes up and comes back (thesis Fig. 4-3 (a),
+    (b)).  ``options`` are the keyword arguments of :func:`sweep`.
+
+    Returns
+    -------
+    (Sweep, Sweep)
+        The up- and the down-sweep.
+    """
+    up = sweep(param, values, base=base, direction="up", state=state, **options)  # type: ignore[arg-type]
+    down = sweep(param, values, base=base, direction="down", state=up.final_state,
+                 **options)  # type: ignore[arg-type]
+    return up, down
+
+
+# ---------------------------------------------------------------------------
+# Output: plot and CSV
+# ---------------------------------------------------------------------------
+
+_AXIS_LABELS: dict[str, str] = {
+    "omega": "forcing frequency omega (nondimensional)",
+    "F": "forcing amplitude F (nondimensional)",
+    "e": "coefficient of restitution e",
+    "gap": "1/F (gap in units of F_es / omega_s^2, at fixed F_es)",
+}
+
+
+def plot_sweeps(sweeps: Sequence[Sweep], path: str | os.PathLike[str]) -> Path:
+    """Plot sweeps like thesis Fig. 4-3 (omega), 4-4 (gap) and 4-5 (e); write atomically.
+
+    One column per sweep (e.g. (a) up, (b) down), three rows: the impact
+    velocities ``v_im``, the upward ``x = 0`` crossing velocities
+    ``v_{x=0}^+`` and the average impact velocity per forcing cycle, against
+    the swept parameter.  For a ``"gap"`` sweep the velocities are divided by
+    ``F`` and plotted against ``1/F`` (eq. 4.5, Fig. 4-4).  The linear estimate
+    of the impact velocity (eq. 4.11) is drawn as a line where it applies.
+    Aperiodic values with a positive Lyapunov exponent are drawn in red.
+
+    Parameters
+    ----------
+    sweeps : sequence of Sweep
+        One to four sweeps of the same parameter.
+    path : str or Path
+        ``.png``, ``.pdf`` or ``.svg``.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    ParameterError
+        If the sweeps are empty, mixed, or the suffix is not supported.
+    OutputError
+        If the directory does not exist.
+    """
+    from matplotlib.figure import Figure
+
+    from rattle_lab._atomic import atomic_path
+    from .bifsets import check_plot_path
+
+    fmt = check_plot_path(Path(path))
+    sweeps = list(sweeps)
+    if not 1 <= len(sweeps) <= 4 or len({s.param for s in sweeps}) != 1:
+        raise ParameterError("`sweeps` must hold one to four sweeps of the same parameter")
+    param = sweeps[0].param
+    gap = param == "gap"
+    fig = Figure(figsize=(5.0 * len(sweeps), 9.0), layout="constrained")
+    axes = fig.subplots(3, len(sweeps), squeeze=False, sharex="col")
+    # [issue 17] mathtext labels (was raw "v_{x=0}^+"), on two short lines so that the
+    # three rows' labels do not run into each other
+    names = ("$v_{im}\\,/\\,F$\n(nondim.)", "$v_{x=0}^{+}\\,/\\,F$\n(nondim.)",
+             "mean $v_{im}\\,/\\,F$\nper cycle (nondim.)") if gap else \
+        ("impact velocity $v_{im}$\n(nondim.)", "crossing velocity $v_{x=0}^{+}$\n(nondim.)",
+         "mean $v_{im}$ per\nforcing cycle (nondim.)")
+    for col, sw in enumerate(sweeps):
+        xs = sw.values
+        scale = np.array([p.params.F if gap else 1.0 for p in sw.points])
+        chaotic = np.array([p.chaotic for p in sw.points])
+        for row, attr in enumerate(("impact_velocities", "crossing_velocities")):
+            ax = axes[row, col]
+            for flag, color in ((False, "black"), (True, "tab:red")):
+                pts = [(x, v / s) for x, s, c, p in zip(xs, scale, chaotic, sw.points)
+                       if c == flag for v in getattr(p, attr)]
+                if pts:
+                    arr = np.array(pts)
+                    ax.plot(arr[:, 0], arr[:, 1], ".", color=color, markersize=1.5,
+                            label="aperiodic, lambda_1 > 0" if flag else None)
+        lin = np.array([p.linear_impact_velocity for p in sw.points]) / scale
+        if np.any(np.isfinite(lin)):
+            # [issue 17] the y range follows the simulated data; the linear estimate (which
+            # grows without bound near resonance) is drawn within it, not stretching it
+            data_y = np.concatenate([np.asarray(p.impact_velocities, float) / s
+                                     for p, s in zip(sw.points, scale)] or [np.zeros(0)])
+            data_y = data_y[np.isfinite(data_y)]
+            axes[0, col].plot(xs, lin, "-", color="tab:blue", linewidth=1.2,
+                              label="linear estimate, eq. (4.11)")
+            if data_y.size:
+                lo, hi = float(data_y.min()), float(data_y.max())
+                pad = 0.08 * (hi - lo) if hi > lo else 0.1 * max(abs(hi), 1e-12)
+                axes[0, col].set_ylim(lo - pad, hi + pad)
+        axes[2, col].plot(xs, sw.mean_impact_velocity / scale, ".-", color="black",
+                          markersize=2, linewidth=0.6)
+        for row in range(3):
+            axes[row, col].set_ylabel(names[row])
+            axes[row, col].grid(alpha=0.3)
+        axes[2, col].set_xlabel(_AXIS_LABELS[param])
+        b = sw.base
+        fixed = {"omega": f"F = {b.F:g}", "F": f"omega = {b.omega:g}",
+                 "e": f"F = {b.F:g}, omega = {b.omega:g}", "gap": f"omega = {b.omega:g}"}[param]
+        rest = f"zeta = {b.zeta:g}" + ("" if param == "e" else f", e = {b.e:g}")
+        axes[0, col].set_title(f"({chr(97 + col)}) {sw.direction}-sweep of "
+                               f"{'1/F' if gap else param}\n{fixed}, {rest}", fontsize=10)
+        handles, _ = axes[0, col].get_legend_handles_labels()
+        if handles:
+            axes[0, col].legend(fontsize=7, loc="best")
+    fig.align_ylabels(axes[:, 0])
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=fmt, dpi=150)
+    return Path(path)
+
+
+CSV_COLUMNS = ("direction", "param", "value", "F", "omega", "zeta", "e", "classification",
+               "m", "n", "n_impacts", "mean_impact_velocity", "max_impact_velocity",
+               "linear_impact_velocity", "lyapunov", "sticking", "impact_velocities",
+               "crossing_velocities")
+
+
+def write_sweeps_csv(sweeps: Sequence[Sweep], path: str | os.PathLike[str]) -> Path:
+    """Write sweeps as CSV (atomically): one row per direction and value.
+
+    Columns are :data:`CSV_COLUMNS`; the velocity lists are ``;``-separated
+    in ``repr`` precision, empty numbers are blank.
+
+    Raises
+    ------
+    OutputError
+        If the directory does not exist.
+    """
+    from rattle_lab._atomic import atomic_path
+
+    def num(x: float | None) -> str:
+        return "" if x is None or not math.isfinite(x) else repr(float(x))
+
+    with atomic_path(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(CSV_COLUMNS)
+        for sw in sweeps:
+            for p in sw.points:
+                lyap = p.lyapunov.exponent if p.lyapunov is not None else None
+                writer.writerow([
+                    sw.direction, sw.param, repr(p.value), repr(p.params.F),
+                    repr(p.params.omega), repr(p.params.zeta), repr(p.params.e),
+                    p.regime.label, p.regime.m, p.regime.n, p.impact_velocities.size,
+                    repr(p.mean_impact_velocity),
+                    num(float(p.impact_velocities.max()) if p.impact_velocities.size else None),
+                    num(p.linear_impact_velocity),
+                    "-inf" if lyap == -math.inf else num(lyap), int(p.sticking),
+                    ";".join(repr(float(v)) for v in p.impact_velocities),
+                    ";".join(repr(float(v)) for v in p.crossing_velocities)])
+    return Path(path)

@@ -1,0 +1,99 @@
+"""The two builds of :mod:`rattle_lab.model.sdf._kernel`: plain Python and numba.
+
+The kernel source is executed a second time as the module
+``rattle_lab.model.sdf._kernel_jit`` with ``__rattle_jit__ = True`` in its globals,
+which makes its ``@jit`` decorator compile every function with
+``numba.njit(cache=True)``.  The plain import :mod:`rattle_lab.model.sdf._kernel`
+stays pure Python: the reference the tests compare the compiled kernel with.
+Compilation is lazy (first call) and cached on disk by numba.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import signal
+import sys
+import threading
+from collections.abc import Iterator
+from types import ModuleType
+
+from . import _kernel as python_kernel
+
+_NAME = "rattle_lab.model.sdf._kernel_jit"
+
+
+def _load_jit() -> ModuleType:
+    if _NAME in sys.modules:
+        return sys.modules[_NAME]
+    origin = python_kernel.__file__
+    spec = importlib.util.spec_from_file_location(_NAME, origin)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    module.__dict__["__rattle_jit__"] = True
+    sys.modules[_NAME] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+jit_kernel = _load_jit()
+
+__all__ = ["python_kernel", "jit_kernel", "signals_deferred"]
+
+_DEFERRED = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def signals_deferred() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM until a long compiled call has returned its arrays.
+
+    A Ctrl-C that arrives during a long compiled call is noticed while numba boxes the
+    call's result (a tuple of arrays); the KeyboardInterrupt raised there left numba a
+    broken tuple and the process died of a segmentation fault.  Inside this block the
+    two signals only record that they came; at its end the previous handlers are back
+    and the first signal that came is raised again, so the interrupt lands at the next
+    Python instruction, as usual.  Handlers can be set in the main thread only; elsewhere
+    nothing changes.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[int] = []
+
+    def _note(signum: int, _frame: object) -> None:
+        came.append(signum)
+
+    previous = {sig: signal.signal(sig, _note) for sig in _DEFERRED}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+        if came:
+            signal.raise_signal(came[0])
+
+
+def warm_cache() -> float:
+    """Compile the kernels' signatures now and write numba's on-disk cache.
+
+    Run once after installing (``python -m rattle_lab.model.sdf._compiled``), so that
+    the first simulation of a fresh install loads the cache (about 1-2 s) instead
+    of compiling (about 20 s).  Returns the seconds it took.
+    """
+    import time
+
+    t0 = time.perf_counter()
+    # each kernel has one signature (floats, booleans, ints, arrays): one call compiles it
+    jit_kernel.run(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
+    # what simulate() calls (run, its result packed in one buffer)
+    jit_kernel.run_packed(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
+    # the ramp replays' piece runner (rattle_lab.model.sdf._simulate.simulate_pieces)
+    import numpy as np
+
+    jit_kernel.run_pieces(np.array([0.2]), 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False,
+                          np.array([1.0]), -1.0, 4, -1.0, np.ones(1, dtype=np.bool_), np.nan)
+    return time.perf_counter() - t0
+
+
+if __name__ == "__main__":  # pragma: no cover - installation step
+    print(f"rattle_lab: numba kernels compiled and cached in {warm_cache():.1f} s")

@@ -1,0 +1,11 @@
+"""The one orchestrator: pipelines (their configuration, caching and provenance) and the demo.
+
+``rattle-lab fit`` is the preset pipeline that ends at the fit's results; ``rattle-lab run``
+runs any pipeline file; ``rattle-lab demo`` is simulate, ingest, fit and report.
+"""
+
+from rattle_lab.workflow.pipeline import (STAGES, Pipeline, PipelineRun, load_pipeline_file,
+                                          parse_pipeline, run_pipeline)
+
+__all__ = ["STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline",
+           "run_pipeline"]

@@ -1,0 +1,625 @@
+"""Pipelines: declared stages run lazily, with results cached by content hash in the store.
+
+A pipeline TOML (see ``pipelines/``) names the outputs wanted and the
+parameters of each stage::
+
+    [pipeline]
+    name = "threshold_campaign"
+    outputs = ["results"]        # any of: store, detections, thresholds, results, report
+    [simulate]                   # seed = 7 (optional; for scene inputs)
+    [ingest]                     # allow_flagged = false
+    [detect]                     # ImpactParams fields, window_s, first_fraction, max_lag_s
+    [fit]                        # participation, vary_participation, outlier_k, ...
+    [report]                     # model = true
+
+The ``[detect]`` and ``[fit]`` tables are those of ``rattle-lab fit --pipeline``
+(validated by :func:`rattle_lab.fit.load_pipeline`), so one file serves both.
+
+Stages and what they call (the same library functions as the CLI commands):
+
+==========  =================================================  =====================
+stage       calls                                              depends on
+==========  =================================================  =====================
+simulate    :func:`rattle_lab.rig.write_synthetic`             (scene inputs only)
+ingest      :func:`rattle_lab.store.ingest`                   simulate
+detect      :func:`rattle_lab.fit.analyse_run`, per run        ingest
+thresholds  :func:`rattle_lab.detect.thresholds.tabulate_thresholds`  detect
+fit         the fits of :func:`rattle_lab.fit.fit_store`,      thresholds, detect
+            :func:`rattle_lab.fit._results.write_results`
+report      :func:`rattle_lab.report.write_report`             fit, ingest
+==========  =================================================  =====================
+
+Each stage has a *key*: the SHA-256 of its parameters, the package version and
+the keys of the stages it depends on (the simulate key hashes the scene file's
+bytes; the ingest key the input files' SHA-256).  Keys are computed without
+running anything.  A stage runs only if a requested output needs it and its
+key differs from the one recorded in the store under ``/pipeline_cache`` (or
+its output is gone); so a changed parameter reruns exactly the stages
+downstream of it.  :attr:`PipelineRun.executed` lists the stages run.
+
+A stage's output is also checked before it counts as up to date: the store's
+records must be those of the inputs (``ingest``), ``/results`` must be the one
+the fit stage wrote (``fit``; a later ``rattle-lab fit`` on the store replaces
+it), the report must have the bytes it was written with.
+
+Per-run detection is independent across runs: with ``scheduler`` (a
+``dask.distributed`` address, or a ``Client``) it is mapped over the cluster;
+results are identical to the serial run (the same function on the same data).
+Each task checks that its worker runs the same rattle_lab code as this process
+(:func:`code_fingerprint`); a worker with another installation, or with a
+source tree edited since this process imported it, fails the stage with a
+:class:`~rattle_lab.exceptions.ParameterError` instead of mixing results of
+different code.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import sys
+import tomllib
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from rattle_lab._atomic import atomic_path
+from rattle_lab._progress import progress
+from rattle_lab._resources import find_resource
+from rattle_lab._version import __version__
+from rattle_lab.exceptions import OutputError, ParameterError
+from rattle_lab.store import (CACHE_GROUP, check_linked_inputs, has_path, input_hashes, output_digest,
+                    read_cache_keys, read_cached, record_cache_keys, store_lock, write_cached)
+
+Stage = Literal["simulate", "ingest", "detect", "thresholds", "fit", "report"]
+
+#: Stages in execution order.
+STAGES: tuple[Stage, ...] = ("simulate", "ingest", "detect", "thresholds", "fit", "report")
+#: What each stage needs.
+DEPENDS: dict[Stage, tuple[Stage, ...]] = {
+    "simulate": (), "ingest": ("simulate",), "detect": ("ingest",), "thresholds": ("detect",),
+    "fit": ("thresholds", "detect"), "report": ("fit", "ingest")}
+#: Output names a pipeline may request, and the stage that makes each.
+OUTPUTS: dict[str, Stage] = {"store": "ingest", "detections": "detect",
+                             "thresholds": "thresholds", "results": "fit", "report": "report"}
+#: Keys of the tables this module validates itself ([detect] and [fit] are the fit's).
+_OWN_KEYS: dict[str, dict[str, Any]] = {"simulate": {"seed": None},
+                                        "ingest": {"allow_flagged": False},
+                                        "report": {"model": True}}
+#: Parameters of [fit] that the per-run analysis (detect stage) uses.
+_DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
+#: Seconds to wait for a scheduler given by address.
+CONNECT_TIMEOUT_S = 10
+
+
+def _source_digest() -> str:
+    # rattle_lab's version and the SHA-256 of its Python sources (relative path + bytes).
+    root = Path(__file__).resolve().parents[1]   # the rattle_lab package
+    h = hashlib.sha256(__version__.encode())
+    for path in sorted(root.rglob("*.py")):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0")
+        h.update(path.read_bytes())
+    return f"{__version__}+{h.hexdigest()[:16]}"
+
+
+# The detection code is imported with this module, and the digest taken at the same moment,
+# so the fingerprint describes the code this process runs (not the files as they are later).
+from rattle_lab import fit as _fit  # noqa: E402,F401  (imports detect, thresholds, ingest, records)
+
+_FINGERPRINT = _source_digest()
+
+
+def code_fingerprint() -> str:
+    """Version and source digest of the rattle_lab code this process runs.
+
+    ``"<version>+<16 hex digits>"``: the SHA-256 of every ``.py`` file of the
+    package (relative path and bytes), taken when :mod:`rattle_lab.workflow.pipeline`
+    was imported, together with the detection code it imports.  Two processes
+    (this one and a Dask worker) with equal fingerprints run the same code.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> code_fingerprint().startswith(__version__ + "+")
+    True
+    """
+    return _FINGERPRINT
+
+
+@dataclass(frozen=True)
+class Pipeline:
+    """A parsed pipeline file.
+
+    Attributes
+    ----------
+    name : str
+        Names the default store (``OUT/name.h5``) and report (``OUT/name.pdf``).
+    outputs : tuple of str
+        Requested outputs (keys of :data:`OUTPUTS`).
+    params : dict of str to dict
+        Parameters per table: ``simulate, ingest, detect, fit, report``.
+    description : str
+    source : str
+        The file it was read from ("" if built in code).
+    """
+
+    name: str
+    outputs: tuple[str, ...]
+    params: dict[str, dict[str, Any]]
+    description: str = ""
+    source: str = ""
+
+
+@dataclass
+class PipelineRun:
+    """What :func:`run_pipeline` did.
+
+    Attributes
+    ----------
+    store : Path
+    executed : list of str
+        Stages run, in order (``simulate`` once per scene simulated).
+    cached : list of str
+        Stages needed but up to date (not rerun).
+    outputs : dict of str to Path
+        The requested outputs (the store, or the report PDF).
+    keys : dict of str to str
+        The content key of each needed stage.
+    """
+
+    store: Path
+    executed: list[str] = field(default_factory=list)
+    cached: list[str] = field(default_factory=list)
+    outputs: dict[str, Path] = field(default_factory=dict)
+    keys: dict[str, str] = field(default_factory=dict)
+
+
+# --- the pipeline file -----------------------------------------------------------------------
+
+def parse_pipeline(doc: Mapping[str, Any], source: str = "<pipeline>") -> Pipeline:
+    """A :class:`Pipeline` from a parsed TOML document.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown table, key or output (the message names it).
+    """
+    from rattle_lab.fit._store import FIT_KEYS, SOUND_KEYS
+    from rattle_lab.detect import ImpactParams
+
+    known = {"pipeline", "simulate", "ingest", "detect", "thresholds", "fit", "report"}
+    unknown = sorted(set(doc) - known)
+    if unknown:
+        raise ParameterError(f"{source}: unknown table [{unknown[0]}] (known: "
+                             f"{', '.join(sorted(known))})")
+    head = doc.get("pipeline", {})
+    if not isinstance(head, Mapping):
+        raise ParameterError(f"{source}: [pipeline] must be a table")
+    bad = sorted(set(head) - {"name", "description", "outputs"})
+    if bad:
+        raise ParameterError(f"{source}: [pipeline]: unknown key {bad[0]!r}")
+    name = head.get("name", Path(source).stem if source != "<pipeline>" else "pipeline")
+    if not isinstance(name, str) or not name or any(c in name for c in "/\\"):
+        raise ParameterError(f"{source}: [pipeline] name must be a plain file stem, was {name!r}")
+    outputs = head.get("outputs", ["report"])
+    if isinstance(outputs, str):
+        outputs = [outputs]
+    for out in outputs:
+        if out not in OUTPUTS:
+            raise ParameterError(f"{source}: [pipeline] outputs: unknown output {out!r} "
+                                 f"(known: {', '.join(OUTPUTS)})")
+    if not outputs:
+        raise ParameterError(f"{source}: [pipeline] outputs must name at least one output")
+    allowed = {"detect": {f.name for f in dataclasses.fields(ImpactParams)} | set(SOUND_KEYS),
+               "fit": set(FIT_KEYS), "thresholds": set(), **{k: set(v) for k, v in
+                                                             _OWN_KEYS.items()}}
+    params: dict[str, dict[str, Any]] = {}
+    for table, keys in allowed.items():
+        values = doc.get(table, {})
+        if not isinstance(values, Mapping):
+            raise ParameterError(f"{source}: [{table}] must be a table")
+        bad = sorted(set(values) - keys)
+        if bad:
+            hint = (" (n_confirm belongs to [fit], as in `rattle-lab fit --pipeline`)"
+                    if table == "thresholds" else "")
+            raise ParameterError(f"{source}: [{table}]: unknown key {bad[0]!r}{hint}")
+        params[table] = {**_OWN_KEYS.get(table, {}), **dict(values)}
+    seed = params["simulate"]["seed"]
+    if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)):
+        raise ParameterError(f"{source}: [simulate] seed must be an integer, was {seed!r}")
+    for table, key in (("ingest", "allow_flagged"), ("report", "model")):
+        if not isinstance(params[table][key], bool):
+            raise ParameterError(f"{source}: [{table}] {key} must be true or false, "
+                                 f"was {params[table][key]!r}")
+    params["fit"] = {**FIT_KEYS, **params["fit"]}
+    params.pop("thresholds")
+    return Pipeline(name, tuple(outputs), params, str(head.get("description", "")), source)
+
+
+def load_pipeline_file(path: str | os.PathLike[str]) -> Pipeline:
+    """Read and validate a pipeline TOML file.
+
+    Raises
+    ------
+    ParameterError
+        If the file cannot be read or is invalid.
+    """
+    if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
+        path = find_resource("pipelines", str(path)) or path
+    try:
+        doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise ParameterError(f"{path}: cannot read pipeline TOML: {exc}") from exc
+    return parse_pipeline(doc, str(path))
+
+
+# --- content keys and the cache in the store -------------------------------------------------
+
+def _digest(obj: Any) -> str:
+    text = json.dumps(obj, sort_keys=True, default=str, allow_nan=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _is_scene(item: str) -> bool:
+    return item == "default" or Path(item).suffix.lower() == ".toml"
+
+
+def _scene_bytes(item: str) -> bytes:
+    if item == "default":
+        from importlib import resources
+
+        return resources.files("rattle_lab").joinpath("data/scenes/default.toml").read_bytes()
+    try:
+        return Path(item).read_bytes()
+    except OSError as exc:
+        raise ParameterError(f"{item}: cannot read scene: {exc}") from exc
+
+
+def read_detections(store: str | os.PathLike[str]) -> tuple[Any, ...]:
+    """The per-run detection results the detect stage cached in ``store``.
+
+    Returns
+    -------
+    tuple of RunResult
+
+    Raises
+    ------
+    DataError
+        If the store holds none.
+    """
+    return read_cached(store, "detect")
+
+
+# --- stage functions --------------------------------------------------------------------------
+
+def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any],
+               fit: Mapping[str, Any], code: str | None = None) -> Any:
+    """Detection results of one stored run (:func:`rattle_lab.fit.analyse_run`).
+
+    A pure function of its arguments: what the serial loop and the Dask
+    workers call.
+
+    Parameters
+    ----------
+    store : str
+        The ingest store.
+    input_key, run_id : str
+        The run.
+    detect, fit : mapping
+        The ``[detect]`` and ``[fit]`` parameters.
+    code : str, optional
+        The caller's :func:`code_fingerprint`; if given, this process must run
+        the same code.
+
+    Returns
+    -------
+    RunResult
+
+    Raises
+    ------
+    ParameterError
+        If ``code`` differs from this process's fingerprint (a Dask worker with
+        another rattle_lab).
+    """
+    from rattle_lab.fit import analyse_run
+    from rattle_lab.store import open_stored_record
+
+    if code is not None and code != _FINGERPRINT:
+        raise ParameterError(f"`scheduler`: a worker runs other rattle_lab code ({_FINGERPRINT}) "
+                             f"than the caller ({code}); install the same rattle_lab on the "
+                             "workers (or restart them after editing the sources)")
+
+    with open_stored_record(store, input_key) as record:
+        return analyse_run(input_key, record.run(run_id), detect=detect, fit=fit,
+                           mic_distance_m=record.rig.mic_distance_m)
+
+
+def _connect(scheduler: Any) -> tuple[Any, bool]:
+    """A ``distributed.Client`` for ``scheduler`` and whether this call owns it."""
+    from distributed import Client
+
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if not isinstance(scheduler, str) or not scheduler.strip():
+        raise ParameterError(f"`scheduler` must be an address like 'tcp://host:8786' or a "
+                             f"distributed.Client, was {scheduler!r}")
+    try:
+        return Client(scheduler.strip(), timeout=CONNECT_TIMEOUT_S), True
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ParameterError(f"`scheduler` {scheduler!r}: cannot connect "
+                             f"({' '.join(str(exc).split()) or type(exc).__name__})") from None
+
+
+def _detect_all(store: Path, detect: Mapping[str, Any], fit: Mapping[str, Any],
+                scheduler: Any, quiet: bool = True) -> list[Any]:
+    from rattle_lab.store import read_catalogue
+
+    catalogue = read_catalogue(store, level="runs")
+    check_linked_inputs(store, dict.fromkeys(catalogue["input_key"]))
+    jobs = [(str(store), str(k), str(r)) for k, r in zip(catalogue["input_key"],
+                                                       catalogue["run_id"])]
+    if scheduler is None:
+        return [detect_run(*job, detect, fit) for job in progress(
+            jobs, total=len(jobs), desc="detect", quiet=quiet, unit="run")]
+    from distributed import as_completed
+
+    client, owned = _connect(scheduler)
+    try:
+        futures = client.map(detect_run, *zip(*jobs), detect=dict(detect), fit=dict(fit),
+                             code=_FINGERPRINT, pure=False) if jobs else []
+        position = {f.key: i for i, f in enumerate(futures)}
+        results: list[Any] = [None] * len(futures)
+        for fut in progress(as_completed(futures), total=len(futures), desc="detect",
+                            quiet=quiet, unit="run"):
+            results[position[fut.key]] = fut.result()
+        return results
+    finally:
+        if owned:
+            client.close()
+
+
+def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipeline) -> None:
+    # The fits of rattle_lab.fit.fit_store on the cached detections (no refitting logic here).
+    from rattle_lab.fit import json_ready, summarise_fits
+    from rattle_lab.fit._store import store_participation
+    from rattle_lab.fit._results import StoreFit, write_results
+
+    fit = pipeline.params["fit"]
+    inputs = input_hashes(store)
+    provenance = {"function": "rattle_lab.fit.fit_store", "via": "rattle_lab.workflow.pipeline",
+                  "pipeline": pipeline.name, "rattle_lab_version": __version__,
+                  "python": sys.version.split()[0],
+                  "parameters": {"detect": pipeline.params["detect"], "fit": fit},
+                  "inputs": inputs}
+    # issue 15 hook: the participation from the pipeline, else from the records' rig metadata
+    summary = summarise_fits(list(runs), curve, fit, participation=store_participation(
+        store, fit.get("participation"), "pipeline"))
+    write_results(store, StoreFit(tuple(runs), curve, json_ready(summary),
+                                  json_ready(provenance)))
+
+
+def _file_hash(path: Path) -> str:
+    from rattle_lab.store import file_hash
+
+    return file_hash(path)
+
+
+# --- the runner -------------------------------------------------------------------------------
+
+def needed_stages(outputs: Sequence[str], *, scenes: bool) -> list[Stage]:
+    """The stages the requested outputs need, in execution order.
+
+    Examples
+    --------
+    >>> needed_stages(["thresholds"], scenes=False)
+    ['ingest', 'detect', 'thresholds']
+    >>> needed_stages(["store"], scenes=True)
+    ['simulate', 'ingest']
+    """
+    need: set[Stage] = set()
+    todo = [OUTPUTS[o] for o in outputs]
+    while todo:
+        stage = todo.pop()
+        if stage in need or (stage == "simulate" and not scenes):
+            continue
+        need.add(stage)
+        todo.extend(DEPENDS[stage])
+    return [s for s in STAGES if s in need]
+
+
+def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *,
+                 store: str | os.PathLike[str] | None = None, out_dir: str | os.PathLike[str] = ".",
+                 scheduler: Any = None, log: Callable[[str], None] | None = None,
+                 quiet: bool = True, report: str | os.PathLike[str] | None = None
+                 ) -> PipelineRun:
+    """Run the stages ``pipeline`` needs for its outputs, skipping those up to date.
+
+    Parameters
+    ----------
+    pipeline : Pipeline
+        From :func:`load_pipeline_file`.
+    inputs : sequence of path-like
+        Record files (any format ``rattle-lab ingest`` reads), or scenes
+        (``.toml`` files, or ``"default"``), which are simulated into
+        ``out_dir/<stem>.h5`` first.
+    store : path-like, optional
+        The store (default ``out_dir/<pipeline.name>.h5``).
+    out_dir : path-like
+        Directory of simulated records and of the report ``<pipeline.name>.pdf``
+        (created, with its parents, if missing).
+    scheduler : str or distributed.Client, optional
+        Run per-run detection on this Dask cluster (default: serially here).
+    log : callable, optional
+        Called with one line when a stage starts (``"<stage>: running"``), ends
+        (``"<stage>: done"``) or is skipped (``"<stage>: up to date"``).
+    quiet : bool
+        No progress bars (they are drawn on a terminal only, in any case).
+    report : path-like, optional
+        The report PDF (default ``out_dir/<pipeline.name>.pdf``).
+
+    Returns
+    -------
+    PipelineRun
+
+    Raises
+    ------
+    ParameterError
+        If there are no inputs, an input is missing, ``out_dir`` is a file, the
+        scheduler cannot be reached or one of its workers runs other rattle_lab code.
+    RattleLabError
+        Whatever a stage raises (the store is left as the last completed stage wrote it).
+    """
+    say = log or (lambda line: None)
+    items = [str(i) for i in inputs]
+    # a scene shipped with rattle_lab may be named instead of given as a file
+    items = [i if i == "default" or Path(i).exists() else str(find_resource("scenes", i) or i)
+             for i in items]
+    if not items:
+        raise ParameterError("`inputs` must name at least one record file or scene")
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ParameterError(f"`out_dir` {str(out)!r} is not a directory")
+    for item in items:
+        if item != "default" and not Path(item).is_file():
+            raise ParameterError(f"input {item!r}: no such file")
+    try:  # the output folder is made, as `--out build/` leads a user to expect
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"`out_dir` {str(out)!r}: cannot be created: "
+                          f"{exc.strerror or exc}") from exc
+    store_path = Path(store) if store is not None else out / f"{pipeline.name}.h5"
+    scenes = [i for i in items if _is_scene(i)]
+    p = pipeline.params
+    version = __version__
+    # content keys, computed without running anything
+    keys: dict[str, str] = {}
+    sim_keys = {}
+    raw_for: dict[str, Path] = {}
+    for item in scenes:
+        stem = "default" if item == "default" else Path(item).stem
+        raw_for[item] = out / f"{stem}.h5"
+        sim_keys[item] = _digest({"stage": "simulate", "v": version, "params": p["simulate"],
+                                  "scene": hashlib.sha256(_scene_bytes(item)).hexdigest()})
+    ingest_inputs = [sim_keys[i] if i in sim_keys else _file_hash(Path(i)) for i in items]
+    keys["ingest"] = _digest({"stage": "ingest", "v": version, "params": p["ingest"],
+                              "inputs": sorted(ingest_inputs)})
+    detect_params = {**p["detect"], **{k: p["fit"][k] for k in _DETECT_FIT_KEYS}}
+    keys["detect"] = _digest({"stage": "detect", "v": version, "params": detect_params,
+                              "up": keys["ingest"]})
+    keys["thresholds"] = _digest({"stage": "thresholds", "v": version, "up": keys["detect"]})
+    keys["fit"] = _digest({"stage": "fit", "v": version, "params": p["fit"],
+                           "up": [keys["thresholds"], keys["detect"]]})
+    keys["report"] = _digest({"stage": "report", "v": version, "params": p["report"],
+                              "up": [keys["fit"], keys["ingest"]]})
+    run = PipelineRun(store_path)
+    stages = needed_stages(pipeline.outputs, scenes=bool(scenes))
+    cache = read_cache_keys(store_path)
+    report_path = Path(report) if report is not None else out / f"{pipeline.name}.pdf"
+    runs: list[Any] | None = None
+    curve: Any = None
+
+    def fresh(stage: str, key: str, output_ok: bool) -> bool:
+        if cache.get(stage) == key and output_ok:
+            run.cached.append(stage)
+            say(f"{stage}: up to date")
+            return True
+        say(f"{stage}: running")
+        return False
+
+    def done(stage: str, key: str, extra: Mapping[str, str] | None = None) -> None:
+        run.executed.append(stage)
+        run.keys[stage] = key
+        say(f"{stage}: done")
+        entries = {stage: key, **(extra or {})}
+        cache.update(entries)
+        if store_path.is_file():
+            record_cache_keys(store_path, entries)
+
+    for stage in stages:
+        if stage == "simulate":
+            from rattle_lab.rig import write_synthetic
+
+            for item in scenes:
+                raw = raw_for[item]
+                ck = f"simulate:{raw.name}"
+                ok = raw.is_file() and cache.get(f"{ck}:hash") == _file_hash(raw)
+                if fresh(ck, sim_keys[item], ok):
+                    continue
+                write_synthetic(item, raw, seed=p["simulate"]["seed"], quiet=quiet)
+                run.executed.append("simulate")
+                say(f"simulate: {item} -> {raw}")
+                cache.update({ck: sim_keys[item], f"{ck}:hash": _file_hash(raw)})
+            continue
+        key = keys[stage]
+        run.keys[stage] = key
+        if stage == "ingest":
+            if fresh("ingest", key, cache.get("ingest:records") == output_digest(store_path,
+                                                                                 "ingest")):
+                continue
+            from rattle_lab.store import ingest
+
+            files = [raw_for.get(i, Path(i)) for i in items]
+            if "ingest" in cache and store_path.is_file():
+                # A store this pipeline made, with other inputs (e.g. a scene simulated with a
+                # new seed: same run ids, new data): rebuild it from the current inputs; its
+                # /results and /pipeline_cache are stale anyway.  A store the pipeline did not
+                # make (no cached ingest key) is only ever appended to.
+                with store_lock(store_path), atomic_path(store_path) as tmp:
+                    tmp.unlink()
+                    ingest(files, tmp, allow_flagged=p["ingest"]["allow_flagged"], quiet=quiet)
+                kept = {k: v for k, v in cache.items() if k.startswith("simulate:")}
+                cache.clear()
+                cache.update(kept)
+            else:
+                ingest(files, store_path, allow_flagged=p["ingest"]["allow_flagged"],
+                       quiet=quiet)
+            # the simulate keys are recorded now that the store exists
+            done("ingest", key, {**{k: v for k, v in cache.items() if k.startswith("simulate:")},
+                                 "ingest:records": output_digest(store_path, "ingest")})
+        elif stage == "detect":
+            if fresh("detect", key, has_path(store_path, f"{CACHE_GROUP}/detect")):
+                continue
+            runs = _detect_all(store_path, p["detect"], {**p["fit"]}, scheduler, quiet)
+            write_cached(store_path, "detect", runs)
+            done("detect", key)
+        elif stage == "thresholds":
+            if fresh("thresholds", key, has_path(store_path, f"{CACHE_GROUP}/thresholds")):
+                continue
+            from rattle_lab.detect.thresholds import tabulate_thresholds
+
+            if runs is None:
+                runs = list(read_detections(store_path))
+            curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
+            write_cached(store_path, "thresholds", curve)
+            done("thresholds", key)
+        elif stage == "fit":
+            if fresh("fit", key, bool(cache.get("fit:results"))
+                     and cache.get("fit:results") == output_digest(store_path, "fit")):
+                continue
+            if runs is None:
+                runs = list(read_detections(store_path))
+            if curve is None:
+                curve = read_cached(store_path, "thresholds")
+            _fit_and_write(store_path, runs, curve, pipeline)
+            done("fit", key, {"fit:results": output_digest(store_path, "fit")})
+        elif stage == "report":
+            ok = report_path.is_file() and cache.get("report:hash") == _file_hash(report_path)
+            if fresh("report", key, ok):
+                continue
+            from rattle_lab.report import write_report
+
+            write_report(store_path, report_path, model=p["report"]["model"], quiet=quiet)
+            done("report", key, {"report:hash": _file_hash(report_path)})
+    for name in pipeline.outputs:
+        run.outputs[name] = report_path if name == "report" else store_path
+    return run
+
+
+__all__ = ["Pipeline", "PipelineRun", "STAGES", "DEPENDS", "OUTPUTS", "load_pipeline_file",
+           "parse_pipeline", "run_pipeline", "needed_stages", "read_detections", "detect_run",
+           "code_fingerprint"]
