@@ -10,13 +10,29 @@ cached products (``/pipeline_cache``) and content verification
 
 from __future__ import annotations
 
-from ._cache import (CACHE_GROUP, input_hashes, output_digest, provenance_log, read_cache_keys,
-                     read_cached, record_cache_keys, write_cached)
-from ._ingest import (CATALOGUE_COLUMNS, REINGEST_ADVICE, IngestReport, InputResult,
-                      MappingIgnoredWarning, file_hash, ingest, input_key, open_stored_record,
-                      read_catalogue)
-from ._layout import (READABLE_VERSIONS, STORE_FORMAT, STORE_VERSION, edit_store, has_path,
-                      open_store, store_lock)
+from ._cache import (
+                     CACHE_GROUP,
+                     input_hashes,
+                     output_digest,
+                     provenance_log,
+                     read_cache_keys,
+                     read_cached,
+                     record_cache_keys,
+                     write_cached,
+)
+from ._catalogue import open_stored_record, read_catalogue
+from ._index import REINGEST_ADVICE
+from ._ingest import MappingIgnoredWarning, ingest
+from ._ingest_types import CATALOGUE_COLUMNS, IngestReport, InputResult, file_hash, input_key
+from ._layout import (
+                     READABLE_VERSIONS,
+                     STORE_FORMAT,
+                     STORE_VERSION,
+                     edit_store,
+                     has_path,
+                     open_store,
+                     store_lock,
+)
 from ._results import StoredResults, read_results, write_results
 from ._verify import Mismatch, check_linked_inputs, record_attrs_count, verify_store
 

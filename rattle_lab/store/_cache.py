@@ -30,6 +30,7 @@ import numpy as np
 
 from rattle_lab.exceptions import DataError
 from rattle_lab.records._errors import StoreError
+
 from ._layout import edit_store, open_store
 
 CACHE_GROUP = "pipeline_cache"

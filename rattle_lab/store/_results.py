@@ -31,7 +31,7 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
-from datetime import datetime, UTC
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -40,6 +40,7 @@ import numpy as np
 
 from rattle_lab._version import __version__
 from rattle_lab.records._errors import StoreError
+
 from ._layout import check_store, edit_store, open_store
 
 RESULTS_VERSION = 1

@@ -18,7 +18,9 @@ from pathlib import Path
 from typing import Literal
 
 from rattle_lab.records._errors import StoreError
-from ._ingest import REINGEST_ADVICE, file_hash
+
+from ._index import REINGEST_ADVICE
+from ._ingest_types import file_hash
 from ._layout import record_attrs
 
 

@@ -1,0 +1,124 @@
+"""Reading the store: the catalogue as a table, and one stored record."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
+
+import h5py
+import numpy as np
+
+from rattle_lab.exceptions import ParameterError
+from rattle_lab.records._errors import StoreError
+from rattle_lab.records._h5 import LinkPolicy, link_policy
+from rattle_lab.records._model import Record
+from rattle_lab.records._readers.native import load_group
+from rattle_lab.records._schema import validate_tree
+
+from ._index import REINGEST_ADVICE, _link_problem, _open_store, _read_columns_from, _text
+from ._ingest_types import CATALOGUE_COLUMNS
+
+if TYPE_CHECKING:  # pandas is imported when a catalogue is built, not at import time
+    import pandas as pd
+
+# --- reading the store ------------------------------------------------------------------------
+
+
+def _frame(columns: Mapping[str, Sequence[Any] | np.ndarray]) -> pd.DataFrame:
+    import pandas as pd
+
+    data = {}
+    for name, kind in CATALOGUE_COLUMNS:
+        values: Sequence[Any] | np.ndarray = columns.get(name, [])
+        if kind == "str":
+            data[name] = pd.Series([str(v) for v in values], dtype=object)
+        elif kind == "int":
+            data[name] = pd.Series(np.asarray(values, dtype=np.int64))
+        else:
+            data[name] = pd.Series(np.asarray(values, dtype=np.float64))
+    return pd.DataFrame(data)
+
+
+def read_catalogue(store: str | os.PathLike[str],
+                   level: Literal["channels", "runs"] = "channels") -> pd.DataFrame:
+    """The store's catalogue as a DataFrame.
+
+    Parameters
+    ----------
+    store : path-like
+        An ingest store.
+    level : {"channels", "runs"}
+        One row per channel (all columns, see :data:`CATALOGUE_COLUMNS`), or one
+        row per run (``input_key, file, campaign_id, run_id, protocol,
+        excitation_freq_hz, nominal_level, nominal_level_units, run_start_iso,
+        n_channels, channels, duration_s, flags``).
+
+    Raises
+    ------
+    StoreError
+        If ``store`` is not an ingest store.
+    ParameterError
+        For another ``level``.
+    """
+    if level not in ("channels", "runs"):
+        raise ParameterError(f"`level` must be 'channels' or 'runs', was {level!r}")
+    store = Path(store)
+    if not store.exists():
+        raise StoreError(f"{store}: no such store")
+    frame = _frame(_read_columns_from(store))
+    if level == "channels":
+        return frame
+    keys = ["input_key", "file", "campaign_id", "run_id", "protocol", "excitation_freq_hz",
+            "nominal_level", "nominal_level_units", "run_start_iso"]
+    rows = []
+    for _values, group in frame.groupby(keys[:4], sort=False, dropna=False):
+        first = group.iloc[0]
+        flags = dict.fromkeys(f for text in group["flags"] for f in text.split(",") if f)
+        rows.append({**{k: first[k] for k in keys}, "n_channels": len(group),
+                     "channels": ",".join(group["channel"]),
+                     "duration_s": float(group["duration_s"].max()), "flags": ",".join(flags)})
+    import pandas as pd
+
+    return pd.DataFrame(rows, columns=keys + ["n_channels", "channels", "duration_s", "flags"])
+
+
+def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
+    """An ingested input as a :class:`~rattle_lab.records.Record` (read lazily).
+
+    :meth:`Channel.read <rattle_lab.records.Channel.read>` gives SI values.
+
+    Raises
+    ------
+    StoreError
+        If ``store`` is not an ingest store or has no such input, or if the
+        input is linked (``storage="link"``) and its file has moved or changed
+        since it was ingested.
+    """
+    from rattle_lab.records._convert import record_from_tree
+    from rattle_lab.records._model import Origin
+
+    store = Path(store)
+    with _open_store(store) as fh:
+        group = fh.get(f"records/{input_key}")
+        if not isinstance(group, h5py.Group):
+            raise StoreError(f"{store}: /records/{input_key}: no such ingested input")
+        if _text(group.attrs.get("ingest_storage", "copy")) == "link":
+            problem = _link_problem(group.attrs)
+            if problem is not None:
+                raise StoreError(f"{store}: /records/{input_key}: attribute 'ingest_input_path': "
+                                 f"{problem}; {REINGEST_ADVICE}")
+    with link_policy(LinkPolicy(trusted=True)):  # the store's own links, to ingested inputs
+        raw = load_group(store, f"/records/{input_key}")
+    label = f"{store}: /records/{input_key}"
+    try:
+        validate_tree(raw.tree, label)
+        return record_from_tree(raw.tree, raw.sources,
+                                Origin(path=store, format="rattle_store", closer=raw.closer))
+    except BaseException:
+        if raw.closer is not None:
+            raw.closer()
+        raise
+
+
