@@ -14,8 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rattle_lab.exceptions import OutputError, ParameterError
 from rattle_lab.model.analysis import bifsets
-from rattle_lab.model.analysis.bifsets import BifurcationSets, bifurcation_sets, plot_bifurcation_sets
+from rattle_lab.model.analysis.bifsets import BifurcationSets, bifurcation_sets
 from rattle_lab.model.analysis.orbits import (
     branch_events,
     floquet_multipliers,
@@ -25,8 +26,8 @@ from rattle_lab.model.analysis.orbits import (
     orbit_forcing,
     saddle_node_forcing,
 )
-from rattle_lab.exceptions import OutputError, ParameterError
 from rattle_lab.model.sdf import SDFParams
+from rattle_lab.plot import plot_bifurcation_sets
 
 ZETA, E = 0.05, 0.6
 
@@ -151,7 +152,7 @@ def test_plot_pdf_structure(sets: BifurcationSets, tmp_path: Path) -> None:
 def test_plot_png_and_errors(sets: BifurcationSets, tmp_path: Path) -> None:
     out = plot_bifurcation_sets(sets, tmp_path / "bif.png")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    with pytest.raises(ParameterError, match=r"`path` must end in .png, .pdf or .svg, was '.*bif.txt'"):
+    with pytest.raises(ParameterError, match=r"plot file '.*bif.txt' must end in .png, .pdf or .svg"):
         plot_bifurcation_sets(sets, tmp_path / "bif.txt")
     with pytest.raises(OutputError, match="output directory .*missing does not exist"):
         plot_bifurcation_sets(sets, tmp_path / "missing" / "bif.png")

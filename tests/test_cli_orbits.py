@@ -7,11 +7,10 @@ import subprocess
 from pathlib import Path
 
 import pytest
+from conftest import RATTLE_LAB as EXE
 
 from rattle_lab.model.analysis.orbits import one_over_n_orbits, saddle_node_forcing
 from rattle_lab.model.sdf import SDFParams
-
-from conftest import RATTLE_LAB as EXE
 
 
 def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
@@ -89,7 +88,7 @@ def test_bifsets_json_and_plot(tmp_path: Path) -> None:
     (("orbits", "--e", "2"), "`e` must be in [0, 1], was 2.0"),
     (("bifsets", "--F", "0.6:0"), "`--F` must have lo < hi, was '0.6:0'"),
     (("bifsets", "--omega", "0.6"), "`--omega` must be a range lo:hi, was '0.6'"),
-    (("bifsets", "--plot", "out.txt"), "`path` must end in .png, .pdf or .svg, was 'out.txt'"),
+    (("bifsets", "--plot", "out.txt"), "plot file 'out.txt' must end in .png, .pdf or .svg"),
     (("bifsets", "--plot", "no/such/dir/x.png"), "output directory no/such/dir does not exist"),
 ])
 def test_invalid_arguments_exit_2_with_one_line(args: tuple[str, ...], needle: str,

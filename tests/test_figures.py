@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 import pypdf
+from record_factory import run_cli
 
 from rattle_lab.model.analysis import sweep_up_down
-from rattle_lab.model.analysis._sweep import plot_sweeps, sweep_values
+from rattle_lab.model.analysis._sweep import sweep_values
 from rattle_lab.model.sdf import SDFParams
-
-from record_factory import run_cli
+from rattle_lab.plot import plot_sweeps
 
 
 def _sweeps():

@@ -15,18 +15,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rattle_lab.exceptions import ParameterError
 from rattle_lab.model.analysis import one_over_n_orbits
-from rattle_lab.model.analysis.maps import (
+from rattle_lab.model.analysis._disturbance import (
     _impact_free_start,
-    basin_map,
     disturbance_map,
     disturbance_threshold,
-    plot_attractor_map,
-    plot_disturbance_map,
-    regime_map,
 )
-from rattle_lab.exceptions import ParameterError
+from rattle_lab.model.analysis.maps import basin_map, regime_map
 from rattle_lab.model.sdf import SDFParams, SDFState, simulate
+from rattle_lab.plot import plot_attractor_map, plot_disturbance_map
 
 P_HYST = SDFParams(F=0.2, omega=1.15, zeta=0.05, e=0.6)
 
@@ -167,6 +165,6 @@ def test_invalid_arguments(tmp_path: Path) -> None:
         disturbance_threshold(P_HYST, kick_max=-1.0)
     with pytest.raises(ParameterError, match="`check_cycles` must be < cycles"):
         disturbance_threshold(P_HYST, cycles=20, check_cycles=20)
-    with pytest.raises(ParameterError, match="`path` must end in .png, .pdf or .svg"):
+    with pytest.raises(ParameterError, match="must end in .png, .pdf or .svg"):
         plot_attractor_map(basin_map(P_HYST, [0.0], [0.0], cycles=30, discard=0, n_max=1),
                            tmp_path / "x.gif")

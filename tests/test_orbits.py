@@ -20,6 +20,7 @@ import math
 import numpy as np
 import pytest
 
+from rattle_lab.exceptions import ConvergenceError, ParameterError, SimulationError
 from rattle_lab.model.analysis import _motion, _saltation, orbits
 from rattle_lab.model.analysis import _one_over_n as _on
 from rattle_lab.model.analysis.orbits import (
@@ -36,7 +37,6 @@ from rattle_lab.model.analysis.orbits import (
     periodic_orbit_from_impacts,
     saddle_node_forcing,
 )
-from rattle_lab.exceptions import ConvergenceError, ParameterError, SimulationError
 from rattle_lab.model.sdf import SDFParams, SDFState, flow
 
 try:  # the lead's simulator; the tests that need it say so when it is missing
@@ -478,12 +478,11 @@ def test_public_surface_is_pinned() -> None:
         "one_over_n_orbits", "impact_quadratic", "impact_velocities", "orbit_forcing",
         "floquet_multipliers", "orbit_clearance", "grazing_forcing", "saddle_node_forcing",
         "branch_events", "impact_map", "find_periodic_orbit", "periodic_orbit_from_impacts",
-        "bifurcation_sets", "plot_bifurcation_sets",
+        "bifurcation_sets",
         "Regime", "SweepPoint", "Sweep", "LyapunovResult", "AttractorMap", "DisturbanceMap",
-        "classify_impacts", "sweep_values", "sweep", "sweep_up_down", "plot_sweeps",
+        "classify_impacts", "sweep_values", "sweep", "sweep_up_down",
         "write_sweeps_csv", "lyapunov_exponent", "lyapunov_from_result", "tangent_log_growth",
         "regime_map", "basin_map", "disturbance_threshold", "disturbance_map",
-        "plot_attractor_map", "plot_disturbance_map",
     ]
     for name in analysis.__all__:
         assert getattr(analysis, name).__doc__

@@ -63,11 +63,11 @@ PACKAGES: dict[str, list[str]] = {
         "one_over_n_orbits", "impact_quadratic", "impact_velocities", "orbit_forcing",
         "floquet_multipliers", "orbit_clearance", "grazing_forcing", "saddle_node_forcing",
         "branch_events", "impact_map", "find_periodic_orbit", "periodic_orbit_from_impacts",
-        "bifurcation_sets", "plot_bifurcation_sets", "Regime", "SweepPoint", "Sweep",
+        "bifurcation_sets", "Regime", "SweepPoint", "Sweep",
         "LyapunovResult", "AttractorMap", "DisturbanceMap", "classify_impacts", "sweep_values",
-        "sweep", "sweep_up_down", "plot_sweeps", "write_sweeps_csv", "lyapunov_exponent",
+        "sweep", "sweep_up_down", "write_sweeps_csv", "lyapunov_exponent",
         "lyapunov_from_result", "tangent_log_growth", "regime_map", "basin_map",
-        "disturbance_threshold", "disturbance_map", "plot_attractor_map", "plot_disturbance_map"
+        "disturbance_threshold", "disturbance_map"
     ],
     "rattle_lab.cli": [
         "COMMAND_MODULES", "build_parser", "main"
@@ -104,7 +104,10 @@ PACKAGES: dict[str, list[str]] = {
         "ritz_modes"
     ],
     "rattle_lab.model": [],
-    "rattle_lab.plot": ["check_figure_path", "save_figure", "plot_time_history"],
+    "rattle_lab.plot": [
+        "FIGURE_SUFFIXES", "check_figure_path", "save_figure", "plot_time_history", "plot_sweeps",
+        "plot_bifurcation_sets", "plot_attractor_map", "plot_disturbance_map"
+    ],
     "rattle_lab.workflow": [
         "STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline", "run_pipeline"
     ],
@@ -126,6 +129,16 @@ PACKAGES: dict[str, list[str]] = {
         "load_scene", "parse_scene", "synthesize", "write_synthetic", "Scene", "SceneError",
         "StageCounter", "Synthesis", "RunSummary", "Modal", "Piece", "RunMotion", "schedule",
         "simulate_run", "true_thresholds", "resolve_modal"
+    ],
+    "rattle_lab.model.scaling": [
+        "flexural_rigidity_nm", "omega_s_rad_s", "f_s_hz", "lam_from_f_s",
+        "participation_factor", "pressure_pa_from_accel", "accel_ms2_from_pressure",
+        "F_es_from_pressure", "F_es_from_accel", "F_from_F_es", "F_es_from_F", "F_from_accel",
+        "accel_ms2_from_F", "F_from_pressure", "pressure_pa_from_F", "omega_from_freq",
+        "freq_hz_from_omega", "tau_from_time", "time_s_from_tau", "x_from_displacement",
+        "displacement_m_from_x", "impact_velocity_ms", "v_im_from_velocity", "inv_F_from_gap",
+        "gap_m_from_inv_F", "v_im_over_F_from_velocity", "velocity_ms_from_v_im_over_F",
+        "NondimensionalExcitation", "PhysicalExcitation", "SDFScaling"
     ],
     "rattle_lab.model.sdf": [
         "SDFParams", "SDFState", "SimImpacts", "Crossings", "DenseSamples", "SimResult",

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rattle_lab.exceptions import ParameterError
 from rattle_lab.model.analysis import branch_events, one_over_n_orbits
 from rattle_lab.model.analysis._sweep import (
     SETTLE_CYCLES,
@@ -34,14 +35,13 @@ from rattle_lab.model.analysis._sweep import (
     classify_impacts,
     classify_settled,
     periodic_label_settled,
-    plot_sweeps,
     sweep,
     sweep_up_down,
     sweep_values,
     write_sweeps_csv,
 )
-from rattle_lab.exceptions import ParameterError
 from rattle_lab.model.sdf import SDFParams, SDFState, simulate
+from rattle_lab.plot import plot_sweeps
 
 BASE = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6)
 STEP = 0.001

@@ -13,6 +13,7 @@ import math
 import sys
 
 from rattle_lab.exceptions import ParameterError
+
 from ._model_args import add_damping_restitution, dump_json, parse_float, parse_int, parse_range
 
 #: Largest n accepted on the command line (the cost grows with n).
@@ -114,11 +115,12 @@ def _run_orbits(args: argparse.Namespace) -> int:
 
 
 def _run_bifsets(args: argparse.Namespace) -> int:
-    from rattle_lab.model.analysis.bifsets import bifurcation_sets, check_plot_path, plot_bifurcation_sets
+    from rattle_lab.model.analysis.bifsets import bifurcation_sets
+    from rattle_lab.plot import check_figure_path, plot_bifurcation_sets
 
     ns = parse_n(args.n)
     if args.plot:
-        check_plot_path(args.plot)  # fail before the computation, not after
+        check_figure_path(args.plot)  # fail before the computation, not after
     sets = bifurcation_sets(
         ns, omega_range=parse_range("--omega", args.omega), F_range=parse_range("--F", args.F),
         zeta=parse_float("--zeta", args.zeta), e=parse_float("--e", args.e),

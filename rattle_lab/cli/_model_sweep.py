@@ -17,6 +17,7 @@ import sys
 from typing import Any
 
 from rattle_lab.exceptions import ParameterError
+
 from ._model_args import add_damping_restitution, dump_json, parse_float, parse_int, parse_range
 
 _GAP_HELP = ("gap: the gap h in units of the static deflection F_es / omega_s^2, i.e. "
@@ -149,17 +150,16 @@ def _fmt(x: float) -> str:
 # ---------------------------------------------------------------------------
 
 def _run_sweep(args: argparse.Namespace) -> int:
-    from rattle_lab.model.analysis.bifsets import check_plot_path
     from rattle_lab.model.analysis._sweep import (
         LYAPUNOV_MODES,
         SWEEP_PARAMS,
-        plot_sweeps,
         sweep,
         sweep_up_down,
         sweep_values,
         write_sweeps_csv,
     )
     from rattle_lab.model.sdf._types import SDFParams
+    from rattle_lab.plot import check_figure_path, plot_sweeps
 
     param = _choice("--param", args.param, SWEEP_PARAMS)
     direction = _choice("--direction", args.direction, ("up", "down", "both"))
@@ -179,7 +179,7 @@ def _run_sweep(args: argparse.Namespace) -> int:
     # the swept parameter's base value is a placeholder: replaced at every grid value
     base = SDFParams(**{**values, **({param: float(grid[0])} if param != "gap" else {})})
     if args.plot:
-        check_plot_path(args.plot)  # fail before the computation, not after
+        check_figure_path(args.plot)  # fail before the computation, not after
     options: dict[str, Any] = dict(
         cycles=parse_int("--cycles", args.cycles), discard=parse_int("--discard", args.discard),
         n_max=parse_int("--n-max", args.n_max), rtol=parse_float("--rtol", args.rtol),
@@ -241,18 +241,19 @@ def _grid(option: str, text: str, n_option: str, n_text: str) -> Any:
 
 
 def _run_map(args: argparse.Namespace) -> int:
-    from rattle_lab.model.analysis.bifsets import check_plot_path
+    from rattle_lab.plot import check_figure_path
 
     kind = _choice("--kind", args.kind, ("regime", "basin", "disturbance"))
     if args.plot:
-        check_plot_path(args.plot)
+        check_figure_path(args.plot)
     workers = parse_int("--workers", args.workers)
     common: dict[str, Any] = dict(workers=workers, scheduler=args.scheduler, quiet=args.quiet)
     zeta, e = parse_float("--zeta", args.zeta), parse_float("--e", args.e)
     if kind == "disturbance":
         return _run_disturbance(args, zeta, e, common)
-    from rattle_lab.model.analysis.maps import basin_map, plot_attractor_map, regime_map
+    from rattle_lab.model.analysis.maps import basin_map, regime_map
     from rattle_lab.model.sdf._types import SDFParams
+    from rattle_lab.plot import check_figure_path, plot_attractor_map
 
     opts: dict[str, Any] = dict(
         cycles=parse_int("--cycles", args.cycles or "150"),
@@ -289,7 +290,8 @@ def _run_disturbance(args: argparse.Namespace, zeta: float, e: float,
                      common: dict[str, Any]) -> int:
     import numpy as np
 
-    from rattle_lab.model.analysis.maps import disturbance_map, plot_disturbance_map
+    from rattle_lab.model.analysis import disturbance_map
+    from rattle_lab.plot import plot_disturbance_map
 
     levels = tuple(parse_float("--levels", t) for t in args.levels.split(","))
     if any(v <= 0 for v in levels):

@@ -1,93 +1,13 @@
-"""Shared plotting helpers (matplotlib, Agg, no pyplot state) with labelled axes."""
+"""Plots (matplotlib, Agg, no pyplot state) with labelled axes and units, written atomically.
 
-from __future__ import annotations
+The plot layer draws what the model and the fit computed; it computes nothing itself.
+"""
 
-from pathlib import Path
-from typing import TYPE_CHECKING
+from ._bifsets import plot_bifurcation_sets
+from ._figures import FIGURE_SUFFIXES, check_figure_path, save_figure
+from ._maps import plot_attractor_map, plot_disturbance_map
+from ._sweeps import plot_sweeps
+from ._time_history import plot_time_history
 
-from rattle_lab._atomic import atomic_path
-from rattle_lab.exceptions import ParameterError
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
-    from rattle_lab.model.sdf import SimResult
-
-FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
-
-
-def check_figure_path(path: str | Path) -> Path:
-    """Validate a figure output path before any work is done.
-
-    Raises
-    ------
-    ParameterError
-        If the suffix is not png/pdf/svg or the directory does not exist.
-    """
-    p = Path(path)
-    if p.suffix.lower() not in FIGURE_SUFFIXES:
-        raise ParameterError(f"plot file {str(p)!r} must end in one of {', '.join(FIGURE_SUFFIXES)}")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise ParameterError(f"plot file {str(p)!r}: directory {str(parent)!r} does not exist")
-    return p
-
-
-def save_figure(fig: Figure, path: str | Path) -> Path:
-    """Write ``fig`` atomically to ``path`` (format from the suffix)."""
-    p = check_figure_path(path)
-    with atomic_path(p) as tmp:
-        fig.savefig(tmp, format=p.suffix.lower().lstrip("."),
-                    metadata={"CreationDate": None} if p.suffix.lower() == ".pdf" else None)
-    return p
-
-
-def plot_time_history(res: SimResult, path: str | Path) -> Path:
-    """Time histories (x, v, a with forced/transient parts) and the phase portrait.
-
-    ``res`` must hold dense samples with fields x, v, a, forced and excitation.
-    """
-    from matplotlib.figure import Figure
-
-    d = res.dense
-    if d is None or d.x is None or d.v is None:
-        raise ParameterError("plot_time_history needs a result with dense x and v samples")
-    fig = Figure(figsize=(10, 7.5), layout="constrained")
-    gs = fig.add_gridspec(3, 2, width_ratios=(2.2, 1))
-    ax_x = fig.add_subplot(gs[0, 0])
-    ax_v = fig.add_subplot(gs[1, 0], sharex=ax_x)
-    ax_a = fig.add_subplot(gs[2, 0], sharex=ax_x)
-    ax_p = fig.add_subplot(gs[:, 1])
-    p = res.params
-    ax_x.plot(d.t, d.x, lw=1, label="x")
-    if d.forced is not None:
-        ax_x.plot(d.t, d.forced, lw=0.8, ls="--", label="forced part")
-    if d.transient is not None:
-        ax_x.plot(d.t, d.transient, lw=0.8, ls=":", label="transient part")
-    ax_x.axhline(1.0, color="k", lw=0.8)
-    ax_x.set_ylabel("displacement x = x_s / h (nondim.)")
-    ax_x.legend(loc="lower left", fontsize=8)
-    ax_v.plot(d.t, d.v, lw=1)
-    imp = res.impacts
-    if len(imp):
-        ax_v.plot(imp.t, imp.v_in, "o", ms=3, mfc="none", label="v_in at impact")
-        ax_v.legend(loc="lower left", fontsize=8)
-    ax_v.set_ylabel("velocity dx/dt (nondim.)")
-    if d.a is not None:
-        ax_a.plot(d.t, d.a, lw=1, label="acceleration")
-    if d.excitation is not None:
-        ax_a.plot(d.t, d.excitation, lw=0.8, ls="--", label="excitation F cos(omega t + phi)")
-    ax_a.set_ylabel("acceleration (nondim.)")
-    ax_a.set_xlabel("time t = omega_s t_phys (nondim.)")
-    ax_a.legend(loc="lower left", fontsize=8)
-    ax_p.plot(d.x, d.v, lw=0.7)
-    ax_p.axvline(1.0, color="k", lw=0.8)
-    ax_p.set_xlabel("displacement x (nondim.)")
-    ax_p.set_ylabel("velocity dx/dt (nondim.)")
-    ax_p.set_title("phase portrait")
-    fig.suptitle(f"SDF impact oscillator: F={p.F:g}, omega={p.omega:g}, zeta={p.zeta:g}, e={p.e:g}")
-    return save_figure(fig, path)
-
-
-__all__ = ["check_figure_path", "save_figure", "plot_time_history"]
-
+__all__ = ["FIGURE_SUFFIXES", "check_figure_path", "save_figure", "plot_time_history",
+           "plot_sweeps", "plot_bifurcation_sets", "plot_attractor_map", "plot_disturbance_map"]

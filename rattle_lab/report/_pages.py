@@ -780,7 +780,7 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from rattle_lab.model.analysis.bifsets import _LINESTYLES  # the same styles as `model bifsets`' plot
+    from rattle_lab.plot._bifsets import _LINESTYLES  # the same styles as `model bifsets`' plot
 
     fig = landscape_figure()
     ax = fig.add_subplot()

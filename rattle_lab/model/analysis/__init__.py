@@ -13,18 +13,20 @@
   disturbance study (thesis 4.3.3, Fig. 4-7), run serially or through Dask.
 """
 
-from .bifsets import BifurcationSets, BoundaryCurve, bifurcation_sets, plot_bifurcation_sets
-from .lyapunov import LyapunovResult, lyapunov_exponent, lyapunov_from_result, tangent_log_growth
-from .maps import (
-    AttractorMap,
-    DisturbanceMap,
-    basin_map,
-    disturbance_map,
-    disturbance_threshold,
-    plot_attractor_map,
-    plot_disturbance_map,
-    regime_map,
+from ._disturbance import DisturbanceMap, disturbance_map, disturbance_threshold
+from ._sweep import (
+    Regime,
+    Sweep,
+    SweepPoint,
+    classify_impacts,
+    sweep,
+    sweep_up_down,
+    sweep_values,
+    write_sweeps_csv,
 )
+from .bifsets import BifurcationSets, BoundaryCurve, bifurcation_sets
+from .lyapunov import LyapunovResult, lyapunov_exponent, lyapunov_from_result, tangent_log_growth
+from .maps import AttractorMap, basin_map, regime_map
 from .orbits import (
     BranchEvent,
     OneOverNOrbit,
@@ -41,17 +43,6 @@ from .orbits import (
     orbit_forcing,
     periodic_orbit_from_impacts,
     saddle_node_forcing,
-)
-from ._sweep import (
-    Regime,
-    Sweep,
-    SweepPoint,
-    classify_impacts,
-    plot_sweeps,
-    sweep,
-    sweep_up_down,
-    sweep_values,
-    write_sweeps_csv,
 )
 
 __all__ = [
@@ -73,7 +64,6 @@ __all__ = [
     "find_periodic_orbit",
     "periodic_orbit_from_impacts",
     "bifurcation_sets",
-    "plot_bifurcation_sets",
     "Regime",
     "SweepPoint",
     "Sweep",
@@ -84,7 +74,6 @@ __all__ = [
     "sweep_values",
     "sweep",
     "sweep_up_down",
-    "plot_sweeps",
     "write_sweeps_csv",
     "lyapunov_exponent",
     "lyapunov_from_result",
@@ -93,6 +82,4 @@ __all__ = [
     "basin_map",
     "disturbance_threshold",
     "disturbance_map",
-    "plot_attractor_map",
-    "plot_disturbance_map",
 ]

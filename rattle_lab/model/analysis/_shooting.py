@@ -288,7 +288,7 @@ def periodic_orbit_from_impacts(params: SDFParams, impacts: SimImpacts, *, max_m
         Newton fails.
     """
     if not isinstance(impacts, SimImpacts):
-        raise ParameterError(f"`impacts` must be an SimImpacts, was {type(impacts).__name__}")
+        raise ParameterError(f"`impacts` must be a SimImpacts, was {type(impacts).__name__}")
     t, ph, v = impacts.t, impacts.phase, impacts.v_in
     N = t.size
     if N < 4:

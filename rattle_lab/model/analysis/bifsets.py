@@ -31,20 +31,20 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, Literal, cast
+from typing import Literal, cast
 
 import numpy as np
 
 from rattle_lab._version import __version__
 from rattle_lab.exceptions import ParameterError
+
 from . import _one_over_n as _on
 from ._dask import check_execution, run_chunks
 
 BoundaryKind = Literal["grazing", "saddle-node", "period-doubling", "secondary-grazing"]
 KINDS: tuple[BoundaryKind, ...] = ("grazing", "saddle-node", "period-doubling", "secondary-grazing")
 
-__all__ = ["BoundaryCurve", "BifurcationSets", "bifurcation_sets", "plot_bifurcation_sets"]
+__all__ = ["BoundaryCurve", "BifurcationSets", "bifurcation_sets"]
 
 
 @dataclass(frozen=True)
@@ -395,100 +395,3 @@ def bifurcation_sets(ns: Sequence[int] = (1, 2, 3, 4), *,
 # Plot
 # ---------------------------------------------------------------------------
 
-_LINESTYLES: dict[str, Any] = {"grazing": "-", "saddle-node": "-.", "period-doubling": "--",
-                               "secondary-grazing": ":"}
-_FORMATS = ("png", "pdf", "svg")
-
-
-def check_plot_path(path: str | Path) -> str:
-    """Check an output path for :func:`plot_bifurcation_sets` before any work; return its format.
-
-    Raises
-    ------
-    ParameterError
-        If the suffix is not ``.png``, ``.pdf`` or ``.svg``.
-    OutputError
-        If the directory does not exist.
-    """
-    from rattle_lab.exceptions import OutputError
-
-    path = Path(path)
-    fmt = path.suffix.lower().lstrip(".")
-    if fmt not in _FORMATS:
-        raise ParameterError(f"`path` must end in .png, .pdf or .svg, was {str(path)!r}")
-    directory = path.parent if str(path.parent) else Path(".")
-    if not directory.is_dir():
-        raise OutputError(f"{path}: output directory {directory} does not exist")
-    return fmt
-
-
-def plot_bifurcation_sets(sets: BifurcationSets, path: str | Path, *, dpi: int = 150) -> Path:
-    """Plot the bifurcation sets like thesis Fig. 3-10 and write it atomically.
-
-    Existence regions are lightly shaded and stability regions shaded darker,
-    one colour per ``n``; the boundary curves are drawn in that colour with a
-    line style per kind, and the grazing curve (eq. 3.4) in black.
-
-    Parameters
-    ----------
-    sets : BifurcationSets
-        What :func:`bifurcation_sets` returned.
-    path : str or Path
-        Output file; the format follows the suffix (``.png``, ``.pdf``, ``.svg``).
-    dpi : int
-        Resolution of raster output.
-
-    Returns
-    -------
-    Path
-        The file written.
-
-    Raises
-    ------
-    ParameterError
-        If the suffix is not a supported format.
-    OutputError
-        If the output directory does not exist.
-    """
-    # A bare Figure (no pyplot): no global backend state is touched, and it renders with Agg.
-    import matplotlib
-    from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-
-    from rattle_lab._atomic import atomic_path
-
-    path = Path(path)
-    fmt = check_plot_path(path)
-    colors = matplotlib.colormaps["tab10"].colors  # type: ignore[attr-defined]
-    fig = Figure(figsize=(10.0, 6.0), layout="constrained")
-    ax = fig.add_subplot()
-    handles: list[object] = []
-    for k, n in enumerate(sets.ns):
-        col = colors[k % len(colors)]
-        if sets.exists[k].any():
-            ax.contourf(sets.omega, sets.F, sets.exists[k].astype(float), levels=[0.5, 1.5],
-                        colors=[col], alpha=0.15)
-        if sets.stable[k].any():
-            ax.contourf(sets.omega, sets.F, sets.stable[k].astype(float), levels=[0.5, 1.5],
-                        colors=[col], alpha=0.45)
-        for c in sets.curves_of(n):
-            if c.kind == "grazing":
-                continue  # drawn once, in black
-            ax.plot(c.omega, c.F, color=col, linestyle=_LINESTYLES[c.kind], linewidth=1.3)
-        handles.append(Patch(facecolor=col, alpha=0.15, label=f"1/{n} exists"))
-        handles.append(Patch(facecolor=col, alpha=0.45, label=f"1/{n} stable"))
-    ax.plot(sets.grazing.omega, sets.grazing.F, color="black", linewidth=1.6)
-    handles.append(Line2D([], [], color="black", linewidth=1.6, label="grazing, eq. (3.4)"))
-    for kind in ("saddle-node", "period-doubling", "secondary-grazing"):
-        handles.append(Line2D([], [], color="0.3", linestyle=_LINESTYLES[kind], label=kind))
-    ax.set_xlim(sets.omega[0], sets.omega[-1])
-    ax.set_ylim(sets.F[0], sets.F[-1])
-    ax.set_xlabel("forcing frequency omega (nondimensional)")
-    ax.set_ylabel("forcing amplitude F (nondimensional)")
-    ax.set_title(f"Bifurcation sets of 1/n orbits (zeta = {sets.zeta:g}, e = {sets.e:g})")
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
-              borderaxespad=0.0)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format=fmt, dpi=dpi)
-    return path
