@@ -70,7 +70,7 @@ def test_model_run_table_and_plot(tmp_path):
     (["--F", "0.2", "--omega", "1", "--zeta", "0.05", "--e", "0.6", "--cycles", "0"],
      "`cycles` must be finite and >= 1, was 0.0"),
     (["--F", "0.2", "--omega", "1", "--zeta", "0.05", "--e", "0.6", "--plot", "out.gif"],
-     "must end in one of .png, .pdf, .svg"),
+     "must end in .png, .pdf or .svg"),
 ])
 def test_model_run_bad_input_exits_2_with_one_line(tmp_path, args, message):
     proc = subprocess.run([_exe(), "model", "run", *args], capture_output=True, text=True,

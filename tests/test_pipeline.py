@@ -28,6 +28,7 @@ from rattle_lab.workflow.pipeline import (Pipeline, code_fingerprint, load_pipel
 from rattle_lab.fit._results import read_results
 
 PIPELINES = Path(__file__).resolve().parents[1] / "pipelines"
+MAPPINGS = Path(__file__).resolve().parents[1] / "data_schema" / "mappings"
 
 
 def _pipe(outputs: list[str], **tables: dict[str, Any]) -> Pipeline:
@@ -295,3 +296,71 @@ def _diff(a: Any, b: Any, path: str = "") -> list[str]:
     if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
         return [d for i, (x, y) in enumerate(zip(a, b)) for d in _diff(x, y, f"{path}[{i}]")]
     return [] if a == b else [f"{path}: {str(a)[:200]} != {str(b)[:200]}"]
+
+
+def test_pipeline_fit_stage_equals_fit_store_with_chain_flags_and_shocks(tmp_path: Path) -> None:
+    # One set of fits for both orchestrators (rattle_lab.fit.fit_runs): a store whose records
+    # carry a measurement-chain flag (a v1 velocity channel that declares no measurand) and a
+    # transient run (a hammer hit, cause and response) must give the pipeline's fit stage
+    # exactly the summary of `rattle-lab fit`, flags and shocks included.
+    from record_factory import write as write_factory_record
+
+    from rattle_lab.detect.thresholds import tabulate_thresholds
+    from rattle_lab.records import UncalibratedWarning
+    from rattle_lab.store import ingest, read_catalogue
+
+    # the hit in plain numpy (not the rig): a 0.3 ms half-sine force of 50 N at 1 ms and a
+    # response ringing at 800 Hz from 50 us later, 25.6 kHz, a little noise on both
+    fs = 25600.0
+    t = np.arange(4096) / fs
+    rng = np.random.default_rng(5)
+    pulse = (t >= 1e-3) & (t < 1.3e-3)
+    force = np.where(pulse, 50.0 * np.sin(np.pi * (t - 1e-3) / 0.3e-3), 0.0)
+    tr = np.clip(t - 1.05e-3, 0.0, None)
+    resp = np.where(t >= 1.05e-3, 30.0 * np.exp(-200.0 * tr) * np.sin(2 * np.pi * 800.0 * tr), 0.0)
+    hit = tmp_path / "hit.npy"
+    np.save(hit, np.vstack([t, force + 0.05 * rng.standard_normal(t.size),
+                            resp + 0.02 * rng.standard_normal(t.size)]))
+    store = tmp_path / "s.h5"
+    ingest([write_factory_record(tmp_path)], store, quiet=True)
+    with pytest.warns(UncalibratedWarning, match="assumed by the mapping"):
+        ingest([hit], store, mapping=MAPPINGS / "hammer_npy.toml", quiet=True)
+    via_pipeline = tmp_path / "p.h5"
+    shutil.copyfile(store, via_pipeline)
+
+    direct = fit_store(store, detect={}, fit={})
+    assert any("measurand" in f for f in direct.summary["data_quality"])
+    (shock,) = direct.summary["transients"]
+    assert [c["channel"] for c in shock["channels"]] == ["force", "response"]
+    assert shock["channels"][0]["onset_s"] == pytest.approx(1e-3, abs=2 / fs)
+
+    pipe = _pipe(["results"])
+    cat = read_catalogue(via_pipeline, level="runs")
+    runs = [pipeline_module.detect_run(str(via_pipeline), k, r, pipe.params["detect"],
+                                       pipe.params["fit"])
+            for k, r in zip(cat["input_key"], cat["run_id"])]
+    curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
+    pipeline_module._fit_and_write(via_pipeline, runs, curve, pipe)
+    a, b = read_results(store).summary, read_results(via_pipeline).summary
+    assert json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
+
+
+def test_a_product_cached_by_other_code_is_a_clear_error(tmp_path: Path) -> None:
+    # A store cached by an older rattle_lab names classes that have since moved
+    # (rattle_lab.results:RunResult); reading it says so instead of an ImportError.
+    import h5py
+
+    from rattle_lab.exceptions import DataError
+    from rattle_lab.store import read_cached
+
+    store = tmp_path / "old.h5"
+    from rattle_lab.store import STORE_FORMAT, STORE_VERSION
+
+    with h5py.File(store, "w") as fh:
+        fh.attrs.update({"store_format": STORE_FORMAT, "store_version": STORE_VERSION})
+        g = fh.create_group("pipeline_cache/thresholds")
+        g.attrs["__class__"] = "rattle_lab.results:ThresholdCurve"
+    with pytest.raises(DataError, match=r"rattle_lab.results:ThresholdCurve does not exist in "
+                                        r"this rattle_lab .*run the stage again"):
+        read_cached(store, "thresholds")
+    assert pipeline_module.CACHE_FORMAT == 2   # a moved class also re-keys the cached stages

@@ -84,7 +84,7 @@ PACKAGES: dict[str, list[str]] = {
         "DEFAULT_SAVE_PATH"
     ],
     "rattle_lab.fit": [
-        "DbLaw", "GrazingFit", "analyse_run", "fit_store", "json_ready", "load_pipeline",
+        "DbLaw", "GrazingFit", "analyse_run", "fit_runs", "fit_store", "json_ready", "load_pipeline",
         "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
         "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
         "restitution_from_ratios", "saddle_node_threshold_ms2",

@@ -16,70 +16,28 @@ from __future__ import annotations
 import math
 import os
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rattle_lab.model.analysis._sweep import Sweep, sweep
-from rattle_lab.exceptions import ParameterError, RattleLabError
+from rattle_lab.exceptions import ParameterError
 from rattle_lab.model.scaling import F_from_accel, accel_ms2_from_F
 from rattle_lab.model.sdf import SDFParams, SDFState
+from ._choices import (_PART_LABELS, _PART_STYLE,
+                       _SWEEP_X_LABELS, _Y_LABELS, AMPLITUDE_MODES,
+                       DEFAULT_SAVE_PATH, IMPACT_VIEWS, PARAM_NAMES, PARTS, QUANTITIES,
+                       SWEEP_CHOICES, AmplitudeMode, ImpactView, ParamName, Part, Quantity,
+                       SweepChoice)
 from ._histories import TWO_PI, Histories, compute_histories, save_histories
+from ._widgets import Widgets
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
-
-ParamName = Literal["F", "accel_ms2", "omega", "zeta", "e", "gap_m"]
-Part = Literal["total", "forced", "transient", "excitation"]
-Quantity = Literal["x", "v", "a"]
-AmplitudeMode = Literal["F", "accel"]
-SweepChoice = Literal["omega", "A", "e"]
-ImpactView = Literal["time", "phase"]
-
-PARAM_NAMES: tuple[ParamName, ...] = ("F", "accel_ms2", "omega", "zeta", "e", "gap_m")
-PARTS: tuple[Part, ...] = ("total", "forced", "transient", "excitation")
-QUANTITIES: tuple[Quantity, ...] = ("x", "v", "a")
-AMPLITUDE_MODES: tuple[AmplitudeMode, ...] = ("F", "accel")
-SWEEP_CHOICES: tuple[SweepChoice, ...] = ("omega", "A", "e")
-IMPACT_VIEWS: tuple[ImpactView, ...] = ("time", "phase")
-
-#: Default save target, in the current directory.
-DEFAULT_SAVE_PATH = "rattle_explore.h5"
-
-_PART_LABELS: dict[Part, str] = {"total": "total", "forced": "forced part",
-                                 "transient": "transient part", "excitation": "excitation"}
-_PART_STYLE: dict[Part, dict[str, Any]] = {
-    "total": {"color": "black", "lw": 1.0},
-    "forced": {"color": "tab:red", "lw": 0.9, "ls": "--"},
-    "transient": {"color": "goldenrod", "lw": 0.9, "ls": ":"},
-    "excitation": {"color": "tab:green", "lw": 0.9, "ls": "-."},
-}
-_Y_LABELS: dict[Quantity, str] = {
-    "x": "displacement x = x_s/h\n(nondimensional)",
-    "v": "velocity dx/dt\n(nondimensional)",
-    "a": "acceleration d2x/dt2\n(nondimensional)",
-}
-_AMPLITUDE_LABELS: dict[AmplitudeMode, str] = {"F": "F (nondim.)", "accel": "A_e [m/s^2]"}
-_SWEEP_LABELS: dict[SweepChoice, str] = {"omega": "omega", "A": "A (amplitude)", "e": "e"}
-_IMPACT_VIEW_LABELS: dict[ImpactView, str] = {"time": "v_in vs time",
-                                              "phase": "v_in vs phase"}
-_SWEEP_X_LABELS: dict[str, str] = {
-    "omega": "forcing frequency omega = f/f_s (nondimensional)",
-    "F": "forcing amplitude F (nondimensional)",
-    "accel": "base-acceleration amplitude A_e [m/s^2]",
-    "e": "coefficient of restitution e (nondimensional)",
-}
-
-#: Slider ranges (nondimensional, gap in mm); widened to include a start value outside them.
-_RANGES: dict[str, tuple[float, float]] = {
-    "F": (0.0, 1.0), "omega": (0.2, 3.0), "zeta": (0.0, 0.3), "e": (0.0, 1.0),
-    "gap_mm": (0.1, 5.0),
-}
-
 
 def display_available() -> bool:
     """Whether the explorer can open a window: an interactive backend and a display.
@@ -199,7 +157,6 @@ class Explorer:
                                            "excitation": False}
         self._impact_view: ImpactView = "time"
         self._sweep_choice: SweepChoice = "omega"
-        self._syncing = False
         self.last_sweep: Sweep | None = None
         self.status = ""
         self.histories: Histories = compute_histories(
@@ -211,7 +168,7 @@ class Explorer:
             figure = _Figure(figsize=(16, 10))
         self.figure = figure
         self._build_axes()
-        self._build_widgets()
+        self._widgets = Widgets(self)
         self._redraw()
 
     # ------------------------------------------------------------------ properties
@@ -295,16 +252,16 @@ class Explorer:
         else:
             params = params.replace(**{name: value})
         self._params, self._gap_m = params, gap_m
-        self._sync_sliders()
+        self._widgets.sync_sliders()
         self._run(self.histories.result.state)
 
     def set_amplitude_mode(self, mode: AmplitudeMode) -> None:
         """Show the ``F`` slider (``"F"``) or the base-acceleration slider (``"accel"``)."""
         _check_choice("mode", mode, AMPLITUDE_MODES)
         self._mode = mode
-        self._sliders["F"].ax.set_visible(mode == "F")
-        self._sliders["accel_ms2"].ax.set_visible(mode == "accel")
-        self._sync_radio("amplitude", AMPLITUDE_MODES.index(mode))
+        self._widgets.sliders["F"].ax.set_visible(mode == "F")
+        self._widgets.sliders["accel_ms2"].ax.set_visible(mode == "accel")
+        self._widgets.sync_radio("amplitude", AMPLITUDE_MODES.index(mode))
         self._redraw()
 
     def toggle(self, part: Part, visible: bool | None = None) -> None:
@@ -312,19 +269,20 @@ class Explorer:
         _check_choice("part", part, PARTS)
         self._visible[part] = (not self._visible[part]) if visible is None else bool(visible)
         index = PARTS.index(part)
-        if self._checks.get_status()[index] != self._visible[part]:
-            self._checks.eventson = False
+        checks = self._widgets.checks
+        if checks.get_status()[index] != self._visible[part]:
+            checks.eventson = False
             try:
-                self._checks.set_active(index)
+                checks.set_active(index)
             finally:
-                self._checks.eventson = True
+                checks.eventson = True
         self._redraw()
 
     def set_impact_view(self, view: ImpactView) -> None:
         """Plot the impact velocities against time (``"time"``) or forcing phase (``"phase"``)."""
         _check_choice("view", view, IMPACT_VIEWS)
         self._impact_view = view
-        self._sync_radio("impact_view", IMPACT_VIEWS.index(view))
+        self._widgets.sync_radio("impact_view", IMPACT_VIEWS.index(view))
         self._redraw()
 
     def advance(self) -> None:
@@ -346,7 +304,7 @@ class Explorer:
             key = "F" if self._mode == "F" else "accel_ms2"
         else:
             key = param
-        s = self._sliders[key]
+        s = self._widgets.sliders[key]
         lo, hi = float(s.valmin), float(s.valmax)
         values = np.linspace(lo, hi, self._sweep_points)
         if key == "accel_ms2":
@@ -377,7 +335,7 @@ class Explorer:
         choice = self._sweep_choice if param is None else param
         _check_choice("param", choice, SWEEP_CHOICES)
         self._sweep_choice = choice
-        self._sync_radio("sweep", SWEEP_CHOICES.index(choice))
+        self._widgets.sync_radio("sweep", SWEEP_CHOICES.index(choice))
         kept = self._sweep_cycles - self._sweep_discard
         result = sweep("F" if choice == "A" else choice, self.sweep_values(choice),
                        base=self._params, direction="up", cycles=self._sweep_cycles,
@@ -404,7 +362,7 @@ class Explorer:
             The files written (see :func:`rattle_lab.explorer.save_histories`).
         """
         if path is None:
-            path = self._textbox.text.strip() or DEFAULT_SAVE_PATH
+            path = self._widgets.textbox.text.strip() or DEFAULT_SAVE_PATH
         written = save_histories(self.histories, path)
         self.status = "saved " + ", ".join(str(p) for p in written)
         self._redraw()
@@ -478,140 +436,26 @@ class Explorer:
         self._info = fig.text(0.07, 0.975, "", fontsize=9, va="center")
         self._status_text = fig.text(0.07, 0.008, "", fontsize=8, color="tab:red")
 
-    def _build_widgets(self) -> None:
-        from matplotlib.widgets import Button, CheckButtons, RadioButtons, Slider, TextBox
-
-        fig = self.figure
-        p = self._params
-        accel_hi = float(accel_ms2_from_F(_RANGES["F"][1], self._participation,
-                                          self.omega_s_rad_s, self._gap_m))
-        specs: list[tuple[str, str, tuple[float, float], float]] = [
-            ("F", "F (nondim.)", _RANGES["F"], p.F),
-            ("accel_ms2", "A_e [m/s^2]", (0.0, accel_hi), self.accel_ms2),
-            ("omega", "omega (nondim.)", _RANGES["omega"], p.omega),
-            ("zeta", "zeta (nondim.)", _RANGES["zeta"], p.zeta),
-            ("e", "e (nondim.)", _RANGES["e"], p.e),
-            ("gap_mm", "gap h [mm]", _RANGES["gap_mm"], self._gap_m * 1e3),
-        ]
-        ys = {"F": 0.25, "accel_ms2": 0.25, "omega": 0.205, "zeta": 0.16, "e": 0.115,
-              "gap_mm": 0.07}
-        self._sliders: dict[str, Slider] = {}
-        for key, label, (lo, hi), value in specs:
-            lo, hi = min(lo, value), max(hi, value)  # widen, never clamp the start value
-            ax = fig.add_axes((0.13, ys[key], 0.2, 0.03))
-            slider = Slider(ax, label, lo, hi, valinit=value)
-            slider.on_changed(self._slider_callback(key))
-            self._sliders[key] = slider
-        self._sliders["F"].ax.set_visible(self._mode == "F")
-        self._sliders["accel_ms2"].ax.set_visible(self._mode == "accel")
-
-        self._checks = CheckButtons(fig.add_axes((0.40, 0.14, 0.1, 0.14)),
-                                    [_PART_LABELS[q] for q in PARTS],
-                                    [self._visible[q] for q in PARTS])
-        self._checks.on_clicked(self._on_check)
-        self._radios: dict[str, RadioButtons] = {
-            "amplitude": RadioButtons(fig.add_axes((0.40, 0.03, 0.1, 0.09)),
-                                      [_AMPLITUDE_LABELS[m] for m in AMPLITUDE_MODES],
-                                      active=AMPLITUDE_MODES.index(self._mode)),
-            "impact_view": RadioButtons(fig.add_axes((0.51, 0.19, 0.09, 0.09)),
-                                        [_IMPACT_VIEW_LABELS[v] for v in IMPACT_VIEWS]),
-            "sweep": RadioButtons(fig.add_axes((0.51, 0.06, 0.09, 0.11)),
-                                  [_SWEEP_LABELS[c] for c in SWEEP_CHOICES]),
-        }
-        self._radios["amplitude"].on_clicked(self._radio_callback("amplitude"))
-        self._radios["impact_view"].on_clicked(self._radio_callback("impact_view"))
-        self._radios["sweep"].on_clicked(self._radio_callback("sweep"))
-        self._buttons: dict[str, Button] = {}
-        for i, (key, label, action) in enumerate((
-                ("sweep", "sweep", lambda: self.run_sweep()),
-                ("advance", "advance", self.advance),
-                ("restart", "restart", self.restart),
-                ("save", "save data", lambda: self.save()))):
-            button = Button(fig.add_axes((0.615, 0.25 - 0.05 * i, 0.06, 0.04)), label)
-            button.on_clicked(self._guarded(action))
-            self._buttons[key] = button
-        self._textbox = TextBox(fig.add_axes((0.13, 0.02, 0.2, 0.03)), "save to ",
-                                initial=DEFAULT_SAVE_PATH)
-
     # widget-facing accessors (documented in the class docstring)
     @property
     def sliders(self) -> Mapping[str, Any]:
-        return dict(self._sliders)
+        return self._widgets.sliders
 
     @property
     def checks(self) -> Any:
-        return self._checks
+        return self._widgets.checks
 
     @property
     def radios(self) -> Mapping[str, Any]:
-        return dict(self._radios)
+        return self._widgets.radios
 
     @property
     def buttons(self) -> Mapping[str, Any]:
-        return dict(self._buttons)
+        return self._widgets.buttons
 
     @property
     def textbox(self) -> Any:
-        return self._textbox
-
-    def _guarded(self, action: Callable[[], object]) -> Callable[[Any], None]:
-        """Wrap a callback: a RattleLabError or OSError becomes the status line."""
-        def callback(_event: Any) -> None:
-            try:
-                action()
-            except (RattleLabError, OSError) as exc:
-                self.status = "error: " + " ".join(str(exc).split())
-                self._redraw()
-        return callback
-
-    def _slider_callback(self, key: str) -> Callable[[float], None]:
-        def on_changed(value: float) -> None:
-            if self._syncing:
-                return
-            if key == "gap_mm":
-                self._guarded(lambda: self.set_param("gap_m", value * 1e-3))(None)
-            else:
-                self._guarded(lambda: self.set_param(key, value))(None)  # type: ignore[arg-type]
-        return on_changed
-
-    def _radio_callback(self, which: str) -> Callable[[str | None], None]:
-        def on_clicked(label: str | None) -> None:
-            if self._syncing or label is None:
-                return
-            if which == "amplitude":
-                mode = next(m for m in AMPLITUDE_MODES if _AMPLITUDE_LABELS[m] == label)
-                self._guarded(lambda: self.set_amplitude_mode(mode))(None)
-            elif which == "impact_view":
-                view = next(v for v in IMPACT_VIEWS if _IMPACT_VIEW_LABELS[v] == label)
-                self._guarded(lambda: self.set_impact_view(view))(None)
-            else:
-                self._sweep_choice = next(c for c in SWEEP_CHOICES if _SWEEP_LABELS[c] == label)
-        return on_clicked
-
-    def _on_check(self, label: str | None) -> None:
-        part = next(q for q in PARTS if _PART_LABELS[q] == label)
-        self.toggle(part, self._checks.get_status()[PARTS.index(part)])
-
-    def _sync_radio(self, which: str, index: int) -> None:
-        radio = self._radios[which]
-        if radio.index_selected != index:
-            self._syncing = True
-            try:
-                radio.set_active(index)
-            finally:
-                self._syncing = False
-
-    def _sync_sliders(self) -> None:
-        values = {"F": self._params.F, "accel_ms2": self.accel_ms2, "omega": self._params.omega,
-                  "zeta": self._params.zeta, "e": self._params.e, "gap_mm": self._gap_m * 1e3}
-        self._syncing = True
-        try:
-            for key, value in values.items():
-                slider = self._sliders[key]
-                if slider.val != value:
-                    slider.set_val(value)
-        finally:
-            self._syncing = False
+        return self._widgets.textbox
 
     def _redraw(self) -> None:
         h = self.histories

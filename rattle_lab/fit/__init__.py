@@ -13,10 +13,10 @@ from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_dow
                            restitution_from_ratios, saddle_node_threshold_ms2)
 from ._results import RunResult, StoreFit
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
-from ._store import analyse_run, fit_store, json_ready, load_pipeline, summarise_fits
+from ._store import analyse_run, fit_runs, fit_store, json_ready, load_pipeline, summarise_fits
 
 __all__ = [
-    "DbLaw", "GrazingFit", "analyse_run", "fit_store", "json_ready", "load_pipeline",
+    "DbLaw", "GrazingFit", "analyse_run", "fit_runs", "fit_store", "json_ready", "load_pipeline",
     "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
     "restitution_from_ratios", "saddle_node_threshold_ms2",

@@ -55,6 +55,12 @@ class RunResult:
     acoustics : RunAcoustics or None
         LAeq, LAFmax, LCpeak, third-octave bands, loudness, sharpness and the
         microphone's calibration (:func:`rattle_lab.acoustics.run_acoustics`).
+    chain_flags : tuple of str
+        Named data-quality flags of the run's measurement chain
+        (:func:`rattle_lab.fit._chain.run_chain_flags`).
+    shocks : tuple of dict
+        Transient runs: the shock found on each channel, the cause first
+        (:func:`rattle_lab.fit._chain.transient_shocks`); empty otherwise.
     """
 
     input_key: str
@@ -75,6 +81,8 @@ class RunResult:
     spl_rms_a_db: float = float("nan")
     threshold: Threshold | None = None
     acoustics: Any = None  # [issue 17] RunAcoustics (levels, loudness) with a microphone
+    chain_flags: tuple[str, ...] = ()
+    shocks: tuple[dict[str, Any], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -127,7 +127,7 @@ def _analyse_transient(run: Any, detect: Mapping[str, Any], base: dict[str, Any]
                     fs_hz=_fs_of(run, ch))
     return RunResult(status="ok", channels_used=tuple(r["channel"] for r in rows), impacts=log,
                      pattern="single shock" if t.size else "no shock", pattern_n=int(t.size),
-                     **base)
+                     shocks=tuple(rows), **base)
 
 
 def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Mapping[str, Any],
@@ -138,7 +138,8 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
         by_q.setdefault(ch.quantity, ch)
     freq = float(run.excitation_freq_hz) if run.excitation_freq_hz else float("nan")
     vel, acc = by_q.get("plate_velocity"), by_q.get("plate_acceleration")
-    base = dict(input_key=input_key, run_id=run.run_id, protocol=run.protocol, freq_hz=freq)
+    base = dict(input_key=input_key, run_id=run.run_id, protocol=run.protocol, freq_hz=freq,
+                chain_flags=tuple(run_chain_flags(run)))
     if run.protocol == "transient":
         return _analyse_transient(run, detect, base)
     wanted = detect.get("channel") or getattr(run, "detect_channel", None)
@@ -322,10 +323,6 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     keys = list(dict.fromkeys(catalogue["input_key"]))
     runs: list[RunResult] = []
     check_linked_inputs(store, keys)  # the bytes read are those ingested (full re-hash)
-    inputs = input_hashes(store, keys)
-    participation = store_participation(store, fit.get("participation"), participation_source)
-    chain_flags: list[str] = []
-    transients: list[dict[str, Any]] = []
     with progress_bar(int(catalogue.shape[0]), desc="detect", unit="run", quiet=quiet) as bar:
         for key in keys:
             record = open_stored_record(store, key)
@@ -333,26 +330,56 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
                 for run in record.runs:
                     runs.append(analyse_run(key, run, detect=detect, fit=fit,
                                             mic_distance_m=record.rig.mic_distance_m))
-                    chain_flags += [f"{key}/{run.run_id}: {f}" for f in run_chain_flags(run)]
-                    if run.protocol == "transient" and runs[-1].status == "ok":
-                        transients.append({"input_key": key, "run_id": run.run_id,
-                                           "channels": transient_shocks(
-                                               run, on=float(detect.get("on", ImpactParams.on)),
-                                               channel=detect.get("channel"))})
                     bar.update()
             finally:
                 record.close()
-    curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
-    summary = summarise_fits(runs, curve, fit, participation=participation, flags=chain_flags)
-    if transients:
-        summary["transients"] = transients
-    provenance = {"function": "rattle_lab.fit.fit_store", "rattle_lab_version": __version__,
-                  "python": sys.version.split()[0], "parameters": {"detect": detect, "fit": fit},
-                  "inputs": inputs}
-    result = StoreFit(tuple(runs), curve, json_ready(summary), json_ready(provenance))
+    result = fit_runs(store, runs, detect=detect, fit=fit,
+                      participation_source=participation_source)
     if write:
         write_results(store, result)
     return result
+
+
+def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
+             detect: Mapping[str, Any], fit: Mapping[str, Any], curve: Any = None,
+             participation_source: str = "pipeline",
+             provenance: Mapping[str, Any] | None = None) -> StoreFit:
+    """The store-level fits of per-run detections: what ``fit`` and the pipeline both write.
+
+    The one place that turns :func:`analyse_run`'s results into a :class:`StoreFit`:
+    the threshold table (unless ``curve`` is given), the participation (from ``fit``
+    or the store's rig metadata, see :func:`store_participation`), the summary of
+    :func:`summarise_fits` and the provenance (function, parameters, versions and
+    the inputs' content hashes).
+
+    Parameters
+    ----------
+    store : path-like
+        The ingest store the runs came from.
+    runs : list of RunResult
+        Every run's detections, skipped runs included.
+    detect, fit : mapping
+        The detection and fit parameters used (``fit`` complete: see ``FIT_KEYS``).
+    curve : ThresholdCurve, optional
+        The threshold table, when already tabulated (the pipeline caches it).
+    participation_source : str
+        Where ``fit["participation"]`` came from, when given.
+    provenance : mapping, optional
+        Further provenance entries (the pipeline adds its name).
+
+    Returns
+    -------
+    StoreFit
+    """
+    if curve is None:
+        curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
+    participation = store_participation(store, fit.get("participation"), participation_source)
+    summary = summarise_fits(list(runs), curve, fit, participation=participation)
+    prov = {"function": "rattle_lab.fit.fit_store", **dict(provenance or {}),
+            "rattle_lab_version": __version__, "python": sys.version.split()[0],
+            "parameters": {"detect": dict(detect), "fit": dict(fit)},
+            "inputs": input_hashes(store, list(dict.fromkeys(r.input_key for r in runs)))}
+    return StoreFit(tuple(runs), curve, json_ready(summary), json_ready(prov))
 
 
 def _est(value: float, stderr: float, unit: str, **extra: Any) -> dict[str, Any]:
@@ -453,7 +480,8 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         The participation and its source (:func:`store_participation`); without it,
         ``fit["participation"]``, or 1.0 flagged ``participation_assumed`` when that is None.
     flags : list of str, optional
-        Further data-quality flags (``"input_key/run_id: flag"``, see :func:`run_chain_flags`).
+        Further data-quality flags, after those of each run's measurement chain
+        (``"input_key/run_id: flag"``, see :func:`run_chain_flags`).
 
     Returns
     -------
@@ -465,7 +493,8 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         95 % ci, vary, plus correlation; ``restitution_ratio``: value, stderr, unit, n;
         ``restitution_down`` and ``damping_ramp``: see :func:`restitution_down_summary`;
         ``spl_law_first|max|rms``: linear and dB laws) and
-        ``not_fitted`` (fit name -> reason); ``participation`` (value, source) and
+        ``not_fitted`` (fit name -> reason); ``transients`` (transient runs: the shock on
+        each channel, cause first); ``participation`` (value, source) and
         ``data_quality`` (named flags, e.g. ``participation_assumed``).  May hold NumPy scalars and NaN: pass it
         through :func:`json_ready` before writing JSON.
 
@@ -478,11 +507,12 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         participation = resolve_participation([], fit.get("participation"), "pipeline")
     fit = {**fit, "participation": participation.value}
     ok = [r for r in runs if r.status == "ok"]
+    chain = [f"{r.input_key}/{r.run_id}: {f}" for r in runs for f in r.chain_flags]
     summary: dict[str, Any] = {
         "participation": {"value": participation.value, "source": participation.source},
         # (a store of single shocks fits no modal law: the participation does not enter)
         "data_quality": (list(participation.flags) if any(r.protocol != "transient" for r in ok)
-                         else []) + list(flags or []),
+                         else []) + chain + list(flags or []),
         "n_runs": len(runs), "n_ok": len(ok),
         "skipped": [{"input_key": r.input_key, "run_id": r.run_id, "reason": r.reason}
                     for r in runs if r.status == "skipped"],
@@ -562,9 +592,13 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                                        "db": {**law_dict(db), "unit": "dB re 20 uPa at 1 m/s"}}
         except RattleLabError as exc:
             missing[f"spl_law_{name}"] = str(exc)
+    shocks = [{"input_key": r.input_key, "run_id": r.run_id, "channels": [dict(c) for c in r.shocks]}
+              for r in ok if r.protocol == "transient"]
+    if shocks:
+        summary["transients"] = shocks
     return summary
 
 
-__all__ = ["analyse_run", "fit_store", "json_ready", "load_pipeline", "paired_plate_channels",
+__all__ = ["analyse_run", "fit_runs", "fit_store", "json_ready", "load_pipeline", "paired_plate_channels",
            "relative_to_striker", "restitution_down_summary", "run_chain_flags",
            "store_participation", "summarise_fits", "transient_shocks"]

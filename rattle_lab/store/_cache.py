@@ -84,7 +84,12 @@ def get_dataclass(group: h5py.Group) -> Any:
     if not module.startswith("rattle_lab."):  # only our own result classes are rebuilt
         raise DataError(f"{group.name}: attribute '__class__': {module}:{qualname} is not a "
                         "rattle_lab class")
-    cls = getattr(importlib.import_module(module), qualname)
+    try:
+        cls = getattr(importlib.import_module(module), qualname)
+    except (ImportError, AttributeError):  # written by other rattle_lab code: a stale product
+        raise DataError(f"{group.name}: attribute '__class__': {module}:{qualname} does not "
+                        "exist in this rattle_lab (the product was cached by another "
+                        "version; run the stage again)") from None
     kwargs: dict[str, Any] = {}
     for f in dataclasses.fields(cls):
         if f.name in group:

@@ -17,17 +17,17 @@ The ``[detect]`` and ``[fit]`` tables are those of ``rattle-lab fit --pipeline``
 
 Stages and what they call (the same library functions as the CLI commands):
 
-==========  =================================================  =====================
-stage       calls                                              depends on
-==========  =================================================  =====================
-simulate    :func:`rattle_lab.rig.write_synthetic`             (scene inputs only)
-ingest      :func:`rattle_lab.store.ingest`                   simulate
-detect      :func:`rattle_lab.fit.analyse_run`, per run        ingest
-thresholds  :func:`rattle_lab.detect.thresholds.tabulate_thresholds`  detect
-fit         the fits of :func:`rattle_lab.fit.fit_store`,      thresholds, detect
-            :func:`rattle_lab.fit._results.write_results`
-report      :func:`rattle_lab.report.write_report`             fit, ingest
-==========  =================================================  =====================
+==========  ==========================================================  ==================
+stage       calls                                                       depends on
+==========  ==========================================================  ==================
+simulate    :func:`rattle_lab.rig.write_synthetic`                      scene inputs only
+ingest      :func:`rattle_lab.store.ingest`                             simulate
+detect      :func:`rattle_lab.fit.analyse_run`, per run                 ingest
+thresholds  :func:`rattle_lab.detect.thresholds.tabulate_thresholds`    detect
+fit         :func:`rattle_lab.fit.fit_runs` (as ``rattle-lab fit``),    thresholds, detect
+            :func:`rattle_lab.store.write_results`
+report      :func:`rattle_lab.report.write_report`                      fit, ingest
+==========  ==========================================================  ==================
 
 Each stage has a *key*: the SHA-256 of its parameters, the package version and
 the keys of the stages it depends on (the simulate key hashes the scene file's
@@ -58,7 +58,6 @@ import dataclasses
 import hashlib
 import json
 import os
-import sys
 import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -70,8 +69,13 @@ from rattle_lab._progress import progress
 from rattle_lab._resources import find_resource
 from rattle_lab._version import __version__
 from rattle_lab.exceptions import OutputError, ParameterError
-from rattle_lab.store import (CACHE_GROUP, check_linked_inputs, has_path, input_hashes, output_digest,
+from rattle_lab.store import (CACHE_GROUP, check_linked_inputs, has_path, output_digest,
                     read_cache_keys, read_cached, record_cache_keys, store_lock, write_cached)
+
+#: Layout of the cached products (their classes' places and fields); a change re-runs the
+#: stages whose products a store caches.  2: the classes moved with the data-flow layout and
+#: RunResult gained chain_flags and shocks.
+CACHE_FORMAT = 2
 
 Stage = Literal["simulate", "ingest", "detect", "thresholds", "fit", "report"]
 
@@ -384,23 +388,14 @@ def _detect_all(store: Path, detect: Mapping[str, Any], fit: Mapping[str, Any],
 
 
 def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipeline) -> None:
-    # The fits of rattle_lab.fit.fit_store on the cached detections (no refitting logic here).
-    from rattle_lab.fit import json_ready, summarise_fits
-    from rattle_lab.fit._store import store_participation
-    from rattle_lab.fit._results import StoreFit, write_results
+    # The same fits as `rattle-lab fit` (rattle_lab.fit.fit_runs), on the cached detections.
+    from rattle_lab.fit import fit_runs
+    from rattle_lab.store import write_results
 
-    fit = pipeline.params["fit"]
-    inputs = input_hashes(store)
-    provenance = {"function": "rattle_lab.fit.fit_store", "via": "rattle_lab.workflow.pipeline",
-                  "pipeline": pipeline.name, "rattle_lab_version": __version__,
-                  "python": sys.version.split()[0],
-                  "parameters": {"detect": pipeline.params["detect"], "fit": fit},
-                  "inputs": inputs}
-    # issue 15 hook: the participation from the pipeline, else from the records' rig metadata
-    summary = summarise_fits(list(runs), curve, fit, participation=store_participation(
-        store, fit.get("participation"), "pipeline"))
-    write_results(store, StoreFit(tuple(runs), curve, json_ready(summary),
-                                  json_ready(provenance)))
+    write_results(store, fit_runs(store, list(runs), detect=pipeline.params["detect"],
+                                  fit=pipeline.params["fit"], curve=curve,
+                                  provenance={"via": "rattle_lab.workflow.pipeline",
+                                              "pipeline": pipeline.name}))
 
 
 def _file_hash(path: Path) -> str:
@@ -509,7 +504,8 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
     keys["ingest"] = _digest({"stage": "ingest", "v": version, "params": p["ingest"],
                               "inputs": sorted(ingest_inputs)})
     detect_params = {**p["detect"], **{k: p["fit"][k] for k in _DETECT_FIT_KEYS}}
-    keys["detect"] = _digest({"stage": "detect", "v": version, "params": detect_params,
+    keys["detect"] = _digest({"stage": "detect", "v": version, "cache": CACHE_FORMAT,
+                              "params": detect_params,
                               "up": keys["ingest"]})
     keys["thresholds"] = _digest({"stage": "thresholds", "v": version, "up": keys["detect"]})
     keys["fit"] = _digest({"stage": "fit", "v": version, "params": p["fit"],
