@@ -234,44 +234,62 @@ def test_fig43_values_match_closed_form_orbits(fig43: tuple[Sweep, Sweep]) -> No
     assert math.isnan(q.linear_impact_velocity)
 
 
-def test_fig43_one_third_window_reached_from_chaos() -> None:
-    # The 1/3 orbit is stable between its period doubling (0.94965) and secondary
-    # grazing (0.95287).  A sweep coming out of chaos reaches it or not depending on
-    # the chaotic state it arrives with (the default sweep from 0.85 stays aperiodic
-    # in its 30 kept periods).  At 0.950-0.951 an aperiodic window is mostly a long
-    # chaotic transient (run on for a few thousand periods, 7 of these 8 seeds settle
-    # on the 1/3 orbit; a coexisting chaotic attractor is established at 0.952 only),
-    # and a 2/6 match there is the 1/3 orbit not yet settled (multiplier -0.994 at
-    # 0.950): the sweep runs such matches longer and says 1/3 or "unsettled",
-    # never 2/6 (test_unsettled_matches_get_no_period_label).  From 8 seeded chaotic starts
-    # at 0.935 most do land on it: there the measured exponent is the orbit's
-    # log|mu| / T.  Near the period doubling |mu| >= 0.96, so the side run starts
-    # before the motion has converged and averages a linearisation that differs
-    # from the orbit's by O(distance); 5e-4 per unit time (1% in |mu| per 1/3
-    # period) covers that and is 100 times smaller than the chaotic exponent
-    # (about 0.05).
-    # Which starts land on the orbit depends on the rounding of the chaotic path
-    # (5 to 7 of these 8 seeds across kernel revisions): at least half are required.
+def test_fig43_one_third_window_started_on_the_orbit() -> None:
+    # The 1/3 orbit is stable between its period doubling (0.94965) and secondary grazing
+    # (0.95287).  Started within 1 % of the closed-form orbit (its impact velocity, at its
+    # impact phase), every one of 8 sweeps through the window stays on it: every value is
+    # labelled 1/3 (run on until settled: near the period doubling the slowest multiplier
+    # is -0.97 to -0.99, so the kept 30 periods alone do not settle) and its exponent is the
+    # orbit's log|mu| / T.  Tolerance 5e-4 per unit time: the side run starts before the
+    # motion has converged and averages a linearisation that differs from the orbit's by
+    # O(distance), 1 % in |mu| per 1/3 period, 100 times below the chaotic exponent (~0.05).
+    p0 = BASE.replace(omega=0.9505)
+    orbit0 = one_over_n_orbits(p0, 3)[1]
+    values = sweep_values(0.9505, 0.952, STEP / 2)
+    for f in np.linspace(0.99, 1.01, 8):
+        start = SDFState(x=1.0, v=-p0.e * orbit0.v_im * f, theta=orbit0.phase)
+        sw = sweep("omega", values, base=BASE, state=start, lyapunov="all")
+        assert [p.regime.label for p in sw.points] == ["1/3"] * values.size
+        for p in sw.points:
+            orbit = one_over_n_orbits(p.params, 3)[1]
+            assert orbit.exists and orbit.stable
+            assert p.lyapunov is not None
+            expected = math.log(abs(orbit.multipliers[0])) / orbit.period
+            assert p.lyapunov.exponent == pytest.approx(expected, abs=5e-4)
+
+
+def test_fig43_one_third_window_from_chaos_gets_honest_labels() -> None:
+    # A sweep coming out of chaos at 0.935 reaches the 1/3 window or not depending on the
+    # chaotic state it arrives with, and on the rounding of the chaotic path, so no count of
+    # landings is asserted (the orbit is reached deterministically from its own basin in the
+    # test above).  What must hold for every start and every value: the label is the truth.
+    # In the window a value is the 1/3 orbit (exponent log|mu| / T, as above), "unsettled"
+    # (a transient that the settle budget did not resolve), or aperiodic with a positive
+    # exponent (chaos; a coexisting chaotic attractor is established at 0.952); never 2/6
+    # (test_unsettled_matches_get_no_period_label) and never "aperiodic" with a negative
+    # exponent (a transient called chaos).  Beyond the secondary grazing (plus two steps)
+    # only chaos remains.
     rng = np.random.default_rng(11)
     values = sweep_values(0.935, 0.96, STEP)
-    hits = 0
+    landed = 0
     for _ in range(8):
         start = SDFState(x=rng.uniform(-1, 1), v=rng.uniform(-1, 1))
         sw = sweep("omega", values, base=BASE, state=start, lyapunov="all")
-        on_orbit = [p for p in sw.points
-                    if 0.94965 < p.value < 0.95287 and p.lyapunov is not None
-                    and p.lyapunov.exponent < 0]
-        hits += bool(on_orbit)
-        for p in on_orbit:
-            orbit = one_over_n_orbits(p.params, 3)[1]
-            assert orbit.exists and orbit.stable
-            expected = math.log(abs(orbit.multipliers[0])) / orbit.period
+        for p in sw.points:
             assert p.lyapunov is not None
-            assert p.lyapunov.exponent == pytest.approx(expected, abs=5e-4)
-        # beyond the secondary grazing (plus two steps) only chaos remains
-        assert all(p.regime.kind == "aperiodic" and p.lyapunov is not None
-                   and p.lyapunov.exponent > 0 for p in sw.points if p.value > 0.95287 + TOL)
-    assert hits >= 4
+            assert p.regime.kind != "aperiodic" or p.lyapunov.exponent > 0, p
+            if not 0.94965 < p.value < 0.95287:
+                continue
+            assert p.regime.label in ("1/3", "unsettled", "aperiodic"), p.regime.label
+            if p.regime.label == "1/3":
+                landed += 1
+                orbit = one_over_n_orbits(p.params, 3)[1]
+                assert orbit.exists and orbit.stable
+                expected = math.log(abs(orbit.multipliers[0])) / orbit.period
+                assert p.lyapunov.exponent == pytest.approx(expected, abs=5e-4)
+        assert all(p.regime.kind == "aperiodic" and p.lyapunov.exponent > 0
+                   for p in sw.points if p.value > 0.95287 + TOL)
+    assert landed > 0   # the per-point checks of the orbit ran at all
 
 
 def test_unsettled_matches_get_no_period_label() -> None:

@@ -287,7 +287,8 @@ def periodic_label_settled(t: ArrayLike, v_in: ArrayLike, *, m: int, n: int, ome
 
 def classify_settled(params: SDFParams, t: np.ndarray, v_in: np.ndarray, *, t_start: float,
                      end_state: SDFState, n_max: int, rtol: float = PERIOD_RTOL,
-                     settle_cycles: float = SETTLE_CYCLES) -> tuple[Regime, float]:
+                     settle_cycles: float = SETTLE_CYCLES,
+                     converging: bool = False) -> tuple[Regime, float]:
     """Classify the impacts of ``[t_start, end_state.t]``, running longer until settled.
 
     An ``m/n`` match that is not settled (:func:`periodic_label_settled`) is
@@ -311,6 +312,9 @@ def classify_settled(params: SDFParams, t: np.ndarray, v_in: np.ndarray, *, t_st
         As for :func:`classify_impacts`.
     settle_cycles : float
         Most extra forcing periods to run (>= 0).
+    converging : bool
+        The motion is known to converge (a negative Lyapunov exponent): an aperiodic
+        window is then a transient, not chaos, and is run on like an unsettled match.
 
     Returns
     -------
@@ -322,7 +326,12 @@ def classify_settled(params: SDFParams, t: np.ndarray, v_in: np.ndarray, *, t_st
     kind, m, n = _classify(np.ascontiguousarray(t, dtype=float),
                            np.ascontiguousarray(v_in, dtype=float), float(t_start),
                            float(end_state.t), period, int(n_max), float(rtol))
-    if kind != 1 or periodic_label_settled(t, v_in, m=m, n=n, omega=params.omega, rtol=rtol):
+    def final(kind: int, m: int, n: int, t: np.ndarray, v_in: np.ndarray) -> bool:
+        if kind == 1:
+            return periodic_label_settled(t, v_in, m=m, n=n, omega=params.omega, rtol=rtol)
+        return not (converging and KIND_NAMES[kind] == "aperiodic")
+
+    if final(kind, m, n, t, v_in):
         return Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n)), 0.0
     window = (end_state.t - t_start) / period
     if abs(window - round(window)) < 1e-6 * max(1.0, window):
@@ -336,8 +345,7 @@ def classify_settled(params: SDFParams, t: np.ndarray, v_in: np.ndarray, *, t_st
         extra += window
         imp = res.impacts
         kind, m, n = _classify(imp.t, imp.v_in, t0, state.t, period, int(n_max), float(rtol))
-        if kind != 1 or periodic_label_settled(imp.t, imp.v_in, m=m, n=n, omega=params.omega,
-                                               rtol=rtol):
+        if final(kind, m, n, imp.t, imp.v_in):
             return Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n)), extra
     return Regime(kind="unsettled"), extra
 

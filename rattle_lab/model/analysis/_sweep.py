@@ -19,7 +19,10 @@ is the thesis's model of a slow sweep experiment (4.2; Appendix A.1,
   statement.  An ``m/n`` match must be settled (:func:`classify_settled`): a
   transient still converging to a shorter period (a 1/3 orbit near its period
   doubling matches 2/6 first) is run longer on a side run until it settles,
-  else it is called ``"unsettled"``; a wrong period is never reported;
+  else it is called ``"unsettled"``; a wrong period is never reported.  Likewise a
+  window without a period whose Lyapunov exponent is negative is a transient, not
+  chaos: it is run on the same way (``"aperiodic"`` is reported only with an exponent
+  >= 0, or where none was computed);
 * the linear estimate of the impact velocity (eq. 4.7-4.11,
   :func:`rattle_lab.model.linear.linear_impact_velocity`), NaN where linear theory
   predicts no impact.
@@ -442,7 +445,8 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
         shorter period, say a 1/3 orbit near its period doubling that matches
         2/6 first) is not reported: the motion is run longer, on a side run of
         at most this many forcing periods, until it settles, else the regime
-        is ``"unsettled"`` (:func:`classify_settled`).
+        is ``"unsettled"`` (:func:`classify_settled`).  The same holds for an
+        aperiodic window whose Lyapunov exponent is negative.
     quiet : bool
         No progress bar (one is drawn on a terminal otherwise).
 
@@ -509,6 +513,13 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
         if lyapunov == "all" or (lyapunov == "aperiodic" and regime.kind == "aperiodic"):
             lyap = lyapunov_exponent(p, cycles=lyapunov_cycles, warmup_cycles=lyapunov_warmup,
                                      state=state)
+            if regime.kind == "aperiodic" and lyap.exponent < 0:
+                # no period in the window, yet nearby motions converge: a transient on its
+                # way to an orbit, not chaos.  Run on until the period settles, or say so.
+                regime, more = classify_settled(p, imp[:, 0], imp[:, 2], t_start=t0,
+                                                end_state=state, n_max=n_max_i, rtol=float(rtol),
+                                                settle_cycles=settle_cycles, converging=True)
+                extra += more
         points.append(SweepPoint(
             value=float(value), params=p,
             impact_velocities=np.array(imp[:, 2]), impact_phases=np.array(imp[:, 1]),
