@@ -313,6 +313,21 @@ def real_records() -> dict[str, object]:
                 f"{row['role']}: onset {1e3 * row['onset_s']:.3f} ms, peak "
                 f"{1e3 * row['peak_s']:.3f} ms" + (f", {1e3 * row['delay_s']:+.3f} ms after the "
                                                    "cause" if "delay_s" in row else ""))
+        # a 5 Hz shaker sine with one shock added: one shock per accelerometer, none in the
+        # sine; the commanded pulse (first above 0.1 % of its peak, its peak) is the truth,
+        # compared in samples (the file's two Delta_X disagree by 3.4 %)
+        rec = read(REALDATA / "forced_shock" / "vibration_0.2.lvm",
+                   mapping=maps / "forced_shock_lvm.toml")
+        run = rec.runs[0]
+        cmd = run.channel("shock_command").read()
+        out["forced_shock_command"] = (f"pulse from sample {np.flatnonzero(cmd > 1e-3 * cmd.max())[0]}"
+                                       f", peak at sample {int(np.argmax(cmd))}")
+        for row in transient_shocks(run):
+            ch = run.channel(row["channel"])
+            k = (lambda t: (t - ch.start_time_s) * ch.sample_rate_hz)
+            out[f"forced_shock_fit_{row['channel']}"] = (
+                f"{row['role']}: " + (f"onset sample {k(row['onset_s']):.0f}, peak sample "
+                                      f"{k(row['peak_s']):.0f}" if row["found"] else "no shock"))
         rec = read(REALDATA / "clap" / "rir_clap.wav", mapping=maps / "clap_wav.toml")
         ch = rec.runs[0].channels[0]
         log = detect_impacts(ch.sample_rate_hz, accel_ms2=ch.read(), params=shock)

@@ -153,6 +153,44 @@ def test_forced_shock_lvm_without_x_column_reads():
     assert run.channel("board").sample_rate_hz == pytest.approx(1 / 0.000586)
 
 
+def test_forced_shock_one_shock_per_accelerometer_none_in_the_sine(tmp_path):
+    """A 5 Hz shaker sine with one shock pulse added (the commanded pulse is the truth).
+
+    With default settings: exactly one shock on each accelerometer (base, board), none in
+    the commanded sine.  Before the steady sine was taken off, the sine was the noise
+    floor and neither accelerometer's shock (about twice the sine) was found.  Timing
+    reference, independent of the detector: the commanded pulse, from its first sample
+    above 0.1 % of its peak (sample 6294) to its peak (6600).  The file's two Delta_X
+    disagree by 3.4 % (0.1 s at 4 s), so the comparison is in samples of one acquisition.
+    """
+    lvm = _real("forced_shock/vibration_0.2.lvm")
+    store = tmp_path / "forced.h5"
+    # the quality scan flags the commanded pulse's exact zeros as clipping (and the two
+    # clocks): ingested with the flags kept
+    proc = run_cli("ingest", str(lvm), "--mapping", str(MAPPINGS / "forced_shock_lvm.toml"),
+                   "-o", str(store), "--allow-flagged")
+    assert proc.returncode == 0, proc.stderr
+    out = _fit(store)
+    assert [r["n_impacts"] for r in out["runs"]] == [1]
+    assert out["runs"][0]["pattern"] == "single shock"
+    rows = {c["channel"]: c for c in out["transients"][0]["channels"]}
+    assert rows["base"]["role"] == "cause" and rows["board"]["role"] == "response"
+    assert rows["base"]["found"] and rows["board"]["found"]
+    assert not rows["sine_command"]["found"]                     # nothing in the sine
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run = read(lvm, mapping=MAPPINGS / "forced_shock_lvm.toml").runs[0]
+    cmd = run.channel("shock_command").read()
+    lo = int(np.flatnonzero(cmd > 1e-3 * cmd.max())[0])
+    hi = int(np.argmax(cmd))
+    for name in ("base", "board"):
+        ch = run.channel(name)
+        k_onset = (rows[name]["onset_s"] - ch.start_time_s) * ch.sample_rate_hz
+        assert lo <= k_onset <= hi, (name, k_onset)
+    # one shock, not a train: the board answers the base within 20 samples
+    assert 0.0 <= rows["board"]["delay_s"] < 20 / run.channel("board").sample_rate_hz
+
+
 def test_unknown_lvm_header_fields_warn(tmp_path):
     text = ("LabVIEW Measurement\t\nWriter_Version\t2\nSeparator\tTab\nX_Columns\tOne\n"
             "Shaker_Serial\tXY-1\n***End_of_Header***\t\n\nChannels\t1\t\nSamples\t2\t\n"

@@ -104,9 +104,15 @@ def fractional_delay(x: np.ndarray, sample_rate_hz: float, delay_s: float) -> np
 
 
 def base_velocity(motion: RunMotion, sample_rate_hz: float) -> np.ndarray:
-    """The shaker base's velocity, m/s: the integral of its ``-A cos(theta)`` acceleration."""
+    """The shaker base's velocity, m/s: the integral of its ``-A cos(theta)`` acceleration.
+
+    ``omega = 2 pi f`` of each sample's piece (not the slope of ``theta``: the simulator wraps
+    ``theta`` by 2 pi at piece boundaries, where a numerical slope made a spike of ~A/omega
+    in the velocity once per piece).
+    """
     assert motion.theta is not None and motion.level_m_s2 is not None
-    omega = np.gradient(motion.theta) * sample_rate_hz
+    assert motion.freq_hz is not None
+    omega = TWO_PI * motion.freq_hz
     return -motion.level_m_s2 / omega * np.sin(motion.theta)
 
 
