@@ -100,6 +100,22 @@ def test_clipping_at_the_channels_own_extreme_without_a_range():
     assert "own extreme" in detail
 
 
+def test_a_rest_level_at_one_extreme_is_not_clipping():
+    # A gated pulse or a shaker command (the forced-shock record's commanded pulse: 0 from
+    # sample 0 to 6350 and after 6850) rests at its minimum most of the time: not clipping.
+    x = np.zeros(2000)
+    x[900:1100] = np.sin(np.linspace(0, np.pi, 200))
+    assert _check(x, chunk=64, n_dropout=10_000) == []
+    # the same pulse clipped at its top is still caught (a flat run at the other extreme)
+    y = np.minimum(x, 0.8)
+    [(flag, index, _, detail)] = _check(y, chunk=64, n_dropout=10_000)
+    assert flag == "clipping" and y[index] == 0.8 and "value 0.8" in detail
+    # and a signal clipped at one rail for a minority of its samples is caught too
+    z = np.clip(np.sin(np.linspace(0, 6 * np.pi, 600)), None, 0.9)
+    [(flag, *_)] = _check(z, chunk=64, n_dropout=10_000)
+    assert flag == "clipping"
+
+
 def test_integer_data_clip_at_the_dtype_limits():
     x = (np.sin(np.linspace(0, 4 * np.pi, 400)) * 40000).clip(-32768, 32767).astype(np.int16)
     [(flag, index, _, detail)] = _check(x, n_dropout=1000)

@@ -10,7 +10,9 @@ flag                       fatal   what
 ``clipping``               yes     a flat run of >= ``n_clip_min`` samples at the range
                                    limit: the declared ``range_min``/``range_max``, the
                                    limits of an integer dtype, or else the channel's own
-                                   minimum or maximum
+                                   minimum or maximum (not its rest level: flat runs at
+                                   an extreme that hold most of the samples, as a gated
+                                   pulse or a command signal sits at 0)
 ``dropout``                yes     a flat run of >= ``max(n_dropout_min, dropout_min_s*fs)``
                                    identical samples not at a range limit (stuck or
                                    zero-filled acquisition), a constant channel, or a
@@ -316,9 +318,16 @@ class ChannelChecker:
                         f"{self.n_inf} infinite sample(s), first at sample {self.first_inf}"))
         constant = self.vmin == self.vmax
         if self.range_min is None:
-            for acc, side in ((self._hi, "maximum"), (self._lo, "minimum")):
-                at_extreme = acc.value == (self.vmax if side == "maximum" else self.vmin)
-                if acc.n_runs and at_extreme and not constant:
+            sides = ((self._hi, "maximum"), (self._lo, "minimum"))
+            flat = {side: bool(acc.n_runs) and acc.value == (self.vmax if side == "maximum"
+                                                              else self.vmin)
+                    for acc, side in sides}
+            for acc, side in sides:
+                # Without a declared range, a signal that rests at one of its extremes (a
+                # gated pulse, a command that is 0 between shots) is not clipped there: a
+                # clipped signal leaves its rail again and spends most of its time inside.
+                rest_level = flat[side] and 2 * acc.n_samples > n
+                if flat[side] and not rest_level and not constant:
                     self.clip.add(np.array([acc.first_start]), np.array([acc.first_len]),
                                   np.array([acc.value]))
                     self.clip.n_runs += acc.n_runs - 1
