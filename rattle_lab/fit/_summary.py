@@ -196,7 +196,7 @@ class TransientRun(_Normalised):
 def _items(r: _In, key: str, cls: Any, default: Any = None) -> tuple[Any, ...]:
     xs = r[key] if default is None else r.get(key, default)
     if not isinstance(xs, (list, tuple)):
-        raise SummaryFormatError(f"summary: {r.path}.{key}: expected a list, got {xs!r}")
+        raise SummaryFormatError(f"summary: {key}: expected a list, got {xs!r}")
     return tuple(cls.from_dict(x, f"{key}[{i}]") for i, x in enumerate(xs))
 
 
@@ -287,7 +287,7 @@ class FitSummary(_Normalised):
         ...
         rattle_lab.exceptions.SummaryVersionError: summary: schema_version 99 is not supported ...
         """
-        r = _In(d, "summary")
+        r = _In(d, "top level")
         version = r.get("schema_version")
         if version is None:
             raise SummaryVersionError(
