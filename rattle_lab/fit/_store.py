@@ -40,7 +40,7 @@ from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
 from ._grazing import GrazingFit, fit_grazing
 from ._damping import fit_zeta_ramp
 from ._restitution import METHODS, fit_restitution_down, restitution_from_ratios
-from ._spl_law import fit_db_law, fit_linear_law
+from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
 from ._estimates import (DbLawSummary, DownRestitution, Fits, GrazingParameter, GrazingSummary,
                          LinearLawSummary, RampDamping, RatioRestitution, SplLawSummary)
 from ._summary import (FitSummary, ParticipationInfo, RunRow, SkippedRun, ThresholdTable,
@@ -407,7 +407,8 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
             z = zf.zeta
             ramp = RampDamping(z.value, z.stderr, "1", z.ci_low, z.ci_high, notes=zf.notes,
                                method="ramp replay of the upward thresholds",
-                               n=len(zf.run_ids), residuals_ms2=zf.residuals_ms2)
+                               n=len(zf.run_ids),
+                               residuals_ms2=tuple(zf.residuals_ms2.tolist()))
             zeta, zeta_se = z.value, z.stderr
         except RattleLabError as exc:
             missing["damping_ramp"] = str(exc)
@@ -421,7 +422,7 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
                                notes=tuple(rf.notes) + ((zeta_note,) if zeta_note else ()),
                                method=rf.method, n=len(rf.run_ids), run_ids=rf.run_ids,
                                zeta_used=rf.zeta, stderr_from_zeta=rf.stderr_from_zeta,
-                               residuals_ms2=rf.residuals_ms2)
+                               residuals_ms2=tuple(rf.residuals_ms2.tolist()))
     except RattleLabError as exc:
         missing["restitution_down"] = str(exc)
     return down, ramp, missing
@@ -444,17 +445,18 @@ def _grazing_summary(grazing: GrazingFit, ramp: RampDamping | None) -> GrazingSu
             "the ramp replay (damping_ramp), which corrects it; this interval does not "
             "include the lag"))
     return GrazingSummary(**params, unidentifiable=grazing.unidentifiable,
-                          outliers_hz=grazing.freq_hz[grazing.outlier],
-                          residuals_ms2=grazing.residuals_ms2,
-                          correlation_names=grazing.varied, correlation=grazing.correlation,
+                          outliers_hz=tuple(grazing.freq_hz[grazing.outlier].tolist()),
+                          residuals_ms2=tuple(grazing.residuals_ms2.tolist()),
+                          correlation_names=grazing.varied,
+                          correlation=tuple(map(tuple, grazing.correlation.tolist())),
                           redchi=grazing.redchi)
 
 
-def _spl_law_summary(lin: Any, db: Any) -> SplLawSummary:
+def _spl_law_summary(lin: LinearLaw, db: DbLaw) -> SplLawSummary:
     return SplLawSummary(
-        LinearLawSummary(lin.slope, *lin.slope_ci, lin.intercept, *lin.intercept_ci, lin.r2,
-                         lin.n),
-        DbLawSummary(db.c_db, *db.c_ci, db.k_db_per_decade, db.n))
+        LinearLawSummary(lin.slope, lin.slope_ci[0], lin.slope_ci[1], lin.intercept,
+                         lin.intercept_ci[0], lin.intercept_ci[1], lin.r2, lin.n),
+        DbLawSummary(db.c_db, db.c_ci[0], db.c_ci[1], db.k_db_per_decade, db.n))
 
 
 def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
