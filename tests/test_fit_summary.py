@@ -250,3 +250,22 @@ def test_a_summary_written_before_the_versioning_is_read(fitted, tmp_path):
     assert back.fits == result.summary.fits and back.runs == result.summary.runs
     with pytest.raises(SummaryVersionError, match="no schema_version"):
         FitSummary.from_dict(stored)
+
+
+def test_the_report_reads_old_summaries_and_names_an_unsupported_one(fitted, tmp_path):
+    from rattle_lab.report import gather
+
+    store, result, _ = fitted
+    copy = tmp_path / "copy.h5"
+    for summary, readable in (({k: v for k, v in result.summary.to_dict().items()
+                                if k != "schema_version"}, True),
+                              ({**result.summary.to_dict(), "schema_version": 99}, False)):
+        copy.write_bytes(store.read_bytes())
+        with h5py.File(copy, "r+") as fh:
+            fh["results"].attrs["summary"] = json.dumps(summary)
+        data = gather(copy)
+        if readable:   # an older release's layout: the same typed summary
+            assert data.summary == result.summary and data.results is not None
+        else:          # a newer one: no results sections, and the reason
+            assert data.summary is None and data.results is None
+            assert "schema_version 99 is not supported" in data.missing["results"]
