@@ -166,6 +166,10 @@ def test_versions_and_malformed_summaries_raise_with_the_field_named():
     with pytest.raises(SummaryFormatError, match="RatioRestitution.n: expected an integer"):
         FitSummary.from_dict(bad)
     bad = json.loads(json.dumps(d))
+    bad["fits"]["restitution_ratio"]["ci"] = [0.5]
+    with pytest.raises(SummaryFormatError, match=r"fits.restitution_ratio.ci: expected \[low, high\]"):
+        FitSummary.from_dict(bad)
+    bad = json.loads(json.dumps(d))
     del bad["runs"][0]["protocol"]
     with pytest.raises(SummaryFormatError, match=r"runs\[0\]: missing 'protocol'"):
         FitSummary.from_dict(bad)

@@ -100,7 +100,12 @@ def _mapping(v: Any) -> dict[str, Any]:
 
 
 class _Normalised:
-    """Mixin: coerce every field to its canonical JSON-compatible form when built."""
+    """Mixin: coerce every field to its canonical JSON-compatible form when built.
+
+    The coercion is chosen by the field's annotation (a string, under ``from __future__
+    import annotations``) through :data:`_COERCE`; a field of another type (a nested result
+    class) is left as given.
+    """
 
     def __post_init__(self) -> None:
         for f in fields(self):  # type: ignore[arg-type]
@@ -191,7 +196,7 @@ class Estimate(_Normalised):
 
     @staticmethod
     def _read(r: _In, *, ci: bool = True) -> dict[str, Any]:
-        lo, hi = r.pair("ci") if ci else (r.get("ci") or [None, None])
+        lo, hi = r.pair("ci") if ci or "ci" in r else (None, None)
         return dict(value=r["value"], stderr=r["stderr"], unit=r["unit"], ci_low=lo, ci_high=hi,
                     notes=r.get("notes", ()))
 

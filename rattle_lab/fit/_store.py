@@ -237,7 +237,9 @@ def json_ready(obj: Any) -> Any:
     Dicts and lists/tuples are walked recursively (tuples become lists); NumPy
     scalars become Python ``int``, ``float`` or ``bool``; non-finite floats
     (NaN, +-Inf) become ``None``.  Everything else is returned unchanged.
-    This is how :func:`fit_store` cleans the summary and provenance it writes.
+    This is how :func:`fit_store` cleans the provenance it writes.  A
+    :class:`~rattle_lab.fit.FitSummary` is returned unchanged: it holds JSON values
+    by construction (its ``to_dict()`` is the JSON form).
 
     Parameters
     ----------
