@@ -324,7 +324,7 @@ def real_records() -> dict[str, object]:
                                        f", peak at sample {int(np.argmax(cmd))}")
         for row in transient_shocks(run):
             ch = run.channel(row["channel"])
-            k = (lambda t: (t - ch.start_time_s) * ch.sample_rate_hz)
+            k = (lambda t, ch=ch: (t - ch.start_time_s) * ch.sample_rate_hz)
             out[f"forced_shock_fit_{row['channel']}"] = (
                 f"{row['role']}: " + (f"onset sample {k(row['onset_s']):.0f}, peak sample "
                                       f"{k(row['peak_s']):.0f}" if row["found"] else "no shock"))

@@ -56,6 +56,14 @@ class NumericalWarning(RattleLabWarning):
     """A numerical result holds with reduced accuracy; the message says why."""
 
 
+class SummaryFormatError(DataError):
+    """A fit summary (``rattle-lab fit``'s ``/results`` or ``--json``) is malformed."""
+
+
+class SummaryVersionError(SummaryFormatError):
+    """A fit summary has no ``schema_version``, or one this release does not read."""
+
+
 __all__ = [
     "RattleLabError",
     "ParameterError",
@@ -65,7 +73,10 @@ __all__ = [
     "SchemaError",
     "FileFormatError",
     "OutputError",
+    "SummaryFormatError",
+    "SummaryVersionError",
     "RattleLabWarning",
     "DataQualityWarning",
     "NumericalWarning",
 ]
+

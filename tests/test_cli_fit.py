@@ -95,7 +95,7 @@ def test_cli_fit_table_and_results_in_store(campaign):
 def test_fit_store_library_call_matches(campaign):
     store, _, _ = campaign
     result = fit_store(store, fit={"participation": 1.2}, write=False)
-    assert result.summary["n_runs"] == 11 and result.summary["n_ok"] == 10
+    assert result.summary.n_runs == 11 and result.summary.n_ok == 10
 
 
 def test_cli_bad_store_exit_2(tmp_path):
@@ -168,17 +168,17 @@ def test_fit_store_ramp_model_on_the_default_scene(rig_store):
     than a cycle's level change between e = 0.3 and 0.6), the 100 Hz one pins it; the
     demo's run gives 0.589 +- 0.024, and 3 standard errors (or 0.06) is the tolerance."""
     fit = fit_store(rig_store, fit={"participation": 1.2442}, write=True)
-    fits = fit.summary["fits"]
-    assert fits["grazing"]["zeta"]["value"] == pytest.approx(0.0085, rel=0.10)
-    damping = fits["damping_ramp"]
-    assert damping["value"] == pytest.approx(0.0085, rel=0.01) and damping["n"] == 5
-    assert abs(damping["value"] / 0.0085 - 1) < abs(fits["grazing"]["zeta"]["value"] / 0.0085 - 1)
-    down = fits["restitution_down"]
-    assert down["method"] == "ramp" and down["run_ids"] == ["down_097", "down_098", "down_100"]
-    assert down["zeta_used"] == damping["value"] and down["stderr_from_zeta"] >= 0
-    assert down["ci"][0] < 0.6 < down["ci"][1] and 0 < down["stderr"] < 0.05
-    assert abs(down["value"] - 0.6) < min(3 * down["stderr"], 0.06)
-    assert "restitution_down" not in fit.summary["not_fitted"]
+    fits = fit.summary.fits
+    assert fits.grazing.zeta.value == pytest.approx(0.0085, rel=0.10)
+    damping = fits.damping_ramp
+    assert damping.value == pytest.approx(0.0085, rel=0.01) and damping.n == 5
+    assert abs(damping.value / 0.0085 - 1) < abs(fits.grazing.zeta.value / 0.0085 - 1)
+    down = fits.restitution_down
+    assert down.method == "ramp" and down.run_ids == ("down_097", "down_098", "down_100")
+    assert down.zeta_used == damping.value and down.stderr_from_zeta >= 0
+    assert down.ci_low < 0.6 < down.ci_high and 0 < down.stderr < 0.05
+    assert abs(down.value - 0.6) < min(3 * down.stderr, 0.06)
+    assert "restitution_down" not in fit.summary.not_fitted
     res = read_results(rig_store)
     assert res.summary["fits"]["restitution_down"]["method"] == "ramp"
     run = next(v for k, v in res.runs.items() if k[1] == "down_098")

@@ -329,10 +329,10 @@ def test_pipeline_fit_stage_equals_fit_store_with_chain_flags_and_shocks(tmp_pat
     shutil.copyfile(store, via_pipeline)
 
     direct = fit_store(store, detect={}, fit={})
-    assert any("measurand" in f for f in direct.summary["data_quality"])
-    (shock,) = direct.summary["transients"]
-    assert [c["channel"] for c in shock["channels"]] == ["force", "response"]
-    assert shock["channels"][0]["onset_s"] == pytest.approx(1e-3, abs=2 / fs)
+    assert any("measurand" in f for f in direct.summary.data_quality)
+    (shock,) = direct.summary.transients
+    assert [c["channel"] for c in shock.channels] == ["force", "response"]
+    assert shock.channels[0]["onset_s"] == pytest.approx(1e-3, abs=2 / fs)
 
     pipe = _pipe(["results"])
     cat = read_catalogue(via_pipeline, level="runs")

@@ -89,7 +89,11 @@ PACKAGES: dict[str, list[str]] = {
         "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
         "restitution_from_ratios", "saddle_node_threshold_ms2",
         "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
-        "RunResult", "StoreFit"
+        "RunResult", "StoreFit",
+        "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
+        "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
+        "LinearLawSummary", "DbLawSummary", "RunRow", "SkippedRun", "ThresholdTable",
+        "TransientRun", "ParticipationInfo"
     ],
     "rattle_lab.model.modal": [
         "CONTACT_NAMES", "THESIS_HERTZ_N_M15", "THESIS_PLATE", "THESIS_STRIKER_STIFFNESS_N_M",

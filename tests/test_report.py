@@ -5,6 +5,7 @@ Checked by reading the PDF back with pypdf (page count, text, drawings), not pix
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import shutil
 from pathlib import Path
@@ -16,7 +17,8 @@ import pypdf
 import pytest
 
 from rattle_lab.exceptions import OutputError, ParameterError, RattleLabError
-from rattle_lab.fit import fit_store
+from rattle_lab.fit import (DownRestitution, FitSummary, Fits, GrazingParameter, GrazingSummary,
+                            RatioRestitution, fit_store)
 from rattle_lab.store import ingest
 from rattle_lab.records._errors import StoreError
 from rattle_lab.report import ReportResult, build_pages, gather, write_report
@@ -89,12 +91,13 @@ def test_summary_values_come_from_results(stores: dict[str, Path]) -> None:
 
 
 def test_parameter_table_flags_unidentified_and_missing_fits() -> None:
-    results = SimpleNamespace(summary={"fits": {
-        "restitution_ratio": {"value": 0.6, "stderr": 0.01, "n": 11},
-        "restitution_down": {"value": 0.999, "stderr": 1.7, "n": 2}},
-        "not_fitted": {"grazing": "needs >= 4 upward thresholds, had 2",
-                       "spl_law_first": "no microphone"}})
-    data = SimpleNamespace(results=results, missing={})
+    summary = FitSummary(n_runs=2, n_ok=2, fits=Fits(
+        restitution_ratio=RatioRestitution(0.6, 0.01, "1", n=11),
+        restitution_down=DownRestitution(0.999, 1.7, "1", n=2)),
+        not_fitted={"grazing": "needs >= 4 upward thresholds, had 2",
+                    "spl_law_first": "no microphone"})
+    data = SimpleNamespace(results=SimpleNamespace(summary=summary.to_dict()), summary=summary,
+                           missing={})
     text = "\n".join(parameter_lines(data))  # type: ignore[arg-type]
     assert "not fitted: needs >= 4 upward thresholds, had 2" in text
     assert "not fitted: no microphone" in text
@@ -208,22 +211,27 @@ def test_partial_results_drop_only_their_sections(stores: dict[str, Path], tmp_p
 def test_grazing_band_against_closed_form() -> None:
     # one varied parameter (gap): the threshold is linear in gap, so the delta-method band is
     # exactly 1.96 * stderr * A / gap (tolerance: central differences, relative 1e-6 step).
-    g = {"gap_m": {"value": 1e-3, "stderr": 1e-4}, "f_s_hz": {"value": 96.0, "stderr": None},
-         "zeta": {"value": 0.01, "stderr": None}, "participation": {"value": 1.0},
-         "correlation": {"names": ["gap_m"], "matrix": [[1.0]]}}
+    g = GrazingSummary(gap_m=GrazingParameter(1e-3, 1e-4, "m"),
+                       f_s_hz=GrazingParameter(96.0, None, "Hz"),
+                       zeta=GrazingParameter(0.01, None, "1"),
+                       participation=GrazingParameter(1.0, None, "1", vary=False),
+                       correlation_names=("gap_m",), correlation=((1.0,),))
     f = np.array([90.0, 96.0, 100.0])
     y, half = grazing_band_ms2(f, g)
     np.testing.assert_allclose(half, 1.96 * 1e-4 * y / 1e-3, rtol=1e-6)
 
 
 def test_band_uses_student_t_with_the_fit_degrees_of_freedom() -> None:
-    g = {"residuals_ms2": [0.1, -0.2, 0.0, 0.3, 0.1], "outliers_hz": [97.0],
-         "correlation": {"names": ["gap_m", "f_s_hz"], "matrix": [[1, 0], [0, 1]]}}
+    p = GrazingParameter(1.0, 0.1, "1")
+    g = GrazingSummary(gap_m=p, f_s_hz=p, zeta=p, participation=p,
+                       residuals_ms2=(0.1, -0.2, 0.0, 0.3, 0.1), outliers_hz=(97.0,),
+                       correlation_names=("gap_m", "f_s_hz"), correlation=((1, 0), (0, 1)))
     q, dof = band_quantile(g)
     assert dof == 2 and np.isclose(q, 4.302652729749464)  # t(0.975, 2), scipy reference
-    g["correlation"]["names"] += ["zeta"]
+    g = dataclasses.replace(g, correlation_names=g.correlation_names + ("zeta",))
     assert band_quantile(g)[1] == 1
-    g["correlation"]["names"] += ["participation"]  # 4 points (5 less an outlier), 4 parameters
+    # 4 points (5 less an outlier), 4 parameters
+    g = dataclasses.replace(g, correlation_names=g.correlation_names + ("participation",))
     assert band_quantile(g)[1] == 0 and np.isnan(band_quantile(g)[0])
 
 

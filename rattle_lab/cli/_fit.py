@@ -11,7 +11,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from rattle_lab.fit import FitSummary
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -54,22 +57,22 @@ def _run(args: argparse.Namespace) -> int:
     result = fit_store(args.store, detect=params["detect"], fit=params["fit"], quiet=args.quiet,
                        participation_source=source)
     if args.json:
-        print(json.dumps(result.summary, indent=2, allow_nan=False))
+        print(json.dumps(result.summary.to_dict(), indent=2, allow_nan=False))
     else:
         print(as_table(result.summary))
     return _all_skipped_status(result.summary)
 
 
-def _all_skipped_status(summary: dict[str, Any]) -> int:
+def _all_skipped_status(summary: FitSummary) -> int:
     """2, with the reasons on stderr, when runs exist and every one was skipped; else 0."""
     import sys
 
-    skipped = summary.get("skipped", [])
-    if summary.get("n_ok", 0) or not skipped:
+    skipped = summary.skipped
+    if summary.n_ok or not skipped:
         return 0
     reasons: dict[str, list[str]] = {}
     for s in skipped:
-        reasons.setdefault(str(s["reason"]), []).append(f"{s['input_key']}/{s['run_id']}")
+        reasons.setdefault(s.reason, []).append(f"{s.input_key}/{s.run_id}")
     text = "; ".join(f"{why} ({len(runs)} run{'s' if len(runs) > 1 else ''}: "
                      f"{', '.join(runs[:3])}{', ...' if len(runs) > 3 else ''})"
                      for why, runs in reasons.items())
@@ -84,71 +87,70 @@ def _num(x: Any, fmt: str = ".6g") -> str:
     return format(x, fmt) if isinstance(x, (int, float)) else str(x)
 
 
-def as_table(summary: dict[str, Any]) -> str:
+def as_table(summary: FitSummary) -> str:
     """Human summary: fitted values with units and uncertainties, then runs and skips."""
     lines = ["quantity                          value          stderr         unit",
              "--------------------------------  -------------  -------------  ----------------"]
-    fits = summary["fits"]
+    fits = summary.fits
     rows: list[tuple[str, Any, Any, str]] = []
-    for name, p in fits.get("grazing", {}).items():
-        if isinstance(p, dict) and "value" in p:
-            rows.append((f"grazing.{name}" + ("" if p["vary"] else " (fixed)"), p["value"],
-                         p["stderr"], p["unit"]))
-    if "damping_ramp" in fits:
-        rows.append(("damping_ramp.zeta (ramp replay)", fits["damping_ramp"]["value"],
-                     fits["damping_ramp"]["stderr"], "1"))
-    if "restitution_ratio" in fits:
-        rows.append(("restitution_ratio.e", fits["restitution_ratio"]["value"],
-                     fits["restitution_ratio"]["stderr"], "1"))
-    if "restitution_down" in fits:
-        down = fits["restitution_down"]
-        rows.append((f"restitution_down.e ({down.get('method', '?')})", down["value"],
-                     down["stderr"], "1"))
+    if fits.grazing is not None:
+        for name, p in fits.grazing.parameters().items():
+            rows.append((f"grazing.{name}" + ("" if p.vary else " (fixed)"), p.value, p.stderr,
+                         p.unit))
+    if fits.damping_ramp is not None:
+        rows.append(("damping_ramp.zeta (ramp replay)", fits.damping_ramp.value,
+                     fits.damping_ramp.stderr, "1"))
+    if fits.restitution_ratio is not None:
+        rows.append(("restitution_ratio.e", fits.restitution_ratio.value,
+                     fits.restitution_ratio.stderr, "1"))
+    if fits.restitution_down is not None:
+        down = fits.restitution_down
+        rows.append((f"restitution_down.e ({down.method or '?'})", down.value, down.stderr, "1"))
     for name in ("first", "max", "rms"):
-        law = fits.get(f"spl_law_{name}")
-        if law:
-            lin = law["linear"]
-            half = None if lin["slope_ci"][0] is None else (lin["slope_ci"][1] - lin["slope_ci"][0]) / 2
-            rows.append((f"spl_law_{name}.slope (95% half)", lin["slope"], half, "Pa/(m/s)"))
-            rows.append((f"spl_law_{name}.r2", lin["r2"], None, "1"))
-            rows.append((f"spl_law_{name}.db_offset", law["db"]["c_db"], None, "dB re 20 uPa @1 m/s"))
+        law = fits.spl_law(name)
+        if law is not None:
+            lin = law.linear
+            half = None if lin.slope_ci_low is None or lin.slope_ci_high is None \
+                else (lin.slope_ci_high - lin.slope_ci_low) / 2
+            rows.append((f"spl_law_{name}.slope (95% half)", lin.slope, half, "Pa/(m/s)"))
+            rows.append((f"spl_law_{name}.r2", lin.r2, None, "1"))
+            rows.append((f"spl_law_{name}.db_offset", law.db.c_db, None, "dB re 20 uPa @1 m/s"))
     for label, value, err, unit in rows:
         lines.append(f"{label:<32}  {_num(value):<13}  {_num(err):<13}  {unit}")
-    part = summary.get("participation")
-    if part and not all(r["protocol"] == "transient" for r in summary["runs"]):
-        lines.append(f"participation Q1/Q2 = {_num(part['value'])} ({part['source']})")
-    for flag in summary.get("data_quality", []):
+    part = summary.participation
+    if part is not None and not all(r.protocol == "transient" for r in summary.runs):
+        lines.append(f"participation Q1/Q2 = {_num(part.value)} ({part.source})")
+    for flag in summary.data_quality:
         lines.append(f"data-quality flag: {flag}")
-    for note in fits.get("grazing", {}).get("unidentifiable", []):
-        lines.append(f"note: {note}")
-    zeta_note = fits.get("grazing", {}).get("zeta", {}).get("bias_note")
-    if zeta_note:
-        lines.append(f"note: grazing.zeta: {zeta_note}")
-    for key in ("damping_ramp", "restitution_down"):
-        for note in fits.get(key, {}).get("notes", []):
+    if fits.grazing is not None:
+        for note in fits.grazing.unidentifiable:
+            lines.append(f"note: {note}")
+        if fits.grazing.zeta.bias_note:
+            lines.append(f"note: grazing.zeta: {fits.grazing.zeta.bias_note}")
+    for key, entry in (("damping_ramp", fits.damping_ramp),
+                       ("restitution_down", fits.restitution_down)):
+        for note in entry.notes if entry is not None else ():
             lines.append(f"note: {key}: {note}")
-    shocks_only = bool(summary["runs"]) and all(r["protocol"] == "transient"
-                                                for r in summary["runs"])
-    if shocks_only:
+    if summary.shocks_only:
         lines.append("transient records only (single shocks): no rattle fits (the grazing "
                      "curve, restitution and SPL laws need shaker runs)")
     else:
-        for key, why in summary["not_fitted"].items():
+        for key, why in summary.not_fitted.items():
             lines.append(f"not fitted: {key}: {why}")
     lines.append("")
-    lines.append(f"runs: {summary['n_ok']} analysed, {len(summary['skipped'])} skipped")
-    for r in summary["runs"]:
-        if r["protocol"] == "transient":
-            lines.append(f"  {r['input_key']}/{r['run_id']}: transient, {r['n_impacts']} shock"
-                         f"{'' if r['n_impacts'] == 1 else 's'}")
+    lines.append(f"runs: {summary.n_ok} analysed, {len(summary.skipped)} skipped")
+    for r in summary.runs:
+        if r.protocol == "transient":
+            lines.append(f"  {r.input_key}/{r.run_id}: transient, {r.n_impacts} shock"
+                         f"{'' if r.n_impacts == 1 else 's'}")
             continue
-        lines.append(f"  {r['input_key']}/{r['run_id']}: {r['n_impacts']} impacts, "
-                     f"pattern {r['pattern'] or '-'}, threshold {_num(r['threshold_accel_ms2'])} m/s^2")
-    for s in summary["skipped"]:
-        lines.append(f"  skipped {s['input_key']}/{s['run_id']}: {s['reason']}")
-    for tr in summary.get("transients", []):
-        lines.append(f"  transient {tr['input_key']}/{tr['run_id']}: one shock per channel")
-        for c in tr["channels"]:
+        lines.append(f"  {r.input_key}/{r.run_id}: {r.n_impacts} impacts, "
+                     f"pattern {r.pattern or '-'}, threshold {_num(r.threshold_accel_ms2)} m/s^2")
+    for s in summary.skipped:
+        lines.append(f"  skipped {s.input_key}/{s.run_id}: {s.reason}")
+    for tr in summary.transients:
+        lines.append(f"  transient {tr.input_key}/{tr.run_id}: one shock per channel")
+        for c in tr.channels:
             if not c["found"]:
                 lines.append(f"    {c['role']:<8} {c['channel']}: no shock above the noise")
                 continue

@@ -28,12 +28,15 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rattle_lab._atomic import atomic_path
 from rattle_lab.exceptions import OutputError
+
+if TYPE_CHECKING:
+    from rattle_lab.fit import RunRow
 
 #: UFF specific data types (records 8/9, field 1) of the record quantities.
 UFF_TYPE_OF_QUANTITY = {"sound_pressure": 15, "base_acceleration": 12, "plate_acceleration": 12,
@@ -74,6 +77,7 @@ def uff_sets(store: str | os.PathLike[str], *, channels: bool = True,
     """The UFF 58 datasets (pyuff dicts) of a store's runs and, if fitted, its results."""
     from rattle_lab.store import open_stored_record, read_catalogue
     from rattle_lab.records._errors import StoreError
+    from rattle_lab.fit import FitSummary
     from rattle_lab.fit._results import read_results
 
     store = Path(store)
@@ -85,7 +89,8 @@ def uff_sets(store: str | os.PathLike[str], *, channels: bool = True,
             stored = read_results(store)
         except StoreError:
             stored = None
-    rows = {(r["input_key"], r["run_id"]): r for r in (stored.summary["runs"] if stored else [])}
+    rows = {(r.input_key, r.run_id): r
+            for r in (FitSummary.from_stored(stored.summary).runs if stored else ())}
     sets: list[dict[str, Any]] = []
     node = 0
     campaign = ""
@@ -133,7 +138,7 @@ def uff_sets(store: str | os.PathLike[str], *, channels: bool = True,
     return sets
 
 
-def _result_sets(stored: Any, row: dict[str, Any] | None, key: str, run_id: str,
+def _result_sets(stored: Any, row: RunRow | None, key: str, run_id: str,
                  ids: tuple[str, str, str], node: int) -> list[dict[str, Any]]:
     out: list[dict[str, Any]] = []
     res = stored.runs.get((key, run_id))
@@ -150,7 +155,7 @@ def _result_sets(stored: Any, row: dict[str, Any] | None, key: str, run_id: str,
                                     ordinate=ordinate, ids=(id1, f"run={run_id} result={name}",
                                                             id3, id4, f"input={key}"),
                                     node=1000 * node + direction, direction=0, name=name))
-    bands = ((row or {}).get("acoustics") or {}).get("third_octave_db") or {}
+    bands = ((row.acoustics if row is not None else None) or {}).get("third_octave_db") or {}
     pairs = [(float(f), 20e-6 * 10 ** (db / 20)) for f, db in bands.items() if db is not None]
     if pairs:
         f, p = np.array(pairs).T

@@ -14,6 +14,11 @@ from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_dow
 from ._results import RunResult, StoreFit
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
 from ._store import analyse_run, fit_runs, fit_store, json_ready, load_pipeline, summarise_fits
+from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
+                         GrazingSummary, LinearLawSummary, RampDamping, RatioRestitution,
+                         SplLawSummary)
+from ._summary import (SUMMARY_SCHEMA_VERSION, FitSummary, ParticipationInfo, RunRow,
+                       SkippedRun, ThresholdTable, TransientRun)
 
 __all__ = [
     "DbLaw", "GrazingFit", "analyse_run", "fit_runs", "fit_store", "json_ready", "load_pipeline",
@@ -22,4 +27,8 @@ __all__ = [
     "restitution_from_ratios", "saddle_node_threshold_ms2",
     "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
     "RunResult", "StoreFit",
+    "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
+    "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
+    "LinearLawSummary", "DbLawSummary", "RunRow", "SkippedRun", "ThresholdTable",
+    "TransientRun", "ParticipationInfo",
 ]

@@ -15,6 +15,7 @@ from rattle_lab.detect import ImpactLog, SoundPeaks
 from rattle_lab.store._results import (RESULTS_VERSION, StoredResults, read_results,  # noqa: F401
                              write_results)
 from rattle_lab.detect.thresholds import Threshold, ThresholdCurve
+from ._summary import FitSummary
 
 
 @dataclass(frozen=True)
@@ -93,15 +94,16 @@ class StoreFit:
     ----------
     runs : tuple of RunResult
     thresholds : ThresholdCurve
-    summary : dict
-        JSON-ready summary (fits with units and uncertainties, run counts, skipped runs).
+    summary : FitSummary
+        The fits with units and uncertainties, run counts, skipped runs
+        (:meth:`FitSummary.to_dict` is what ``/results`` stores and ``--json`` prints).
     provenance : dict
         Function, parameters, package version and the inputs' SHA-256.
     """
 
     runs: tuple[RunResult, ...]
     thresholds: ThresholdCurve
-    summary: dict[str, Any]
+    summary: FitSummary
     provenance: dict[str, Any]
 
 

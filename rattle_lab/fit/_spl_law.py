@@ -9,7 +9,6 @@ Linear law ``p = slope * v + intercept`` by ordinary least squares
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -101,9 +100,3 @@ def fit_db_law(v_m_s: object, p_pa: object) -> DbLaw:
     k = float(stats.linregress(np.log10(v), level).slope)
     return DbLaw(float(np.mean(c)), (float(np.mean(c) - t * sem), float(np.mean(c) + t * sem)), k,
                  int(v.size))
-
-
-def law_dict(law: Any) -> dict[str, Any]:
-    """JSON-ready dict of a law."""
-    from dataclasses import asdict
-    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(law).items()}

@@ -40,7 +40,11 @@ from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
 from ._grazing import GrazingFit, fit_grazing
 from ._damping import fit_zeta_ramp
 from ._restitution import METHODS, fit_restitution_down, restitution_from_ratios
-from ._spl_law import fit_db_law, fit_linear_law, law_dict
+from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
+from ._estimates import (DbLawSummary, DownRestitution, Fits, GrazingParameter, GrazingSummary,
+                         LinearLawSummary, RampDamping, RatioRestitution, SplLawSummary)
+from ._summary import (FitSummary, ParticipationInfo, RunRow, SkippedRun, ThresholdTable,
+                       TransientRun)
 
 SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01, "channel": None}
 FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0,
@@ -234,7 +238,9 @@ def json_ready(obj: Any) -> Any:
     Dicts and lists/tuples are walked recursively (tuples become lists); NumPy
     scalars become Python ``int``, ``float`` or ``bool``; non-finite floats
     (NaN, +-Inf) become ``None``.  Everything else is returned unchanged.
-    This is how :func:`fit_store` cleans the summary and provenance it writes.
+    This is how :func:`fit_store` cleans the provenance it writes.  A
+    :class:`~rattle_lab.fit.FitSummary` is returned unchanged: it holds JSON values
+    by construction (its ``to_dict()`` is the JSON form).
 
     Parameters
     ----------
@@ -379,17 +385,13 @@ def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
             "rattle_lab_version": __version__, "python": sys.version.split()[0],
             "parameters": {"detect": dict(detect), "fit": dict(fit)},
             "inputs": input_hashes(store, list(dict.fromkeys(r.input_key for r in runs)))}
-    return StoreFit(tuple(runs), curve, json_ready(summary), json_ready(prov))
-
-
-def _est(value: float, stderr: float, unit: str, **extra: Any) -> dict[str, Any]:
-    return {"value": value, "stderr": stderr, "unit": unit, **extra}
+    return StoreFit(tuple(runs), curve, summary, json_ready(prov))
 
 
 def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
                              fit: Mapping[str, Any], *, e_guess: float = 0.6
-                             ) -> tuple[dict[str, Any], dict[str, str]]:
-    """Summary entries of ``e`` from the downward thresholds (and of the ramp-model damping).
+                             ) -> tuple[DownRestitution | None, RampDamping | None, dict[str, str]]:
+    """``e`` from the downward thresholds (and the ramp-model damping) for the summary.
 
     With ``fit["restitution_method"] == "ramp"`` (default), ``zeta`` is first refitted to
     the upward thresholds with the ramp model (:func:`~rattle_lab.fit.fit_zeta_ramp`,
@@ -411,10 +413,11 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
 
     Returns
     -------
-    fits : dict
-        ``restitution_down``: value, stderr, unit, ci (2 sigma), method, n, run_ids,
-        zeta_used, stderr_from_zeta, residuals_ms2, notes; with the ramp method also
-        ``damping_ramp``: value, stderr, unit, ci, method, n, residuals_ms2, notes.
+    restitution_down : DownRestitution or None
+        ``e`` with its stderr, 2 sigma interval, method, runs, the ``zeta`` used and the
+        part of the stderr propagated from it, residuals and notes.
+    damping_ramp : RampDamping or None
+        With the ramp method: ``zeta`` from the ramp replay.
     not_fitted : dict
         Entry name -> reason, for what could not be fitted.
     """
@@ -424,7 +427,7 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
     p = grazing.params
     modal: dict[str, Any] = dict(gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value,
                                  participation=p["participation"].value)
-    fits: dict[str, Any] = {}
+    down, ramp = None, None
     missing: dict[str, str] = {}
     zeta, zeta_se, zeta_note = p["zeta"].value, p["zeta"].stderr, ""
     if method == "ramp":
@@ -432,10 +435,10 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
             zf = fit_zeta_ramp(thresholds, zeta0=zeta, e=e_guess, n_confirm=n_confirm,
                                level_hold_periods=hold, **modal)
             z = zf.zeta
-            fits["damping_ramp"] = _est(z.value, z.stderr, "1", ci=[z.ci_low, z.ci_high],
-                                        method="ramp replay of the upward thresholds",
-                                        n=len(zf.run_ids), residuals_ms2=zf.residuals_ms2.tolist(),
-                                        notes=list(zf.notes))
+            ramp = RampDamping(z.value, z.stderr, "1", z.ci_low, z.ci_high, notes=zf.notes,
+                               method="ramp replay of the upward thresholds",
+                               n=len(zf.run_ids),
+                               residuals_ms2=tuple(zf.residuals_ms2.tolist()))
             zeta, zeta_se = z.value, z.stderr
         except RattleLabError as exc:
             missing["damping_ramp"] = str(exc)
@@ -445,19 +448,50 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
                                   zeta_stderr=zeta_se if np.isfinite(zeta_se) else 0.0,
                                   level_hold_periods=hold, **modal)
         e = rf.e
-        fits["restitution_down"] = _est(
-            e.value, e.stderr, "1", ci=[e.ci_low, e.ci_high], method=rf.method,
-            n=len(rf.run_ids), run_ids=list(rf.run_ids), zeta_used=rf.zeta,
-            stderr_from_zeta=rf.stderr_from_zeta, residuals_ms2=rf.residuals_ms2.tolist(),
-            notes=list(rf.notes) + ([zeta_note] if zeta_note else []))
+        down = DownRestitution(e.value, e.stderr, "1", e.ci_low, e.ci_high,
+                               notes=tuple(rf.notes) + ((zeta_note,) if zeta_note else ()),
+                               method=rf.method, n=len(rf.run_ids), run_ids=rf.run_ids,
+                               zeta_used=rf.zeta, stderr_from_zeta=rf.stderr_from_zeta,
+                               residuals_ms2=tuple(rf.residuals_ms2.tolist()))
     except RattleLabError as exc:
         missing["restitution_down"] = str(exc)
-    return fits, missing
+    return down, ramp, missing
+
+
+_UNITS = {"gap_m": "m", "f_s_hz": "Hz", "zeta": "1", "participation": "1"}
+
+
+def _grazing_summary(grazing: GrazingFit, ramp: RampDamping | None) -> GrazingSummary:
+    """The grazing fit's entry; with a ramp-replay damping, the bias of its ``zeta`` named."""
+    params = {n: GrazingParameter(p.value, p.stderr, _UNITS[n], p.ci_low, p.ci_high,
+                                  vary=p.vary) for n, p in grazing.params.items()}
+    zeta = params["zeta"]
+    if ramp is not None and ramp.value is not None and ramp.value > 0 \
+            and zeta.value is not None:
+        # issue 15: name the bias of eq. (3.4)'s zeta, whose interval leaves it out
+        bias = zeta.value / ramp.value - 1.0
+        params["zeta"] = dataclasses.replace(zeta, bias_rel=bias, bias_note=(
+            f"eq. (3.4) reads the ramp lag as damping: zeta is {100 * bias:+.1f} % against "
+            "the ramp replay (damping_ramp), which corrects it; this interval does not "
+            "include the lag"))
+    return GrazingSummary(**params, unidentifiable=grazing.unidentifiable,
+                          outliers_hz=tuple(grazing.freq_hz[grazing.outlier].tolist()),
+                          residuals_ms2=tuple(grazing.residuals_ms2.tolist()),
+                          correlation_names=grazing.varied,
+                          correlation=tuple(map(tuple, grazing.correlation.tolist())),
+                          redchi=grazing.redchi)
+
+
+def _spl_law_summary(lin: LinearLaw, db: DbLaw) -> SplLawSummary:
+    return SplLawSummary(
+        LinearLawSummary(lin.slope, lin.slope_ci[0], lin.slope_ci[1], lin.intercept,
+                         lin.intercept_ci[0], lin.intercept_ci[1], lin.r2, lin.n),
+        DbLawSummary(db.c_db, db.c_ci[0], db.c_ci[1], db.k_db_per_decade, db.n))
 
 
 def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                    participation: Participation | None = None,
-                   flags: list[str] | None = None) -> dict[str, Any]:
+                   flags: list[str] | None = None) -> FitSummary:
     """Fit the store-level models to per-run detections; the summary ``/results`` stores.
 
     From the per-run results of :func:`analyse_run` and the threshold table of
@@ -465,7 +499,7 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     (gap, f_s, zeta; needs >= 4 upward thresholds), the coefficient of restitution
     from velocity ratios and from the disappearance thresholds, and the SPL laws
     (first peak, maximum peak, RMS per impact) against impact velocity.  A fit that
-    cannot be made is named in ``"not_fitted"`` with the reason; nothing raises for it.
+    cannot be made is named in ``not_fitted`` with the reason; nothing raises for it.
 
     Parameters
     ----------
@@ -485,18 +519,16 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
 
     Returns
     -------
-    dict
-        ``n_runs``, ``n_ok``, ``skipped`` (input_key, run_id, reason), ``runs`` (one
-        row per analysed run: protocol, freq_hz, n_impacts, pattern, delays in s, SPL
-        in dB, threshold in m/s^2), ``thresholds`` (freq_hz, up_ms2, down_ms2,
-        hysteresis_ms2), ``fits`` (``grazing``: per parameter value, stderr, unit,
-        95 % ci, vary, plus correlation; ``restitution_ratio``: value, stderr, unit, n;
+    FitSummary
+        Run counts, skipped runs (with reasons), one row per analysed run (protocol,
+        freq_hz, n_impacts, pattern, delays in s, SPL in dB, threshold in m/s^2,
+        acoustics), the threshold table, the fits (``grazing``: gap_m, f_s_hz, zeta,
+        participation with stderr, unit and 95 % ci, plus correlation; ``restitution_ratio``;
         ``restitution_down`` and ``damping_ramp``: see :func:`restitution_down_summary`;
-        ``spl_law_first|max|rms``: linear and dB laws) and
-        ``not_fitted`` (fit name -> reason); ``transients`` (transient runs: the shock on
-        each channel, cause first); ``participation`` (value, source) and
-        ``data_quality`` (named flags, e.g. ``participation_assumed``).  May hold NumPy scalars and NaN: pass it
-        through :func:`json_ready` before writing JSON.
+        ``spl_law_first|max|rms``: linear and dB laws), ``not_fitted`` (fit name ->
+        reason), the transient runs' shocks (each channel, cause first), the participation
+        (value, source) and ``data_quality`` flags (e.g. ``participation_assumed``, and each
+        run's measurement-chain flags).  :meth:`FitSummary.to_dict` is its JSON form.
 
     Raises
     ------
@@ -507,96 +539,73 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         participation = resolve_participation([], fit.get("participation"), "pipeline")
     fit = {**fit, "participation": participation.value}
     ok = [r for r in runs if r.status == "ok"]
-    chain = [f"{r.input_key}/{r.run_id}: {f}" for r in runs for f in r.chain_flags]
-    summary: dict[str, Any] = {
-        "participation": {"value": participation.value, "source": participation.source},
-        # (a store of single shocks fits no modal law: the participation does not enter)
-        "data_quality": (list(participation.flags) if any(r.protocol != "transient" for r in ok)
-                         else []) + chain + list(flags or []),
-        "n_runs": len(runs), "n_ok": len(ok),
-        "skipped": [{"input_key": r.input_key, "run_id": r.run_id, "reason": r.reason}
-                    for r in runs if r.status == "skipped"],
-        "runs": [{"input_key": r.input_key, "run_id": r.run_id, "protocol": r.protocol,
-                  "freq_hz": r.freq_hz, "n_impacts": r.impacts.n_impacts if r.impacts else 0,
-                  "pattern": r.pattern, "acoustic_delay_s": r.acoustic_delay_s,
-                  "expected_delay_s": r.expected_delay_s, "spl_rms_db": r.spl_rms_db,
-                  "spl_rms_a_db": r.spl_rms_a_db,
-                  "threshold_accel_ms2": r.threshold.accel_ms2 if r.threshold else None,
-                  **(r.acoustics.summary() if r.acoustics is not None else {})}  # [issue 17]
-                 for r in ok],
-        "thresholds": {"freq_hz": curve.freq_hz.tolist(), "up_ms2": curve.up_ms2.tolist(),
-                       "down_ms2": curve.down_ms2.tolist(),
-                       "hysteresis_ms2": curve.hysteresis_ms2.tolist()},
-        "fits": {},
-        "not_fitted": {},
-    }
-    fits, missing = summary["fits"], summary["not_fitted"]
-    grazing = None
+    chain = tuple(f"{r.input_key}/{r.run_id}: {f}" for r in runs for f in r.chain_flags)
+    missing: dict[str, str] = {}
+    grazing_fit, grazing = None, None
     n_up = int(np.isfinite(curve.up_ms2).sum())
     if n_up >= 4:
         try:
             # eq. (3.4) models the level where the response reaches the gap: the crossing,
             # half a forcing period before the first impact on average (issue 15)
             up_crossing = _crossing_curve(runs_thresholds(ok), curve.freq_hz)
-            grazing = fit_grazing(curve.freq_hz, up_crossing, participation=fit["participation"],
-                                  vary_participation=fit["vary_participation"],
-                                  outlier_k=fit["outlier_k"], conf_interval=fit["conf_interval"])
-            units = {"gap_m": "m", "f_s_hz": "Hz", "zeta": "1", "participation": "1"}
-            fits["grazing"] = {
-                **{n: _est(p.value, p.stderr, units[n], ci=[p.ci_low, p.ci_high], vary=p.vary)
-                   for n, p in grazing.params.items()},
-                "unidentifiable": list(grazing.unidentifiable),
-                "outliers_hz": grazing.freq_hz[grazing.outlier].tolist(),
-                "residuals_ms2": grazing.residuals_ms2.tolist(),
-                "correlation": {"names": list(grazing.varied),
-                                "matrix": grazing.correlation.tolist()},
-                "redchi": grazing.redchi}
+            grazing_fit = fit_grazing(curve.freq_hz, up_crossing,
+                                      participation=fit["participation"],
+                                      vary_participation=fit["vary_participation"],
+                                      outlier_k=fit["outlier_k"],
+                                      conf_interval=fit["conf_interval"])
         except RattleLabError as exc:
             missing["grazing"] = str(exc)
     else:
         missing["grazing"] = f"needs >= 4 upward thresholds, had {n_up}"
     e_all = np.concatenate([r.impacts.e for r in ok if r.impacts is not None] or [np.zeros(0)])
     st = restitution_from_ratios(e_all)
+    ratio = None
     if st.n:
-        fits["restitution_ratio"] = _est(st.mean, st.stderr, "1", std=st.std, median=st.median,
-                                         n=st.n)
+        ratio = RatioRestitution(st.mean, st.stderr, "1", std=st.std, median=st.median, n=st.n)
     else:
         missing["restitution_ratio"] = "no impact with a velocity on both sides"
-    if grazing is not None and np.isfinite(curve.down_ms2).any():
-        fits_down, missing_down = restitution_down_summary(
-            [r.threshold for r in ok if r.threshold is not None], grazing, fit,
+    down, ramp = None, None
+    if grazing_fit is not None and np.isfinite(curve.down_ms2).any():
+        down, ramp, missing_down = restitution_down_summary(
+            [r.threshold for r in ok if r.threshold is not None], grazing_fit, fit,
             e_guess=st.mean if st.n else 0.6)
-        fits.update(fits_down)
         missing.update(missing_down)
-        ramp = fits.get("damping_ramp")
-        if ramp is not None and "grazing" in fits and ramp["value"] > 0:
-            # issue 15: name the bias of eq. (3.4)'s zeta, whose interval leaves it out
-            z = fits["grazing"]["zeta"]
-            bias = z["value"] / ramp["value"] - 1.0
-            z["bias_rel"] = bias
-            z["bias_note"] = (f"eq. (3.4) reads the ramp lag as damping: zeta is "
-                              f"{100 * bias:+.1f} % against the ramp replay (damping_ramp), "
-                              "which corrects it; this interval does not include the lag")
     else:
         missing["restitution_down"] = "needs a grazing fit and downward thresholds"
+    if grazing_fit is not None:
+        grazing = _grazing_summary(grazing_fit, ramp)
     v = np.concatenate([np.abs(r.impacts.v_in_m_s) for r in ok if r.peaks is not None
                         and r.impacts is not None] or [np.zeros(0)])
+    laws: dict[str, SplLawSummary] = {}
     for name in ("first", "max", "rms"):
         attr = {"first": "p_first_pa", "max": "p_max_pa", "rms": "p_rms_pa"}[name]
         pr = np.concatenate([getattr(r.peaks, attr) for r in ok if r.peaks is not None
                              and r.impacts is not None] or [np.zeros(0)])
         try:
-            lin, db = fit_linear_law(v, pr), fit_db_law(v, pr)
-            fits[f"spl_law_{name}"] = {"linear": {**law_dict(lin), "slope_unit": "Pa/(m/s)",
-                                                  "intercept_unit": "Pa"},
-                                       "db": {**law_dict(db), "unit": "dB re 20 uPa at 1 m/s"}}
+            laws[f"spl_law_{name}"] = _spl_law_summary(fit_linear_law(v, pr), fit_db_law(v, pr))
         except RattleLabError as exc:
             missing[f"spl_law_{name}"] = str(exc)
-    shocks = [{"input_key": r.input_key, "run_id": r.run_id, "channels": [dict(c) for c in r.shocks]}
-              for r in ok if r.protocol == "transient"]
-    if shocks:
-        summary["transients"] = shocks
-    return summary
+    rows = [RunRow(r.input_key, r.run_id, r.protocol, r.freq_hz,
+                   r.impacts.n_impacts if r.impacts else 0, r.pattern, r.acoustic_delay_s,
+                   r.expected_delay_s, r.spl_rms_db, r.spl_rms_a_db,
+                   r.threshold.accel_ms2 if r.threshold else None,
+                   **(r.acoustics.summary() if r.acoustics is not None else {}))  # [issue 17]
+            for r in ok]
+    return FitSummary(
+        n_runs=len(runs), n_ok=len(ok), runs=tuple(rows),
+        skipped=tuple(SkippedRun(r.input_key, r.run_id, r.reason)
+                      for r in runs if r.status == "skipped"),
+        thresholds=ThresholdTable(curve.freq_hz, curve.up_ms2, curve.down_ms2,
+                                  curve.hysteresis_ms2),
+        fits=Fits(grazing=grazing, restitution_ratio=ratio, damping_ramp=ramp,
+                  restitution_down=down, **laws),
+        not_fitted=missing,
+        participation=ParticipationInfo(participation.value, participation.source),
+        # (a store of single shocks fits no modal law: the participation does not enter)
+        data_quality=(tuple(participation.flags) if any(r.protocol != "transient" for r in ok)
+                      else ()) + chain + tuple(flags or ()),
+        transients=tuple(TransientRun(r.input_key, r.run_id, tuple(dict(c) for c in r.shocks))
+                         for r in ok if r.protocol == "transient"))
 
 
 __all__ = ["analyse_run", "fit_runs", "fit_store", "json_ready", "load_pipeline", "paired_plate_channels",

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from rattle_lab.exceptions import RattleLabError
+from rattle_lab.fit import FitSummary
 from rattle_lab.records._errors import StoreError
 
 
@@ -63,7 +64,10 @@ class ReportData:
     provenance_log : list of dict
         The store's ``/provenance/log`` documents.
     results : rattle_lab.store.StoredResults or None
-        What ``rattle-lab fit`` wrote.
+        What ``rattle-lab fit`` wrote (per-run arrays, thresholds, provenance).
+    summary : rattle_lab.fit.FitSummary or None
+        Its summary, typed (:meth:`~rattle_lab.fit.FitSummary.from_stored`); None exactly
+        when ``results`` is.
     missing : dict of str to str
         Section name -> why it is left out (filled while gathering and plotting).
     """
@@ -74,6 +78,7 @@ class ReportData:
     provenance_log: list[dict[str, Any]]
     results: Any
     missing: dict[str, str] = field(default_factory=dict)
+    summary: FitSummary | None = None
 
 
 def _s(value: Any) -> str:
@@ -157,13 +162,15 @@ def gather(store: str | os.PathLike[str]) -> ReportData:
         log = _provenance_log(store)
     except (OSError, ValueError) as exc:
         log, missing["provenance log"] = [], str(exc)
-    results = None
+    results, summary = None, None
     try:
         from rattle_lab.store import read_results
 
         results = read_results(store)
+        summary = FitSummary.from_stored(results.summary)
     except ImportError as exc:
         missing["results"] = f"the fit stage is not available ({exc})"
     except (RattleLabError, KeyError, ValueError, OSError) as exc:
+        results = None  # a summary this release cannot read: no results section
         missing["results"] = " ".join(str(exc).split()) or type(exc).__name__
-    return ReportData(store, catalogue, tuple(records), log, results, missing)
+    return ReportData(store, catalogue, tuple(records), log, results, missing, summary)

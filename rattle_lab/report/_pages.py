@@ -17,6 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
+from rattle_lab.fit import Estimate, FitSummary, Fits, GrazingSummary, RatioRestitution
 from ._data import ReportData
 
 PAGE_SIZE_IN = (8.27, 11.69)  # A4 portrait
@@ -44,26 +45,17 @@ def _fmt(x: Any, digits: str = ".4g") -> str:
     return "-" if not math.isfinite(xf) else format(xf, digits)
 
 
-def _fits(data: ReportData) -> dict[str, Any]:
-    if data.results is None:
-        return {}
-    return dict(data.results.summary.get("fits", {}))
+def _fits(data: ReportData) -> Fits:
+    return data.summary.fits if data.summary is not None else Fits()
 
 
-def _grazing(data: ReportData) -> dict[str, Any] | None:
-    g = _fits(data).get("grazing")
-    if not isinstance(g, Mapping):
-        return None
-    if not all(isinstance(g.get(k), Mapping) for k in ("gap_m", "f_s_hz", "zeta")):
-        return None
-    return dict(g)
+def _grazing(data: ReportData) -> GrazingSummary | None:
+    return _fits(data).grazing
 
 
-def _pval(g: Mapping[str, Any], name: str, default: float = float("nan")) -> float:
-    p = g.get(name)
-    if not isinstance(p, Mapping) or p.get("value") is None:
-        return default
-    return float(p["value"])
+def _pval(g: GrazingSummary, name: str, default: float = float("nan")) -> float:
+    value = g.parameters()[name].value
+    return default if value is None else value
 
 
 # --- summary -------------------------------------------------------------------------------
@@ -87,13 +79,6 @@ def _t_ci(value: Any, stderr: Any, dof: int) -> tuple[float | None, float | None
     return v - half, v + half
 
 
-def _pair(value: Any) -> tuple[Any, Any] | None:
-    """A stored ``[low, high]`` interval as a pair (None if it is not one)."""
-    if isinstance(value, (list, tuple)) and len(value) == 2:
-        return value[0], value[1]
-    return None
-
-
 def _row(quantity: str, value: Any = None, stderr: Any = None,
          ci: tuple[Any, Any] | None = None, unit: str = "", note: str = "",
          scale: float = 1.0) -> list[str]:
@@ -112,11 +97,17 @@ def _row(quantity: str, value: Any = None, stderr: Any = None,
     return out
 
 
+def _fit_summary(data: ReportData) -> FitSummary:
+    """The typed summary of a report with results (gather sets both or neither)."""
+    if data.summary is None:
+        raise Missing(data.missing.get("results", "no results"))
+    return data.summary
+
+
 def _not_fitted(data: ReportData, key: str) -> str:
-    if data.results is None:
+    if data.summary is None:
         return data.missing.get("results", "no results")
-    return " ".join(str(data.results.summary.get("not_fitted", {}).get(key, "not fitted"))
-                    .split())
+    return " ".join(data.summary.not_fitted.get(key, "not fitted").split())
 
 
 def parameter_lines(data: ReportData) -> list[str]:
@@ -130,63 +121,61 @@ def parameter_lines(data: ReportData) -> list[str]:
              "participation": ("participation Q1/Q2", 1.0, "1")}
     if g is not None:
         for key, (label, scale, unit) in names.items():
-            p = g.get(key)
-            if not isinstance(p, Mapping):
+            p = g.parameters()[key]
+            if not p.vary:
+                lines += _row(label, p.value, "fixed", None, unit, scale=scale)
                 continue
-            if not p.get("vary", True):
-                lines += _row(label, p.get("value"), "fixed", None, unit, scale=scale)
-                continue
-            lines += _row(label, p.get("value"), p.get("stderr"), _pair(p.get("ci")), unit,
-                          scale=scale)
-        notes = [str(n) for n in g.get("unidentifiable", []) or []]
-        if g.get("outliers_hz"):
+            lines += _row(label, p.value, p.stderr, (p.ci_low, p.ci_high), unit, scale=scale)
+        notes = list(g.unidentifiable)
+        if g.outliers_hz:
             notes.append("thresholds left out as outliers at " + ", ".join(
-                f"{_fmt(f)} Hz" for f in g["outliers_hz"]))
+                f"{_fmt(f)} Hz" for f in g.outliers_hz))
         for note in notes:
             lines += textwrap.wrap("note: " + note, TEXT_WIDTH, initial_indent="      ",
                                    subsequent_indent="      ")
     else:
         lines += _row("gap h, f_s, zeta", note="not fitted: " + _not_fitted(data, "grazing"))
-    not_fitted = data.results.summary.get("not_fitted", {}) if data.results is not None else {}
+    not_fitted = data.summary.not_fitted if data.summary is not None else {}
     for key, label, what in (("damping_ramp", "zeta (ramp model)", "upward ramps"),
                              ("restitution_ratio", "e (velocity ratios)", "impacts"),
                              ("restitution_down", "e (disappearance thresholds)", "thresholds")):
-        p = fits.get(key)
-        if not isinstance(p, Mapping):
+        est: Estimate | None = getattr(fits, key)
+        if est is None:
             if key != "damping_ramp" or key in not_fitted:  # an optional fit: only if tried
                 lines += _row(label, note="not fitted: " + _not_fitted(data, key))
             continue
-        n = int(p.get("n") or 0)
-        note = f"from {n} {what}" + (f" ({p['method']})" if p.get("method") else "")
-        if key == "restitution_ratio" and p.get("median") is not None:
-            note += f"; median {_fmt(p.get('median'))}, scatter (std) {_fmt(p.get('std'))}"
-        err = p.get("stderr")
-        if err is not None and p.get("value") is not None and float(err) > abs(float(p["value"])):
+        n = int(getattr(est, "n", 0))
+        method = getattr(est, "method", "")
+        note = f"from {n} {what}" + (f" ({method})" if method else "")
+        if isinstance(est, RatioRestitution) and est.median is not None:
+            note += f"; median {_fmt(est.median)}, scatter (std) {_fmt(est.std)}"
+        err = est.stderr
+        if err is not None and est.value is not None and err > abs(est.value):
             note += "; NOT IDENTIFIED: the standard error exceeds the value"
-        for extra in p.get("notes") or []:
+        for extra in est.notes:
             note += f"; {extra}"
-        ci = _pair(p.get("ci"))
-        if ci is None or None in ci:
-            ci = _t_ci(p.get("value"), err, n - 1)
-        lines += _row(label, p.get("value"), err, ci, "1", note)
+        ci: tuple[float | None, float | None] = (est.ci_low, est.ci_high)
+        if None in ci:
+            ci = _t_ci(est.value, err, n - 1)
+        lines += _row(label, est.value, err, ci, "1", note)
     for name, label in (("first", "first peak"), ("max", "maximum peak"),
                         ("rms", "RMS per impact")):
-        law = fits.get(f"spl_law_{name}")
-        if not isinstance(law, Mapping):
+        law = fits.spl_law(name)
+        if law is None:
             lines += _row(f"SPL law, {label}",
                           note="not fitted: " + _not_fitted(data, f"spl_law_{name}"))
             continue
-        lin, db = dict(law.get("linear", {})), dict(law.get("db", {}))
-        lines += _row(f"SPL {label}: slope", lin.get("slope"), None,
-                      _pair(lin.get("slope_ci")), "Pa/(m/s)",
-                      f"p = slope * |v_in| + intercept, r2 = {_fmt(lin.get('r2'), '.3f')}, "
-                      f"{lin.get('n', '?')} impacts")
-        lines += _row(f"SPL {label}: intercept", lin.get("intercept"), None,
-                      _pair(lin.get("intercept_ci")), "Pa")
-        lines += _row(f"SPL {label}: C", db.get("c_db"), None,
-                      _pair(db.get("c_ci")), "dB re 20 uPa at 1 m/s",
+        lin, db = law.linear, law.db
+        lines += _row(f"SPL {label}: slope", lin.slope, None,
+                      (lin.slope_ci_low, lin.slope_ci_high), "Pa/(m/s)",
+                      f"p = slope * |v_in| + intercept, r2 = {_fmt(lin.r2, '.3f')}, "
+                      f"{lin.n} impacts")
+        lines += _row(f"SPL {label}: intercept", lin.intercept, None,
+                      (lin.intercept_ci_low, lin.intercept_ci_high), "Pa")
+        lines += _row(f"SPL {label}: C", db.c_db, None,
+                      (db.c_ci_low, db.c_ci_high), "dB re 20 uPa at 1 m/s",
                       f"L = 20 log10(|v_in| / (1 m/s)) + C; free-slope check k = "
-                      f"{_fmt(db.get('k_db_per_decade'), '.3g')} dB/decade (20 for a linear law)")
+                      f"{_fmt(db.k_db_per_decade, '.3g')} dB/decade (20 for a linear law)")
     return lines
 
 
@@ -201,11 +190,11 @@ def wrapped(line: str) -> list[str]:
 def summary_lines(data: ReportData, version: str) -> list[str]:
     """Text lines of the summary page (fitted values, flags, provenance), <= TEXT_WIDTH wide."""
     lines = [f"store: {data.store.name}"]
-    if data.results is not None:
-        summ = data.results.summary
-        n_imp = sum(int(r.get("n_impacts", 0) or 0) for r in summ.get("runs", []))
-        lines.append(f"runs: {summ.get('n_runs', '?')} ({summ.get('n_ok', '?')} analysed, "
-                     f"{len(summ.get('skipped', []))} skipped), {n_imp} impacts detected")
+    if data.summary is not None:
+        summ = data.summary
+        n_imp = sum(r.n_impacts for r in summ.runs)
+        lines.append(f"runs: {summ.n_runs} ({summ.n_ok} analysed, "
+                     f"{len(summ.skipped)} skipped), {n_imp} impacts detected")
     lines += ["", "Fitted parameters (95 % CI: as the fit gives it, e.g. profile likelihood for "
               "eq. (3.4); else Student t from the standard error; OLS t for the SPL laws)"]
     lines += parameter_lines(data)
@@ -222,16 +211,16 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
         lines.append(f"  {row['input_key']}/{row['run_id']}/{row['channel']}: {row['flags']}")
     if len(flagged) > 12:
         lines.append(f"  ... and {len(flagged) - 12} more flagged channels")
-    if data.results is not None:  # issue 15: the fit's own flags (e.g. participation_assumed)
-        part = data.results.summary.get("participation") or {}
-        for flag in data.results.summary.get("data_quality", []):
-            lines.append(f"  fit: {flag} (participation {part.get('value')} from "
-                         f"{part.get('source', '?')})" if flag.startswith("participation")
+    if data.summary is not None:  # issue 15: the fit's own flags (e.g. participation_assumed)
+        part = data.summary.participation
+        for flag in data.summary.data_quality:
+            lines.append(f"  fit: {flag} (participation {part.value if part else None} from "
+                         f"{part.source if part else '?'})" if flag.startswith("participation")
                          else f"  fit: {flag}")
-    skipped = data.results.summary.get("skipped", []) if data.results is not None else []
+    skipped = data.summary.skipped if data.summary is not None else ()
     for item in skipped[:6]:
-        lines.append(f"  run skipped by the fit: {item.get('input_key')}/{item.get('run_id')}: "
-                     f"{item.get('reason')}")
+        lines.append(f"  run skipped by the fit: {item.input_key}/{item.run_id}: "
+                     f"{item.reason}")
     lines += ["", "Provenance", f"  report: rattle_lab {version} (rattle_lab.report.write_report)"]
     if data.results is not None:
         prov = data.results.provenance
@@ -340,27 +329,26 @@ def rig_page(data: ReportData) -> list[Figure]:
 
 # --- thresholds (Fig. 6-2, 6-3) ------------------------------------------------------------
 
-def band_quantile(g: Mapping[str, Any]) -> tuple[float, int | None]:
+def band_quantile(g: GrazingSummary) -> tuple[float, int | None]:
     """The 97.5 % quantile for the 95 % band of the eq. (3.4) fit, and its degrees of freedom.
 
     Student t with ``n - p`` degrees of freedom (``n`` thresholds fitted, the
     outliers left out; ``p`` varied parameters), as the profile intervals of the
-    fit are; 1.96 (normal, ``None``) when the fit does not say how many points it used.
+    fit are; 1.96 (normal, ``None``) when the fit does not say how many points it used
+    (no residuals).
     ``nan`` when ``n <= p``: an exactly determined fit has no band.
     """
     from scipy import stats
 
-    resid = g.get("residuals_ms2")
-    varied = list((g.get("correlation") or {}).get("names") or [])
-    if resid is None:
+    if not g.residuals_ms2:
         return 1.96, None
-    n = sum(1 for r in resid if r is not None and math.isfinite(float(r)))
-    n -= len(g.get("outliers_hz") or [])
-    dof = n - len(varied)
+    n = sum(1 for r in g.residuals_ms2 if r is not None)
+    n -= len(g.outliers_hz)
+    dof = n - len(g.correlation_names)
     return (float(stats.t.ppf(0.975, dof)) if dof >= 1 else float("nan")), dof
 
 
-def grazing_band_ms2(freq_hz: np.ndarray, g: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+def grazing_band_ms2(freq_hz: np.ndarray, g: GrazingSummary) -> tuple[np.ndarray, np.ndarray]:
     """Eq. (3.4) at the fitted parameters and the half-width of its 95 % band, m/s^2.
 
     Delta method: the covariance is ``stderr_i stderr_j corr_ij`` of the varied
@@ -372,8 +360,8 @@ def grazing_band_ms2(freq_hz: np.ndarray, g: Mapping[str, Any]) -> tuple[np.ndar
     ----------
     freq_hz : ndarray
         Excitation frequencies, Hz.
-    g : mapping
-        The ``grazing`` entry of the fit summary.
+    g : GrazingSummary
+        The grazing fit of the fit summary.
 
     Returns
     -------
@@ -390,10 +378,11 @@ def grazing_band_ms2(freq_hz: np.ndarray, g: Mapping[str, Any]) -> tuple[np.ndar
                                               p["participation"]), dtype=float)
 
     y = model(p0)
-    corr = g.get("correlation") or {}
-    varied = list(corr.get("names") or [])
-    matrix = np.asarray(corr.get("matrix") or np.zeros((0, 0)), dtype=float)
-    err = np.array([float(g[n].get("stderr") or np.nan) for n in varied]) if varied else np.zeros(0)
+    varied = list(g.correlation_names)
+    matrix = np.array([[np.nan if c is None else c for c in row] for row in g.correlation],
+                      dtype=float).reshape(len(g.correlation), -1)
+    err = np.array([g.parameters()[n].stderr or np.nan for n in varied]) if varied \
+        else np.zeros(0)
     if not varied or matrix.shape != (len(varied), len(varied)) or not np.isfinite(err).all():
         return y, np.full_like(y, np.nan)
     cov = matrix * np.outer(err, err)
@@ -412,22 +401,25 @@ def negative_hysteresis(data: ReportData) -> list[tuple[float, float]]:
     """``(freq_hz, onset - disappearance)`` where the disappearance lies above the onset."""
     if data.results is None:
         return []
+    f, up, down = _threshold_arrays(data)
+    h = up - down
+    return [(float(a), float(b)) for a, b in zip(f, h) if math.isfinite(b) and b < 0]
+
+
+def _threshold_arrays(data: ReportData) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``freq_hz, up_ms2, down_ms2`` as ``/results/thresholds`` holds them (NaN: not measured)."""
     th = data.results.thresholds
     f = np.asarray(th.get("freq_hz", []), dtype=float)
     up = np.asarray(th.get("up_ms2", np.full(f.size, np.nan)), dtype=float)
     down = np.asarray(th.get("down_ms2", np.full(f.size, np.nan)), dtype=float)
-    h = up - down
-    return [(float(a), float(b)) for a, b in zip(f, h) if math.isfinite(b) and b < 0]
+    return f, up, down
 
 
 def threshold_page(data: ReportData) -> list[Figure]:
     """Onset/disappearance thresholds against frequency, eq. 3.4 fit and band, hysteresis."""
     if data.results is None:
         raise Missing(data.missing.get("results", "no results"))
-    th = data.results.thresholds
-    f = np.asarray(th.get("freq_hz", []), dtype=float)
-    up = np.asarray(th.get("up_ms2", np.full(f.size, np.nan)), dtype=float)
-    down = np.asarray(th.get("down_ms2", np.full(f.size, np.nan)), dtype=float)
+    f, up, down = _threshold_arrays(data)
     if f.size == 0 or not (np.isfinite(up).any() or np.isfinite(down).any()):
         raise Missing("no ramp thresholds in /results/thresholds (needs amplitude_ramp_up/down "
                       "runs with a base accelerometer)")
@@ -447,7 +439,7 @@ def threshold_page(data: ReportData) -> list[Figure]:
             how = f"Student t, {dof} dof" if dof is not None else "normal"
             ax.fill_between(grid, y - half, y + half, color="0.6", alpha=0.35,
                             label=f"95 % confidence band (delta method, {how})")
-        out = np.asarray(g.get("outliers_hz") or [], dtype=float)
+        out = np.array([np.nan if x is None else x for x in g.outliers_hz], dtype=float)
         if out.size:
             sel = np.isin(f, out)
             ax.plot(f[sel], up[sel], "o", ms=11, mfc="none", color="k",
@@ -482,8 +474,8 @@ def threshold_page(data: ReportData) -> list[Figure]:
     ax_h.set_title("Hysteresis")
     ax_h.grid(alpha=0.3)
     if g is None:
-        data.missing["eq. 3.4 fit curve"] = (data.results.summary.get("not_fitted", {})
-                                             .get("grazing", "grazing fit absent"))
+        data.missing["eq. 3.4 fit curve"] = _fit_summary(data).not_fitted.get(
+            "grazing", "grazing fit absent")
     return [fig]
 
 
@@ -650,9 +642,9 @@ def spl_page(data: ReportData) -> list[Figure]:
     if data.results is None:
         raise Missing(data.missing.get("results", "no results"))
     fits = _fits(data)
-    laws = {n: fits.get(f"spl_law_{n}") for n in ("first", "max", "rms")}
-    if not any(isinstance(v, Mapping) for v in laws.values()):
-        why = data.results.summary.get("not_fitted", {}).get("spl_law_first", "not fitted")
+    laws = {n: fits.spl_law(n) for n in ("first", "max", "rms")}
+    if all(v is None for v in laws.values()):
+        why = _fit_summary(data).not_fitted.get("spl_law_first", "not fitted")
         raise Missing(f"no SPL law in /results ({why})")
     v_all: dict[str, list[np.ndarray]] = {"first": [], "max": [], "rms": []}
     p_all: dict[str, list[np.ndarray]] = {"first": [], "max": [], "rms": []}
@@ -670,18 +662,18 @@ def spl_page(data: ReportData) -> list[Figure]:
     names = {"first": "first peak", "max": "maximum peak", "rms": "RMS per impact"}
     for n in ("rms", "max", "first"):  # the first-peak law (the thesis's) drawn on top
         law = laws[n]
-        if not isinstance(law, Mapping) or not v_all[n]:
+        if law is None or not v_all[n]:
             continue
         v, p = np.concatenate(v_all[n]), np.concatenate(p_all[n])
         ok = np.isfinite(v) & np.isfinite(p) & (v > 0) & (p > 0)
         v, p = v[ok], p[ok]
         ax.plot(v, p, ".", ms=2.5, alpha=0.5, color=colors[n], label=f"{names[n]}, measured")
-        lin = law.get("linear", {})
-        slope, icpt = float(lin.get("slope", np.nan)), float(lin.get("intercept", np.nan))
+        lin = law.linear
+        slope, icpt = _num(lin.slope), _num(lin.intercept)
         grid = np.linspace(0.0, float(v.max()) * 1.05 if v.size else 1.0, 100)
         ax.plot(grid, slope * grid + icpt, color=colors[n], lw=1.3,
                 label=f"{names[n]}: p = {slope:.3g} Pa/(m/s) |v_in| + {icpt:.3g} Pa (r2 "
-                      f"{float(lin.get('r2', np.nan)):.3f})")
+                      f"{_num(lin.r2):.3f})")
         if v.size > 2:  # 95 % band of the mean (OLS), for the plot only
             resid = p - (slope * v + icpt)
             s = math.sqrt(float(np.sum(resid**2)) / (v.size - 2))
@@ -703,7 +695,7 @@ def spl_page(data: ReportData) -> list[Figure]:
 
 # --- model predictions ---------------------------------------------------------------------
 
-def _nondim(g: Mapping[str, Any], f_hz: np.ndarray, a_ms2: np.ndarray) -> tuple[np.ndarray,
+def _nondim(g: GrazingSummary, f_hz: np.ndarray, a_ms2: np.ndarray) -> tuple[np.ndarray,
                                                                                 np.ndarray]:
     # Eq. (2.28) omega = f / f_s and eq. (2.31) F = (Q1/Q2) A / (omega_s^2 h)
     f_s, gap = _pval(g, "f_s_hz"), _pval(g, "gap_m")
@@ -748,25 +740,22 @@ def model_pages(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     g = _grazing(data)
     if g is None:
         raise Missing("needs the grazing fit (gap, f_s, zeta): "
-                      + str(data.results.summary.get("not_fitted", {}).get("grazing", "absent")))
+                      + _fit_summary(data).not_fitted.get("grazing", "absent"))
     fits = _fits(data)
-    e_fit = fits.get("restitution_ratio")
-    if not isinstance(e_fit, Mapping) or e_fit.get("value") is None:
+    e_fit = fits.restitution_ratio
+    if e_fit is None or e_fit.value is None:
         raise Missing("needs a fitted coefficient of restitution e")
     # zeta from replaying the ramps when the fit made it (free of the ramp lag), else eq. (3.4)'s
-    ramp = fits.get("damping_ramp")
-    ramp_zeta = float(ramp["value"]) if isinstance(ramp, Mapping) and ramp.get("value") else None
+    ramp = fits.damping_ramp
+    ramp_zeta = ramp.value if ramp is not None and ramp.value else None
     zeta = ramp_zeta if ramp_zeta is not None else abs(_pval(g, "zeta"))
     zeta_src = "ramp model" if ramp_zeta is not None else "eq. (3.4) fit"
-    e = float(e_fit["value"])
+    e = e_fit.value
     if not 0.0 <= e <= 1.0:
         raise Missing(f"fitted e = {e:.4g} is outside [0, 1]")
     if not (math.isfinite(zeta) and zeta > 0 and math.isfinite(_pval(g, "gap_m"))):
         raise Missing(f"fitted zeta {zeta} or gap unusable for the model")
-    th = data.results.thresholds
-    f = np.asarray(th.get("freq_hz", []), dtype=float)
-    up = np.asarray(th.get("up_ms2", np.full(f.size, np.nan)), dtype=float)
-    down = np.asarray(th.get("down_ms2", np.full(f.size, np.nan)), dtype=float)
+    f, up, down = _threshold_arrays(data)
     w_up, F_up = _nondim(g, f, up)
     w_dn, F_dn = _nondim(g, f, down)
     finite_w = w_up[np.isfinite(w_up)]
@@ -871,11 +860,11 @@ def _acoustic_rows(data: ReportData) -> list[dict[str, Any]]:
     if data.results is None:
         return []
     out = []
-    for row in data.results.summary.get("runs", []):
-        ac = row.get("acoustics")
-        if not isinstance(ac, Mapping):
+    for run in _fit_summary(data).runs:
+        if run.acoustics is None:
             continue
-        r = data.results.runs.get((row.get("input_key"), row.get("run_id")), {})
+        row = run.to_dict()
+        r = data.results.runs.get((run.input_key, run.run_id), {})
         v = np.abs(np.asarray(r.get("v_in_m_s", []), dtype=float))
         v = v[np.isfinite(v)]
         out.append({**row, "v_rms_m_s": float(np.sqrt(np.mean(v**2))) if v.size else np.nan})

@@ -5,8 +5,11 @@ the writers' lock, on a copy renamed over the store; an error leaves the previou
 
     /results                    attrs: results_version (1), created_iso, rattle_lab_version,
                                        provenance (JSON: function, parameters, inputs
-                                       {input_key: ingest_input_hash}), summary (JSON, as
-                                       printed by ``rattle-lab fit --json``)
+                                       {input_key: ingest_input_hash}), summary (JSON of
+                                       ``FitSummary.to_dict()``, as printed by
+                                       ``rattle-lab fit --json``; it carries its own
+                                       ``schema_version``, absent in summaries written
+                                       before the fit results were typed)
     /results/runs/{input_key}/{run_id}
                                 attrs: status ("ok" | "skipped"), reason, protocol, freq_hz,
                                        channels_used (JSON), n_impacts, pattern, pattern_n,
@@ -56,7 +59,10 @@ class StoredResults:
 
     Attributes
     ----------
-    summary, provenance : dict
+    summary : dict
+        The fit summary as stored (:meth:`rattle_lab.fit.FitSummary.to_dict`'s JSON form;
+        :meth:`rattle_lab.fit.FitSummary.from_stored` types it, older layouts included).
+    provenance : dict
         As written.
     runs : dict
         Per-run attributes and arrays, keyed by ``(input_key, run_id)`` (keys as in the
@@ -87,13 +93,16 @@ def _attr(value: Any) -> Any:
 
 
 def _write(fh: h5py.File, fit: Any) -> None:
+    # the summary is typed by the fit package (a layer below would not know it): it writes
+    # itself as JSON values (FitSummary.to_dict, strict JSON with its schema_version)
+    summary = fit.summary.to_dict() if hasattr(fit.summary, "to_dict") else fit.summary
     if "results" in fh:
         del fh["results"]
     root = fh.create_group("results")
     root.attrs.update({"results_version": RESULTS_VERSION, "created_iso": _now_iso(),
                        "rattle_lab_version": __version__,
                        "provenance": json.dumps(fit.provenance, allow_nan=True),
-                       "summary": json.dumps(fit.summary, allow_nan=True)})
+                       "summary": json.dumps(summary, allow_nan=True)})
     runs = root.create_group("runs")
     for r in fit.runs:
         g = runs.require_group(r.input_key).create_group(r.run_id)
@@ -126,7 +135,8 @@ def _write(fh: h5py.File, fit: Any) -> None:
 
 
 def write_results(store: str | os.PathLike[str], fit: Any) -> None:
-    """Replace ``/results`` of ``store`` with ``fit`` (a :class:`rattle_lab.fit._results.StoreFit`).
+    """Replace ``/results`` of ``store`` with ``fit`` (a :class:`rattle_lab.fit._results.StoreFit`,
+    whose ``summary`` is a :class:`rattle_lab.fit.FitSummary`).
 
     Raises
     ------

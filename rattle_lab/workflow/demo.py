@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from rattle_lab.exceptions import OutputError
+from rattle_lab.fit import FitSummary, Fits
 
 #: What the demo writes into its output directory.
 RAW_NAME, STORE_NAME, REPORT_NAME = "raw.h5", "store.h5", "report.pdf"
@@ -29,13 +30,13 @@ def _row(name: str, unit: str, fitted: Any, stderr: Any, truth: float) -> str:
     return f"{name:<26} {fmt(fitted):>12} {fmt(stderr):>12} {fmt(truth):>12} {err:>10}  {unit}"
 
 
-def truth_table(fits: dict[str, Any], truth: Any) -> list[str]:
-    """Lines of the table of fitted values (``summary["fits"]``) against the rig's truth.
+def truth_table(fits: Fits, truth: Any) -> list[str]:
+    """Lines of the table of fitted values (:attr:`FitSummary.fits`) against the rig's truth.
 
     Parameters
     ----------
-    fits : dict
-        The ``fits`` entry of a fit summary (:func:`rattle_lab.fit.summarise_fits`).
+    fits : Fits
+        The fits of a fit summary (:func:`rattle_lab.fit.summarise_fits`).
     truth : Truth
         The synthetic record's truth (:attr:`rattle_lab.rig.Synthesis.record` ``.truth``).
 
@@ -48,23 +49,22 @@ def truth_table(fits: dict[str, Any], truth: Any) -> list[str]:
     lines = [
         f"{'quantity':<26} {'fitted':>12} {'std. error':>12} {'rig truth':>12} {'error':>10}  unit",
     ]
-    graz = fits.get("grazing") or {}
+    graz = fits.grazing
     for key, name, unit, true in (("gap_m", "gap", "m", truth.gap_m),
                                   ("f_s_hz", "f_s", "Hz", truth.f_s_hz),
                                   ("zeta", "zeta", "1", truth.zeta)):
-        p = graz.get(key) or {}
-        lines.append(_row(name, unit, p.get("value"), p.get("stderr"), true))
-    if isinstance(fits.get("damping_ramp"), dict):  # zeta from replaying the ramps, if fitted
-        p = fits["damping_ramp"]
-        lines.append(_row("zeta (ramp model)", "1", p.get("value"), p.get("stderr"), truth.zeta))
-    for key, name in (("restitution_ratio", "e (velocity ratios)"),
-                      ("restitution_down", "e (down thresholds)")):
-        p = fits.get(key) or {}
-        lines.append(_row(name, "1", p.get("value"), p.get("stderr"), truth.e))
-    law = (fits.get("spl_law_first") or {}).get("linear") or {}
-    ci = law.get("slope_ci") or [None, None]
-    half = 0.5 * (ci[1] - ci[0]) if None not in ci else None
-    lines.append(_row("SPL slope, 1st peak (95%)", "Pa/(m/s)", law.get("slope"), half,
+        p = graz.parameters()[key] if graz is not None else None
+        lines.append(_row(name, unit, p and p.value, p and p.stderr, true))
+    if fits.damping_ramp is not None:  # zeta from replaying the ramps, if fitted
+        z = fits.damping_ramp
+        lines.append(_row("zeta (ramp model)", "1", z.value, z.stderr, truth.zeta))
+    for est, name in ((fits.restitution_ratio, "e (velocity ratios)"),
+                      (fits.restitution_down, "e (down thresholds)")):
+        lines.append(_row(name, "1", est and est.value, est and est.stderr, truth.e))
+    law = fits.spl_law_first.linear if fits.spl_law_first is not None else None
+    lo, hi = (law.slope_ci_low, law.slope_ci_high) if law is not None else (None, None)
+    half = 0.5 * (hi - lo) if lo is not None and hi is not None else None
+    lines.append(_row("SPL slope, 1st peak (95%)", "Pa/(m/s)", law and law.slope, half,
                       float(truth.extra.get("acoustic_pa_per_m_s", float("nan")))))
     return lines
 
@@ -132,7 +132,7 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
 
     run = run_pipeline(pipeline, [raw], store=store, out_dir=out, report=out / REPORT_NAME,
                        quiet=quiet, log=log)
-    fits = read_results(store).summary.get("fits", {})
+    fits = FitSummary.from_stored(read_results(store).summary).fits
     print("\nfitted values against the rig's truth:")
     print("\n".join(truth_table(fits, truth)))
     print(f"\nreport: {run.outputs['report'].resolve()}")

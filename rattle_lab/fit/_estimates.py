@@ -1,0 +1,511 @@
+"""Typed fit results: one estimate (value, stderr, interval, unit, notes) and one class per
+store-level fit, each with ``to_dict``/``from_dict`` (the layout is documented in
+:mod:`rattle_lab.fit._summary`).
+
+Every class normalises its fields when built (:class:`_Normalised`): a number that is not
+finite becomes None, NumPy scalars become Python numbers, arrays and lists become tuples and
+mappings become JSON values -- so ``from_dict(to_dict(x)) == x`` holds exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from rattle_lab.exceptions import SummaryFormatError
+
+_F = "float | None"
+
+
+# --- normalisation: the one place where numbers, arrays and mappings become JSON values -------
+
+def _num(x: Any) -> float | None:
+    """``float(x)``, or None for None and non-finite values."""
+    if x is None:
+        return None
+    if isinstance(x, (bool, np.bool_, str, bytes)):
+        raise TypeError(f"expected a number or None, got {x!r}")
+    v = float(x)
+    return v if math.isfinite(v) else None
+
+
+def _int(x: Any) -> int:
+    if isinstance(x, (bool, np.bool_)) or isinstance(x, (float, np.floating)) and x != int(x):
+        raise TypeError(f"expected an integer, got {x!r}")
+    return int(x)
+
+
+def _nums(xs: Any) -> tuple[float | None, ...]:
+    if isinstance(xs, (str, bytes, Mapping)):
+        raise TypeError(f"expected a sequence of numbers, got {xs!r}")
+    return tuple(_num(x) for x in (np.asarray(xs).ravel() if isinstance(xs, np.ndarray) else xs))
+
+
+def _strs(xs: Any) -> tuple[str, ...]:
+    if isinstance(xs, (str, bytes, Mapping)):
+        raise TypeError(f"expected a sequence of strings, got {xs!r}")
+    return tuple(_str(x) for x in xs)
+
+
+def _str(x: Any) -> str:
+    if not isinstance(x, str):
+        raise TypeError(f"expected a string, got {x!r}")
+    return x
+
+
+def _json(x: Any) -> Any:
+    """A JSON value: mappings with str keys, lists, str, int, float (finite), bool, None."""
+    if isinstance(x, Mapping):
+        return {str(k): _json(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [_json(v) for v in x]
+    if x is None or isinstance(x, (str, bool)):
+        return x
+    if isinstance(x, np.bool_):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return _num(x)
+    raise TypeError(f"not a JSON value: {x!r}")
+
+
+_COERCE: dict[str, Any] = {
+    _F: _num,
+    "int": _int,
+    "bool": lambda v: bool(v) if isinstance(v, (bool, np.bool_)) else _fail("a bool", v),
+    "str": _str,
+    "tuple[str, ...]": _strs,
+    "tuple[float | None, ...]": _nums,
+    "tuple[tuple[float | None, ...], ...]": lambda m: tuple(_nums(r) for r in m),
+    "dict[str, Any] | None": lambda v: None if v is None else _mapping(v),
+    "dict[str, str]": lambda v: {_str(k): _str(w) for k, w in _mapping(v).items()},
+    "tuple[dict[str, Any], ...]": lambda v: tuple(_mapping(m) for m in v),
+}
+
+
+def _fail(what: str, v: Any) -> Any:
+    raise TypeError(f"expected {what}, got {v!r}")
+
+
+def _mapping(v: Any) -> dict[str, Any]:
+    if not isinstance(v, Mapping):
+        raise TypeError(f"expected a mapping, got {v!r}")
+    out: dict[str, Any] = _json(v)
+    return out
+
+
+class _Normalised:
+    """Mixin: coerce every field to its canonical JSON-compatible form when built.
+
+    The coercion is chosen by the field's annotation (a string, under ``from __future__
+    import annotations``) through :data:`_COERCE`; a field of another type (a nested result
+    class) is left as given.
+    """
+
+    def __post_init__(self) -> None:
+        for f in fields(self):  # type: ignore[arg-type]
+            coerce = _COERCE.get(str(f.type))
+            if coerce is not None:
+                try:
+                    value = coerce(getattr(self, f.name))
+                except (TypeError, ValueError) as exc:
+                    raise SummaryFormatError(f"{type(self).__name__}.{f.name}: {exc}") from exc
+                object.__setattr__(self, f.name, value)
+
+
+class _In:
+    """A mapping being read by ``from_dict``: every error names the path of the field."""
+
+    def __init__(self, d: Any, path: str):
+        if not isinstance(d, Mapping):
+            raise SummaryFormatError(f"summary: {path}: expected a mapping, got {d!r}")
+        self.d, self.path = d, path
+
+    def __contains__(self, key: str) -> bool:
+        return key in self.d
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in self.d:
+            raise SummaryFormatError(f"summary: {self.path}: missing {key!r}")
+        return self.d[key]
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return self.d.get(key, default)
+
+    def sub(self, key: str) -> _In:
+        return _In(self[key], f"{self.path}.{key}")
+
+    def pair(self, key: str) -> tuple[float | None, float | None]:
+        v = self[key]
+        if not isinstance(v, (list, tuple)) or len(v) != 2:
+            raise SummaryFormatError(f"summary: {self.path}.{key}: expected [low, high], got {v!r}")
+        return v[0], v[1]
+
+    def build(self, cls: Any, **kw: Any) -> Any:
+        try:
+            return cls(**kw)
+        except SummaryFormatError as exc:
+            raise SummaryFormatError(f"summary: {self.path}: {exc}") from exc
+
+
+# --- estimates ------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Estimate(_Normalised):
+    """One fitted quantity.
+
+    Attributes
+    ----------
+    value : float or None
+        Best estimate, in ``unit`` (None: not available).
+    stderr : float or None
+        Standard error, in ``unit`` (None: not identifiable / not computed).
+    unit : str
+        ``"m"``, ``"Hz"``, ``"1"`` (nondimensional), ...
+    ci_low, ci_high : float or None
+        Confidence interval as the fit gives it (2 sigma profile interval for the lmfit
+        fits); None when not computed.
+    notes : tuple of str
+        Data-quality notes on this value (e.g. a stderr that leaves out a known bias).
+    """
+
+    value: float | None
+    stderr: float | None
+    unit: str
+    ci_low: float | None = None
+    ci_high: float | None = None
+    notes: tuple[str, ...] = ()
+
+    def _base(self, *, ci: bool = True) -> dict[str, Any]:
+        d: dict[str, Any] = {"value": self.value, "stderr": self.stderr, "unit": self.unit}
+        if ci:
+            d["ci"] = [self.ci_low, self.ci_high]
+        return d
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"value", "stderr", "unit", "ci": [low, high]}``, and ``"notes"`` when any."""
+        d = self._base()
+        if self.notes:
+            d["notes"] = list(self.notes)
+        return d
+
+    @staticmethod
+    def _read(r: _In, *, ci: bool = True) -> dict[str, Any]:
+        lo, hi = r.pair("ci") if ci or "ci" in r else (None, None)
+        return dict(value=r["value"], stderr=r["stderr"], unit=r["unit"], ci_low=lo, ci_high=hi,
+                    notes=r.get("notes", ()))
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "estimate") -> Estimate:
+        """Inverse of :meth:`to_dict`."""
+        r = _In(d, path)
+        return r.build(cls, **cls._read(r))  # type: ignore[no-any-return]
+
+
+@dataclass(frozen=True)
+class GrazingParameter(Estimate):
+    """A parameter of the eq. (3.4) grazing fit (``gap_m`` m, ``f_s_hz`` Hz, ``zeta`` and
+    ``participation`` nondimensional).
+
+    Attributes
+    ----------
+    vary : bool
+        False for a parameter held fixed (``participation`` by default).
+    bias_rel : float or None
+        ``zeta`` only, with a ramp-replay damping: ``zeta / zeta_ramp - 1`` (eq. 3.4 reads
+        the ramp lag as damping; its interval leaves that out).
+    bias_note : str
+        The same in words ("" when not computed).
+    """
+
+    vary: bool = True
+    bias_rel: float | None = None
+    bias_note: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {**super().to_dict(), "vary": self.vary}
+        if self.bias_rel is not None or self.bias_note:
+            d.update(bias_rel=self.bias_rel, bias_note=self.bias_note)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "parameter") -> GrazingParameter:
+        r = _In(d, path)
+        return r.build(cls, **cls._read(r), vary=r["vary"],  # type: ignore[no-any-return]
+                       bias_rel=r.get("bias_rel"), bias_note=r.get("bias_note", ""))
+
+
+@dataclass(frozen=True)
+class GrazingSummary(_Normalised):
+    """The eq. (3.4) grazing fit of the upward thresholds (:func:`~rattle_lab.fit.fit_grazing`).
+
+    Attributes
+    ----------
+    gap_m, f_s_hz, zeta, participation : GrazingParameter
+        Gap (m), natural frequency (Hz), damping ratio and modal participation ``Q1/Q2``.
+    unidentifiable : tuple of str
+        Notes on parameters the data cannot identify.
+    outliers_hz : tuple of float
+        Frequencies of the points left out as outliers, Hz.
+    residuals_ms2 : tuple of float or None
+        Model minus measured crossing level per threshold, m/s^2.
+    correlation_names : tuple of str
+        The varied parameters, in the order of ``correlation``.
+    correlation : tuple of tuple of float or None
+        Their correlation matrix (None entries without a covariance).
+    redchi : float or None
+        Reduced chi-square.
+    """
+
+    gap_m: GrazingParameter
+    f_s_hz: GrazingParameter
+    zeta: GrazingParameter
+    participation: GrazingParameter
+    unidentifiable: tuple[str, ...] = ()
+    outliers_hz: tuple[float | None, ...] = ()
+    residuals_ms2: tuple[float | None, ...] = ()
+    correlation_names: tuple[str, ...] = ()
+    correlation: tuple[tuple[float | None, ...], ...] = ()
+    redchi: float | None = None
+
+    PARAMETERS = ("gap_m", "f_s_hz", "zeta", "participation")
+
+    def parameters(self) -> dict[str, GrazingParameter]:
+        """``{"gap_m": ..., "f_s_hz": ..., "zeta": ..., "participation": ...}``."""
+        return {n: getattr(self, n) for n in self.PARAMETERS}
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**{n: p.to_dict() for n, p in self.parameters().items()},
+                "unidentifiable": list(self.unidentifiable),
+                "outliers_hz": list(self.outliers_hz),
+                "residuals_ms2": list(self.residuals_ms2),
+                "correlation": {"names": list(self.correlation_names),
+                                "matrix": [list(row) for row in self.correlation]},
+                "redchi": self.redchi}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "fits.grazing") -> GrazingSummary:
+        r = _In(d, path)
+        corr = r.sub("correlation")
+        params = {n: GrazingParameter.from_dict(r[n], f"{path}.{n}") for n in cls.PARAMETERS}
+        return r.build(cls, **params, unidentifiable=r["unidentifiable"],  # type: ignore[no-any-return]
+                       outliers_hz=r["outliers_hz"], residuals_ms2=r["residuals_ms2"],
+                       correlation_names=corr["names"], correlation=corr["matrix"],
+                       redchi=r["redchi"])
+
+
+@dataclass(frozen=True)
+class RatioRestitution(Estimate):
+    """``e`` as the mean of the per-impact velocity ratios ``-v_out/v_in`` (nondimensional).
+
+    Attributes
+    ----------
+    std, median : float or None
+        Spread and median of the ratios.
+    n : int
+        Impacts with a velocity on both sides.
+    """
+
+    std: float | None = None
+    median: float | None = None
+    n: int = 0
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {**self._base(ci=self.ci_low is not None or self.ci_high is not None),
+             "std": self.std, "median": self.median, "n": self.n}
+        if self.notes:
+            d["notes"] = list(self.notes)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "fits.restitution_ratio"
+                  ) -> RatioRestitution:
+        r = _In(d, path)
+        return r.build(cls, **cls._read(r, ci=False), std=r["std"],  # type: ignore[no-any-return]
+                       median=r["median"], n=r["n"])
+
+
+@dataclass(frozen=True)
+class RampDamping(Estimate):
+    """``zeta`` refitted to the upward thresholds by replaying each ramp (nondimensional;
+    :func:`~rattle_lab.fit.fit_zeta_ramp`).
+
+    Attributes
+    ----------
+    method : str
+        How it was fitted.
+    n : int
+        Thresholds used.
+    residuals_ms2 : tuple of float or None
+        Model minus measured threshold, m/s^2.
+    """
+
+    method: str = ""
+    n: int = 0
+    residuals_ms2: tuple[float | None, ...] = ()
+
+    def _extra(self) -> dict[str, Any]:
+        return {"method": self.method, "n": self.n}
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**self._base(), **self._extra(), "residuals_ms2": list(self.residuals_ms2),
+                "notes": list(self.notes)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "fits.damping_ramp") -> RampDamping:
+        r = _In(d, path)
+        return r.build(cls, **cls._read(r), method=r["method"], n=r["n"],  # type: ignore[no-any-return]
+                       residuals_ms2=r["residuals_ms2"])
+
+
+@dataclass(frozen=True)
+class DownRestitution(RampDamping):
+    """``e`` from the disappearance (downward) thresholds (nondimensional;
+    :func:`~rattle_lab.fit.fit_restitution_down`).
+
+    Attributes
+    ----------
+    run_ids : tuple of str
+        The runs whose thresholds were used.
+    zeta_used : float or None
+        The damping ratio the fit held.
+    stderr_from_zeta : float or None
+        The part of ``stderr`` propagated from ``zeta``'s.
+    """
+
+    run_ids: tuple[str, ...] = ()
+    zeta_used: float | None = None
+    stderr_from_zeta: float | None = None
+
+    def _extra(self) -> dict[str, Any]:
+        return {"method": self.method, "n": self.n, "run_ids": list(self.run_ids),
+                "zeta_used": self.zeta_used, "stderr_from_zeta": self.stderr_from_zeta}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "fits.restitution_down"
+                  ) -> DownRestitution:
+        r = _In(d, path)
+        return r.build(cls, **cls._read(r), method=r["method"], n=r["n"],  # type: ignore[no-any-return]
+                       residuals_ms2=r["residuals_ms2"], run_ids=r["run_ids"],
+                       zeta_used=r["zeta_used"], stderr_from_zeta=r["stderr_from_zeta"])
+
+
+@dataclass(frozen=True)
+class LinearLawSummary(_Normalised):
+    """``|p| = slope |v| + intercept`` (:class:`~rattle_lab.fit.LinearLaw`): slope Pa/(m/s),
+    intercept Pa, each with its 95 % interval; ``r2`` and the ``n`` points used."""
+
+    slope: float | None
+    slope_ci_low: float | None
+    slope_ci_high: float | None
+    intercept: float | None
+    intercept_ci_low: float | None
+    intercept_ci_high: float | None
+    r2: float | None
+    n: int
+    slope_unit: str = "Pa/(m/s)"
+    intercept_unit: str = "Pa"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"slope": self.slope, "slope_ci": [self.slope_ci_low, self.slope_ci_high],
+                "intercept": self.intercept,
+                "intercept_ci": [self.intercept_ci_low, self.intercept_ci_high],
+                "r2": self.r2, "n": self.n, "slope_unit": self.slope_unit,
+                "intercept_unit": self.intercept_unit}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "linear") -> LinearLawSummary:
+        r = _In(d, path)
+        s, i = r.pair("slope_ci"), r.pair("intercept_ci")
+        return r.build(cls, slope=r["slope"], slope_ci_low=s[0],  # type: ignore[no-any-return]
+                       slope_ci_high=s[1], intercept=r["intercept"], intercept_ci_low=i[0],
+                       intercept_ci_high=i[1], r2=r["r2"], n=r["n"],
+                       slope_unit=r["slope_unit"], intercept_unit=r["intercept_unit"])
+
+
+@dataclass(frozen=True)
+class DbLawSummary(_Normalised):
+    """``L = 20 log10 v + c_db`` (:class:`~rattle_lab.fit.DbLaw`): ``c_db`` in dB re 20 uPa at
+    1 m/s with its 95 % interval, the free slope ``k_db_per_decade`` and ``n`` points."""
+
+    c_db: float | None
+    c_ci_low: float | None
+    c_ci_high: float | None
+    k_db_per_decade: float | None
+    n: int
+    unit: str = "dB re 20 uPa at 1 m/s"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"c_db": self.c_db, "c_ci": [self.c_ci_low, self.c_ci_high],
+                "k_db_per_decade": self.k_db_per_decade, "n": self.n, "unit": self.unit}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "db") -> DbLawSummary:
+        r = _In(d, path)
+        c = r.pair("c_ci")
+        return r.build(cls, c_db=r["c_db"], c_ci_low=c[0], c_ci_high=c[1],  # type: ignore[no-any-return]
+                       k_db_per_decade=r["k_db_per_decade"], n=r["n"], unit=r["unit"])
+
+
+@dataclass(frozen=True)
+class SplLawSummary:
+    """The SPL law of one peak measure (first, max or RMS) against impact velocity."""
+
+    linear: LinearLawSummary
+    db: DbLawSummary
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"linear": self.linear.to_dict(), "db": self.db.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "spl_law") -> SplLawSummary:
+        r = _In(d, path)
+        return cls(LinearLawSummary.from_dict(r["linear"], f"{path}.linear"),
+                   DbLawSummary.from_dict(r["db"], f"{path}.db"))
+
+
+_FIT_TYPES: dict[str, Any] = {
+    "grazing": GrazingSummary, "restitution_ratio": RatioRestitution,
+    "damping_ramp": RampDamping, "restitution_down": DownRestitution,
+    "spl_law_first": SplLawSummary, "spl_law_max": SplLawSummary, "spl_law_rms": SplLawSummary,
+}
+
+
+@dataclass(frozen=True)
+class Fits:
+    """The fits that were made (None: not made; :attr:`FitSummary.not_fitted` says why)."""
+
+    grazing: GrazingSummary | None = None
+    restitution_ratio: RatioRestitution | None = None
+    damping_ramp: RampDamping | None = None
+    restitution_down: DownRestitution | None = None
+    spl_law_first: SplLawSummary | None = None
+    spl_law_max: SplLawSummary | None = None
+    spl_law_rms: SplLawSummary | None = None
+
+    def spl_law(self, name: str) -> SplLawSummary | None:
+        """The SPL law of peak measure ``name`` (``"first"``, ``"max"`` or ``"rms"``)."""
+        law: SplLawSummary | None = getattr(self, f"spl_law_{name}")
+        return law
+
+    def to_dict(self) -> dict[str, Any]:
+        return {n: getattr(self, n).to_dict() for n in _FIT_TYPES if getattr(self, n) is not None}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "fits") -> Fits:
+        r = _In(d, path)
+        unknown = sorted(set(r.d) - set(_FIT_TYPES))
+        if unknown:
+            raise SummaryFormatError(f"summary: {path}: unknown fit {unknown[0]!r}")
+        return cls(**{n: t.from_dict(r[n], f"{path}.{n}") for n, t in _FIT_TYPES.items()
+                      if n in r})
+
+
+__all__ = ["DbLawSummary", "DownRestitution", "Estimate", "Fits", "GrazingParameter",
+           "GrazingSummary", "LinearLawSummary", "RampDamping", "RatioRestitution",
+           "SplLawSummary"]
