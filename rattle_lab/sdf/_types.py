@@ -171,6 +171,21 @@ class ImpactLog:
     def __len__(self) -> int:
         return int(self.t.size)
 
+    @classmethod
+    def _from_columns(cls, cols: np.ndarray) -> ImpactLog:
+        """The log of a kernel's impact block ``cols``, shape (4, n), C-contiguous float.
+
+        The block is made read-only and its rows (contiguous views) become the fields:
+        the same object as ``ImpactLog(*cols)``, without a copy or check per field.
+        """
+        if not (cols.dtype == np.float64 and cols.flags.c_contiguous and cols.shape[0] == 4):
+            return cls(t=cols[0], phase=cols[1], v_in=cols[2], v_out=cols[3])
+        cols.setflags(write=False)
+        obj = object.__new__(cls)
+        object.__setattr__(obj, "__dict__", {"t": cols[0], "phase": cols[1],
+                                             "v_in": cols[2], "v_out": cols[3]})
+        return obj
+
 
 @dataclass(frozen=True)
 class Crossings:
@@ -274,8 +289,9 @@ class SimResult:
         """The result of a simulator kernel, built without the frozen dataclass's per-field
         ``__setattr__`` (it has no ``__post_init__``; the same object otherwise)."""
         obj = object.__new__(cls)
-        obj.__dict__.update(params=params, method=method, impacts=impacts,
-                            accumulations=accumulations, sticking=sticking,
-                            crossings=crossings, dense=dense, state=state,
-                            n_events=n_events, micro_bounce=micro_bounce)
+        object.__setattr__(obj, "__dict__", {
+            "params": params, "method": method, "impacts": impacts,
+            "accumulations": accumulations, "sticking": sticking, "crossings": crossings,
+            "dense": dense, "state": state, "n_events": n_events,
+            "micro_bounce": micro_bounce})
         return obj
