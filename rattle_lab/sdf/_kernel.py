@@ -471,6 +471,8 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi):
     if not (lo < s < hi):
         s = 0.5 * (lo + hi)
     width_old = hi - lo
+    f_old = math.inf
+    probe = 0.0  # length of the last probe from an end of the bracket (0: none)
     for it in range(200):
         g, gv, ga, y, yd = level_values(P, S, s, c, sig)
         if which == 0:
@@ -486,10 +488,23 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi):
         if hi - lo <= tol:
             break
         sn = s - f / fp if fp != 0.0 else 0.5 * (lo + hi)
-        if it % 3 == 2:
-            if hi - lo > 0.5 * width_old:
+        # Newton has converged onto one end of the bracket (a step within rounding, to
+        # that end or past it): the root is within rounding of that end, so probe just
+        # inside it, doubling the probe while the sign stays, instead of halving the
+        # whole bracket from the far side (which took ~25 evaluations where one Newton
+        # sequence had converged from one side).
+        if abs(sn - s) <= 4.0 * tol and (sn <= lo + tol or sn >= hi - tol):
+            probe = tol if probe == 0.0 else 2.0 * probe
+            sn = lo + probe if f < 0.0 else hi - probe
+        else:
+            probe = 0.0
+            # every third step: bisect if neither the bracket halved nor |f| fell 4-fold
+            # (a Newton sequence converging from one side shrinks |f|, not the bracket)
+            if it % 3 == 2 and hi - lo > 0.5 * width_old and not abs(f) < 0.25 * f_old:
                 sn = 0.5 * (lo + hi)
+        if it % 3 == 2:
             width_old = hi - lo
+            f_old = abs(f)
         s, converged = _safeguard_newton(s, sn, lo, hi)
         if converged:
             break
@@ -681,9 +696,17 @@ def micro_flight(P, S, s_hi):
         return -1.0
     lb = t2
     sk = 1.0
+    # The Newton iteration below sums the series only up to the last term that can
+    # still reach the rounding of p: |t_k| s^(k-1) > 2^-80 |t_1| on [0, s_max]
+    # (a term below that is 2^-27 of an ulp of t_1, the size of p's terms at the root).
+    thr = 2.0 ** -80 * abs(t1)
+    n_use = 2
     for k in range(3, N_TAYLOR + 1):
         sk *= s_max
-        lb -= (k - 1) * abs(S[J_TAY + k]) * sk
+        term = abs(S[J_TAY + k]) * sk
+        lb -= (k - 1) * term
+        if term * s_max > thr:
+            n_use = k
     if lb <= 0.25 * t2:
         return -1.0
     ph = 0.0
@@ -697,9 +720,9 @@ def micro_flight(P, S, s_hi):
     for it in range(100):
         f = 0.0
         fp = 0.0
-        for k in range(N_TAYLOR, 0, -1):
+        for k in range(n_use, 0, -1):
             f = f * s + S[J_TAY + k]
-        for k in range(N_TAYLOR, 1, -1):
+        for k in range(n_use, 1, -1):
             fp = fp * s + (k - 1) * S[J_TAY + k]
         if f == 0.0:
             return s
@@ -713,30 +736,66 @@ def micro_flight(P, S, s_hi):
 
 
 @jit
-def stop_exit(P, S, hmax):
-    """Leave the stop: (+1, 0) if the motion pushes into the stop (stick), else
-    (-1, u1) with g < 0 proven on (0, u1].  Uses the leading nonzero Taylor term."""
-    y = S[J_Y]
-    yd = S[J_YD]
+def stop_sign(P, S):
+    """Leaving the stop or pushed into it, from the leading nonzero Taylor term.
+
+    Returns (+1, 0) if the motion pushes into the stop (stick), else (-1, k) with
+    ``k`` the order of the leading nonzero term ``t_k < 0`` (0: all of t_1..t_4
+    vanish, degenerate).
+    """
     for k in range(1, 5):
         tk = S[J_TAY + k]
         if tk > 0.0:
-            return 1.0, 0.0
+            return 1.0, 0
         if tk < 0.0:
-            u = hmax
-            # g(u) <= t_k u^k + M_{k+1} u^{k+1} / (k+1)!  < 0  for u < |t_k| (k+1)! / M
-            for it in range(60):
-                M = deriv_bound(P, k + 1, y, yd, u, 1.0, S[J_TAY + 1], u)
-                fact = 1.0
-                for j in range(2, k + 2):
-                    fact *= j
-                u_ok = abs(tk) * fact / M
-                if u_ok > u:
-                    break
-                u = 0.5 * u_ok
-            return -1.0, u
-    # all leading terms vanish (degenerate): leave with a tiny advance
-    return -1.0, 64.0 * EPS
+            return -1.0, k
+    return -1.0, 0
+
+
+@jit
+def stop_clear(P, S, hmax, k):
+    """Advance u with g < 0 proven on (0, u], leaving the stop with leading term t_k < 0."""
+    if k == 0:
+        # all leading terms vanish (degenerate): leave with a tiny advance
+        return 64.0 * EPS
+    y = S[J_Y]
+    yd = S[J_YD]
+    tk = S[J_TAY + k]
+    u = hmax
+    # g(u) <= t_k u^k + M_{k+1} u^{k+1} / (k+1)!  < 0  for u < |t_k| (k+1)! / M
+    for it in range(60):
+        M = deriv_bound(P, k + 1, y, yd, u, 1.0, S[J_TAY + 1], u)
+        fact = 1.0
+        for j in range(2, k + 2):
+            fact *= j
+        u_ok = abs(tk) * fact / M
+        if u_ok > u:
+            break
+        u = 0.5 * u_ok
+    return u
+
+
+@jit
+def stop_exit(P, S, hmax):
+    """Leave the stop: (+1, 0) if the motion pushes into the stop (stick), else
+    (-1, u1) with g < 0 proven on (0, u1].  Uses the leading nonzero Taylor term.
+
+    (:func:`run` calls the two halves, :func:`stop_sign` and :func:`stop_clear`, and the
+    second only when the flight is not a micro-flight, which needs no ``u1``.)
+    """
+    sgn, k = stop_sign(P, S)
+    if sgn > 0.0:
+        return 1.0, 0.0
+    return -1.0, stop_clear(P, S, hmax, k)
+
+
+@jit
+def taylor_velocity(S, s):
+    """x'(s) of a flight from the stop, from its Taylor series (as :func:`evaluate`)."""
+    vs = 0.0
+    for k in range(N_TAYLOR, 0, -1):
+        vs = vs * s + k * S[J_TAY + k]
+    return vs
 
 
 @jit
@@ -983,21 +1042,25 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             n_seg += 1
         Wn = min(W, rem)
         s_lo = 0.0
+        sgn = 1.0
+        k_lead = 0
         if on_stop:
-            sgn, u1 = stop_exit(P, S, hmax)
+            sgn, k_lead = stop_sign(P, S)
             if sgn > 0.0 and not released_now:
                 stuck = True
                 x = 1.0
                 v = 0.0
                 n_seg -= 1 if want_segs else 0
                 continue
-            s_lo = min(u1, Wn)
         released_now = False
         s_imp = -1.0
         micro = False
         if on_stop:
             s_imp = micro_flight(P, S, Wn)
             micro = s_imp >= 0.0
+            if not micro and sgn < 0.0:
+                # the first instants, proven clear of the stop (a micro-flight needs none)
+                s_lo = min(stop_clear(P, S, hmax, k_lead), Wn)
         if not micro and s_lo < Wn:
             s_imp = first_reach(P, S, 1.0, 1.0, s_lo, Wn, hmax, diag, work)
         s_end = s_imp if s_imp >= 0.0 else Wn
@@ -1038,7 +1101,10 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             last_was_impact = False
             continue
         # impact
-        xi, v_in, ai, yi, ydi, zi = evaluate(P, S, s_imp)
+        if micro:  # evaluate() would take the Taylor branch; only its velocity is needed
+            v_in = taylor_velocity(S, s_imp)
+        else:
+            xi, v_in, ai, yi, ydi, zi = evaluate(P, S, s_imp)
         if v_in < 0.0:
             v_in = 0.0  # grazing: the crossing velocity is zero to rounding
         t_imp = _time_at(t, t_lo, s_imp)
