@@ -487,7 +487,12 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi):
         tol = 2.0 * EPS * max(abs(lo), abs(hi), 1e-300)
         if hi - lo <= tol:
             break
-        sn = s - f / fp if fp != 0.0 else 0.5 * (lo + hi)
+        if which == 0 and fp != 0.0:
+            # Halley's step (g'' comes with g and g' at no cost): cubic convergence
+            den2 = 2.0 * fp * fp - f * ga
+            sn = s - 2.0 * f * fp / den2 if den2 > 0.5 * fp * fp else s - f / fp
+        else:
+            sn = s - f / fp if fp != 0.0 else 0.5 * (lo + hi)
         # Newton has converged onto one end of the bracket (a step within rounding, to
         # that end or past it): the root is within rounding of that end, so probe just
         # inside it, doubling the probe while the sign stays, instead of halving the
@@ -581,7 +586,6 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
         xa = c + sig * ga
         vxa = sig * gva
         M2 = deriv_bound(P, 2, ya, yda, b0, xa, vxa, L)
-        M3 = deriv_bound(P, 3, ya, yda, b0, xa, vxa, L)
         tiny = L <= 4.0 * EPS * max(abs(b0), 1e-300) or level >= MAX_LEVEL
         work += 1
         if work > MAX_WORK:
@@ -592,6 +596,7 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
             # a root lies in (a0, b0]; find the earliest one
             if _lower_line_bound(gva, gvbb, M2, L) > 0.0 or tiny:
                 return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+            M3 = deriv_bound(P, 3, ya, yda, b0, xa, vxa, L)  # only where M2 did not settle it
             uba = _upper_line_bound(gaa, gabb, M3, L)
             lba = _lower_line_bound(gaa, gabb, M3, L)
             if lba > 0.0:  # convex: a single crossing
@@ -609,6 +614,7 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
                 return b0  # touches the stop (within rounding) at the chunk end
             if _max_min_parabolas(ga, gva, gbb, gvbb, M2, L) < -gtol:
                 continue
+            M3 = deriv_bound(P, 3, ya, yda, b0, xa, vxa, L)
             uba = _upper_line_bound(gaa, gabb, M3, L)
             lba = _lower_line_bound(gaa, gabb, M3, L)
             if lba > 0.0:
