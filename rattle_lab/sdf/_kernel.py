@@ -236,7 +236,15 @@ def reduce_phase(th):
 @jit
 def start_segment(P, S, th, x, v, on_stop):
     """Fill the segment vector S for a free flight starting at (x, v, th)."""
-    xp, vp = particular(P, th, 0.0)
+    cth = math.cos(th)  # one cos and one sin for the particular part and the Taylor terms
+    sth = math.sin(th)
+    if P[I_RES] != 0.0:  # particular(P, th, 0.0), with the cos and sin above
+        h = 0.5 * P[I_F]
+        xp = h * 0.0 * sth
+        vp = h * (sth + 0.0 * cth)
+    else:
+        xp = P[I_AC] * cth + P[I_AS] * sth
+        vp = P[I_W] * (P[I_AS] * cth - P[I_AC] * sth)
     S[J_TH] = th
     S[J_Y] = x - xp
     S[J_YD] = v - vp
@@ -252,8 +260,6 @@ def start_segment(P, S, th, x, v, on_stop):
         S[J_TAY + 1] = v
         fact = 1.0
         wk = 1.0
-        cth = math.cos(th)  # one cos and one sin for all the terms
-        sth = math.sin(th)
         for k in range(N_TAYLOR - 1):
             q = k % 4
             if q == 0:
