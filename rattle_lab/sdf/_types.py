@@ -182,8 +182,11 @@ class ImpactLog:
             return cls(t=cols[0], phase=cols[1], v_in=cols[2], v_out=cols[3])
         cols.setflags(write=False)
         obj = object.__new__(cls)
-        object.__setattr__(obj, "__dict__", {"t": cols[0], "phase": cols[1],
-                                             "v_in": cols[2], "v_out": cols[3]})
+        d = obj.__dict__   # the frozen dataclass's fields, set without its __setattr__
+        d["t"] = cols[0]
+        d["phase"] = cols[1]
+        d["v_in"] = cols[2]
+        d["v_out"] = cols[3]
         return obj
 
 
@@ -289,9 +292,15 @@ class SimResult:
         """The result of a simulator kernel, built without the frozen dataclass's per-field
         ``__setattr__`` (it has no ``__post_init__``; the same object otherwise)."""
         obj = object.__new__(cls)
-        object.__setattr__(obj, "__dict__", {
-            "params": params, "method": method, "impacts": impacts,
-            "accumulations": accumulations, "sticking": sticking, "crossings": crossings,
-            "dense": dense, "state": state, "n_events": n_events,
-            "micro_bounce": micro_bounce})
+        d = obj.__dict__
+        d["params"] = params
+        d["method"] = method
+        d["impacts"] = impacts
+        d["accumulations"] = accumulations
+        d["sticking"] = sticking
+        d["crossings"] = crossings
+        d["dense"] = dense
+        d["state"] = state
+        d["n_events"] = n_events
+        d["micro_bounce"] = micro_bounce
         return obj
