@@ -47,10 +47,10 @@ def test_impact_roots_take_few_evaluations(name: str, monkeypatch: pytest.Monkey
             depth[-1] += 1
         return level_values(*args)
 
-    def counting_root(P, S, c, sig, which, lo, hi, flo, fhi):  # type: ignore[no-untyped-def]
+    def counting_root(P, S, c, sig, which, lo, hi, *ends):  # type: ignore[no-untyped-def]
         depth.append(0)
         try:
-            s = root(P, S, c, sig, which, lo, hi, flo, fhi)
+            s = root(P, S, c, sig, which, lo, hi, *ends)
         finally:
             per_root.append(depth.pop())
         if which == 0 and c == 1.0:  # an impact: g = sig (x - 1)

@@ -463,17 +463,36 @@ def _safeguard_newton(s, sn, lo, hi):
 
 
 @jit
-def _root(P, S, c, sig, which, lo, hi, flo, fhi):
-    """Bracketed root of f on [lo, hi] with f(lo) < 0 <= f(hi).
+def _halley_step(s, f, fp, fpp):
+    """Halley's step from s (Newton's where Halley's denominator is small); -1 if fp <= 0."""
+    if not fp > 0.0:
+        return -1.0
+    den = 2.0 * fp * fp - f * fpp
+    if den > 0.5 * fp * fp:
+        return s - 2.0 * f * fp / den
+    return s - f / fp
+
+
+@jit
+def _root(P, S, c, sig, which, lo, hi, flo, fhi, dlo, dhi, d2lo, d2hi):
+    """Bracketed root of f on [lo, hi] with f(lo) < 0 <= f(hi); f', f'' there.
 
     which = 0: f = g (returns the smallest point found with g >= 0);
     which = 1: f = -g' (critical point of g, a maximum).
-    Safeguarded Newton with bisection fallback; converges to rounding.
+    Safeguarded Newton with bisection fallback; converges to rounding.  The first
+    iterate is the Newton step from the end where |f| is smaller, if it falls inside
+    the bracket, else the secant.
     """
     if fhi == 0.0:
         return hi
-    den = fhi - flo
-    s = hi - fhi * ((hi - lo) / den) if den > 0.0 else 0.5 * (lo + hi)
+    s = -1.0
+    if -flo < fhi:
+        s = _halley_step(lo, flo, dlo, d2lo)
+    else:
+        s = _halley_step(hi, fhi, dhi, d2hi)
+    if not (lo < s < hi):
+        den = fhi - flo
+        s = hi - fhi * ((hi - lo) / den) if den > 0.0 else 0.5 * (lo + hi)
     if not (lo < s < hi):
         s = 0.5 * (lo + hi)
     width_old = hi - lo
@@ -601,20 +620,20 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
         if gbb >= 0.0:
             # a root lies in (a0, b0]; find the earliest one
             if _lower_line_bound(gva, gvbb, M2, L) > 0.0 or tiny:
-                return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+                return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
             M3 = deriv_bound(P, 3, ya, yda, b0, xa, vxa, L)  # only where M2 did not settle it
             uba = _upper_line_bound(gaa, gabb, M3, L)
             lba = _lower_line_bound(gaa, gabb, M3, L)
             if lba > 0.0:  # convex: a single crossing
-                return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+                return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
             if uba < 0.0:  # concave: rises to one maximum then falls
                 if gvbb >= 0.0 or gva <= 0.0:
-                    return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
-                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb)
+                    return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
+                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb, -gaa, -gabb, 0.0, 0.0)
                 gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
                 if gc >= 0.0:
-                    return _root(P, S, c, sig, 0, a0, sc, ga, gc)
-                return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+                    return _root(P, S, c, sig, 0, a0, sc, ga, gc, gva, gvc, gaa, gac)
+                return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
         else:
             if graze and gbb >= -GRAZE_TOL and gvbb >= 0.0:
                 return b0  # touches the stop (within rounding) at the chunk end
@@ -628,10 +647,10 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
             if uba < 0.0:
                 if gva <= 0.0 or gvbb >= 0.0:
                     continue  # monotone: the maximum is at an end
-                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb)
+                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb, -gaa, -gabb, 0.0, 0.0)
                 gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
                 if gc >= 0.0:
-                    return _root(P, S, c, sig, 0, a0, sc, ga, gc)
+                    return _root(P, S, c, sig, 0, a0, sc, ga, gc, gva, gvc, gaa, gac)
                 if gc >= -gtol:
                     return sc  # grazing contact: the maximum touches the stop
                 continue
