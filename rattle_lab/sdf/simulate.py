@@ -113,7 +113,10 @@ def simulate(
     if cycles is not None:
         if duration is not None:
             raise ParameterError("give exactly one of `duration` and `cycles`")
-        cycles = float(cycles)
+        try:
+            cycles = float(cycles)
+        except (TypeError, ValueError):
+            raise ParameterError(f"`cycles` must be a number, was {cycles!r}") from None
         if not (cycles >= 0.0 and cycles < math.inf):   # NaN fails the first test
             raise ParameterError(f"`cycles` must be finite and >= 0, was {cycles}")
         duration = cycles * (TWO_PI / omega)
@@ -121,7 +124,10 @@ def simulate(
         raise ParameterError("give exactly one of `duration` and `cycles`")
     else:
         cycles = None
-    duration = float(duration)
+    try:
+        duration = float(duration)
+    except (TypeError, ValueError):
+        raise ParameterError(f"`duration` must be a number, was {duration!r}") from None
     if not (duration >= 0.0 and duration < math.inf):
         raise ParameterError(f"`duration` must be finite and >= 0, was {duration}")
     if state is None:
@@ -131,6 +137,8 @@ def simulate(
     if max_events is None:
         n_periods = cycles if cycles is not None else duration * omega / TWO_PI
         max_events = 10**6 + int(1000 * (n_periods + 1.0))
+    elif isinstance(max_events, bool) or not isinstance(max_events, int | np.integer):
+        raise ParameterError(f"`max_events` must be an integer, was {max_events!r}")
     elif max_events <= 0:
         raise ParameterError(f"`max_events` must be > 0, was {max_events}")
     if dense_fields is not _DENSE_DEFAULT:
