@@ -287,15 +287,14 @@ def evaluate(P, S, s):
     """(x - 1 if on-stop Taylor else x, v, a, y, yd, x) at local time s.
 
     Returns a tuple (x, v, a, y, yd, zstop) where zstop = x - 1 computed without
-    cancellation near a start on the stop (Taylor), else x - 1.
+    cancellation near a start on the stop (Taylor), else x - 1.  Within the Taylor
+    reach of a start on the stop, x and v come from the series and the homogeneous
+    state from them, ``(y, yd) = (x - x_p, v - v_p)`` (equal to the closed form's to
+    rounding; it only enters the derivative bounds), so the closed-form transition
+    (an exp, a cos and a sin) is not evaluated there.
     """
     th = S[J_TH] + P[I_W] * s
-    Ec, Es = transition(P, s)
     z = P[I_Z]
-    y0 = S[J_Y]
-    yd0 = S[J_YD]
-    y = (Ec + z * Es) * y0 + Es * yd0
-    yd = -Es * y0 + (Ec - z * Es) * yd0
     c = math.cos(th)  # shared by the particular part and the force
     sn = math.sin(th)
     if P[I_RES] != 0.0:
@@ -305,9 +304,6 @@ def evaluate(P, S, s):
     else:
         xp = P[I_AC] * c + P[I_AS] * sn
         vp = P[I_W] * (P[I_AS] * c - P[I_AC] * sn)
-    x = xp + y
-    v = vp + yd
-    zstop = x - 1.0
     if S[J_ONSTOP] != 0.0 and s * P[I_LAM] <= TAYLOR_REACH:
         zs = 0.0
         vs = 0.0
@@ -317,6 +313,17 @@ def evaluate(P, S, s):
         zstop = zs * s
         v = vs
         x = 1.0 + zstop
+        y = x - xp
+        yd = v - vp
+    else:
+        Ec, Es = transition(P, s)
+        y0 = S[J_Y]
+        yd0 = S[J_YD]
+        y = (Ec + z * Es) * y0 + Es * yd0
+        yd = -Es * y0 + (Ec - z * Es) * yd0
+        x = xp + y
+        v = vp + yd
+        zstop = x - 1.0
     a = P[I_F] * c - 2.0 * z * v - x
     return x, v, a, y, yd, zstop
 
