@@ -17,7 +17,11 @@ Run ``python benchmarks/sweeps.py [--quick]``.  Times (wall clock, best of
    ``o = t_parallel - t_serial / w``, parallel pays for serial work longer than
    ``o w / (w - 1)``.  The bifurcation sets are also run with ``workers=2``.
    Parallel speed-ups mean something only on an otherwise idle machine with at
-   least 2 free cores; the benchmark prints the load average next to them.
+   least 2 free cores; the benchmark prints the load average next to them, and
+   the CPU time of the serial and the pooled regime map (the pool's workers
+   included): CPU seconds per wall second show how many cores each run actually
+   got, and pool CPU / serial CPU the work the pool adds, neither of which the
+   load changes.  No speed-up is extrapolated from them.
 
 Target: the up+down sweep (with Lyapunov exponents) in well under one second
 on one core, i.e. < 1 s; printed as PASS/FAIL.  Numbers also go to
@@ -59,6 +63,28 @@ def _best(func: Callable[[], Any], repeat: int) -> tuple[float, Any]:
     return best, result
 
 
+def _cpu_s() -> tuple[float, float]:
+    """CPU seconds used so far by this process, and by its reaped child processes."""
+    t = os.times()
+    return t.user + t.system, t.children_user + t.children_system
+
+
+def _timed_cpu(func: Callable[[], Any]) -> tuple[float, float, float, Any]:
+    """One run: wall seconds, CPU seconds of this process and of its worker processes.
+
+    The workers of a local pool are child processes, reaped when the pool closes, so
+    their CPU time is in ``os.times().children_*`` once the call has returned.  (The
+    workers of a Dask ``LocalCluster`` are not reaped by then; their CPU time is not
+    counted.)  CPU time does not depend on how busy the machine is; the wall time does.
+    """
+    own0, kids0 = _cpu_s()
+    t0 = time.perf_counter()
+    out = func()
+    wall = time.perf_counter() - t0
+    own1, kids1 = _cpu_s()
+    return wall, own1 - own0, kids1 - kids0, out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="small map, one repeat (< 60 s)")
@@ -92,9 +118,10 @@ def main(argv: list[str] | None = None) -> int:
     F = np.linspace(0.02, 0.6, n_map)
     omega = np.linspace(0.6, 1.5, n_map)
     regime_map(F[:2], omega[:2])  # warm-up
-    t_serial, serial = _best(lambda: regime_map(F, omega), 1)
+    load_before = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
+    t_serial, cpu_serial, _, serial = _timed_cpu(lambda: regime_map(F, omega))
     rows.append(("regime map, serial", f"{n_map} x {n_map} points x 150 periods", t_serial))
-    t_pool, pool_map = _best(lambda: regime_map(F, omega, workers=2), 1)
+    t_pool, cpu_parent, cpu_workers, pool_map = _timed_cpu(lambda: regime_map(F, omega, workers=2))
     rows.append(("regime map, local pool 2 workers", "same, pool start-up included", t_pool))
     import logging
 
@@ -131,8 +158,21 @@ def main(argv: list[str] | None = None) -> int:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"regime map: {n_map * n_map / t_serial:,.0f} points/s serial; results of every "
           f"parallel run identical to serial: {same}")
-    print(f"load average {load:.1f} on {os.cpu_count()} cores: the speed-ups below are "
-          f"meaningful only on an idle machine (goal >= 1.8x on 2 cores)")
+    print(f"load average {load:.1f} on {os.cpu_count()} cores (1-min average before the "
+          f"map runs {load_before[0]:.1f}): the wall-clock speed-ups below are meaningful "
+          f"only on an idle machine (goal >= 1.8x on 2 cores)")
+    # What the machine gave each run, from CPU time (which load does not change): a run
+    # that had a core to itself uses ~1 CPU second per wall second, a 2-worker run ~2.
+    cores_serial = cpu_serial / t_serial
+    cores_pool = (cpu_parent + cpu_workers) / t_pool
+    print(f"  regime map CPU time: serial {cpu_serial:.2f} s in {t_serial:.2f} s wall "
+          f"({cores_serial:.2f} cores); local pool {cpu_parent + cpu_workers:.2f} s "
+          f"(parent {cpu_parent:.2f}, workers {cpu_workers:.2f}) in {t_pool:.2f} s wall "
+          f"({cores_pool:.2f} cores)")
+    print(f"  work added by the pool (CPU time pool / serial): "
+          f"{(cpu_parent + cpu_workers) / cpu_serial:.2f}x; the wall-clock speed-up "
+          f"{t_serial / t_pool:.2f}x was measured with {cores_pool:.2f} of {w} cores obtained "
+          f"against {cores_serial:.2f} of 1 for the serial run")
     for name, t_par in (("local pool, 2 workers", t_pool),
                         ("Dask scheduler, 2 workers", t_dask),
                         ("Dask incl. cluster start", t_dask + t_start),
@@ -148,6 +188,9 @@ def main(argv: list[str] | None = None) -> int:
     atomic_write_text(OUT / "sweeps.json", json.dumps({
         "quick": args.quick, "repeat": repeat, "warmup_s": warm,
         "rows": [{"task": n, "size": s, "time_s": t} for n, s, t in rows],
+        "regime_map_cpu_s": {"serial": cpu_serial, "pool_parent": cpu_parent,
+                             "pool_workers": cpu_workers},
+        "load_average": list(load_before),
         "map_identical": same, "sweep_target_s": SWEEP_TARGET_S, "sweep_pass": ok,
     }, indent=2))
     return 0 if ok and same else 1

@@ -310,6 +310,12 @@ def test_invalid_state_and_arguments():
         simulate({"F": 1}, cycles=1)  # type: ignore[arg-type]
     with pytest.raises(ParameterError, match=r"`max_events` must be > 0, was 0"):
         simulate(p, cycles=1, max_events=0)
+    with pytest.raises(ParameterError, match=r"`max_events` must be an integer, was 2.5"):
+        simulate(p, cycles=1, max_events=2.5)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"`cycles` must be a number, was 'x'"):
+        simulate(p, cycles="x")  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"`duration` must be a number, was \[1.0\]"):
+        simulate(p, duration=[1.0])  # type: ignore[arg-type]
     with pytest.raises(ParameterError, match="`dense_t` is available for the exact methods only"):
         simulate(p, cycles=1, dense_t=[0.0], method="rk4-thesis")
 

@@ -11,8 +11,6 @@ import argparse
 import math
 from typing import Any
 
-import numpy as np
-
 from ._model_plate import _EDGE_HELP, _emit_json, _plate_from_args, _table
 
 
@@ -63,6 +61,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run_modal_impact(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from rattle_lab.exceptions import ParameterError
     from rattle_lab.model.modal import contact_from_name, modal_channels, plate_system
 

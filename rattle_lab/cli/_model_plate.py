@@ -13,8 +13,6 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-import numpy as np
-
 _EDGE_HELP = (
     "four letters C (clamped), S (simply supported), F (free) for the edges "
     "y=0, x=a, y=b, x=0 in that order (counter-clockwise from the bottom edge); "
@@ -83,6 +81,8 @@ def _add_plate_args(p: argparse.ArgumentParser, *, need_shape: bool) -> None:
 # --------------------------------------------------------------------------- output helpers
 def _clean(value: Any) -> Any:
     """JSON-safe copy: numpy scalars to Python, NaN/inf to None."""
+    import numpy as np  # here, not at the top: `rattle-lab --help` must not import numpy
+
     if isinstance(value, dict):
         return {k: _clean(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
@@ -219,6 +219,8 @@ def _run_scale(args: argparse.Namespace) -> int:
 
 
 def _run_grazing(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from rattle_lab.model import linear
 
     out: dict[str, Any] = {"zeta": args.zeta}

@@ -6,9 +6,6 @@ import argparse
 import json
 import sys
 
-import numpy as np
-
-from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 from ._types import cycles, finite, non_negative, positive, probability
 
 
@@ -39,6 +36,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from rattle_lab.model.sdf import SDFParams, SDFState, simulate
+
     params = SDFParams(F=args.F, omega=args.omega, zeta=args.zeta, e=args.e)
     state = SDFState(x=args.x0, v=args.v0, theta=args.phase)
     if args.plot:

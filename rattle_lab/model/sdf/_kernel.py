@@ -236,7 +236,15 @@ def reduce_phase(th):
 @jit
 def start_segment(P, S, th, x, v, on_stop):
     """Fill the segment vector S for a free flight starting at (x, v, th)."""
-    xp, vp = particular(P, th, 0.0)
+    cth = math.cos(th)  # one cos and one sin for the particular part and the Taylor terms
+    sth = math.sin(th)
+    if P[I_RES] != 0.0:  # particular(P, th, 0.0), with the cos and sin above
+        h = 0.5 * P[I_F]
+        xp = h * 0.0 * sth
+        vp = h * (sth + 0.0 * cth)
+    else:
+        xp = P[I_AC] * cth + P[I_AS] * sth
+        vp = P[I_W] * (P[I_AS] * cth - P[I_AC] * sth)
     S[J_TH] = th
     S[J_Y] = x - xp
     S[J_YD] = v - vp
@@ -252,8 +260,6 @@ def start_segment(P, S, th, x, v, on_stop):
         S[J_TAY + 1] = v
         fact = 1.0
         wk = 1.0
-        cth = math.cos(th)  # one cos and one sin for all the terms
-        sth = math.sin(th)
         for k in range(N_TAYLOR - 1):
             q = k % 4
             if q == 0:
@@ -281,15 +287,14 @@ def evaluate(P, S, s):
     """(x - 1 if on-stop Taylor else x, v, a, y, yd, x) at local time s.
 
     Returns a tuple (x, v, a, y, yd, zstop) where zstop = x - 1 computed without
-    cancellation near a start on the stop (Taylor), else x - 1.
+    cancellation near a start on the stop (Taylor), else x - 1.  Within the Taylor
+    reach of a start on the stop, x and v come from the series and the homogeneous
+    state from them, ``(y, yd) = (x - x_p, v - v_p)`` (equal to the closed form's to
+    rounding; it only enters the derivative bounds), so the closed-form transition
+    (an exp, a cos and a sin) is not evaluated there.
     """
     th = S[J_TH] + P[I_W] * s
-    Ec, Es = transition(P, s)
     z = P[I_Z]
-    y0 = S[J_Y]
-    yd0 = S[J_YD]
-    y = (Ec + z * Es) * y0 + Es * yd0
-    yd = -Es * y0 + (Ec - z * Es) * yd0
     c = math.cos(th)  # shared by the particular part and the force
     sn = math.sin(th)
     if P[I_RES] != 0.0:
@@ -299,9 +304,6 @@ def evaluate(P, S, s):
     else:
         xp = P[I_AC] * c + P[I_AS] * sn
         vp = P[I_W] * (P[I_AS] * c - P[I_AC] * sn)
-    x = xp + y
-    v = vp + yd
-    zstop = x - 1.0
     if S[J_ONSTOP] != 0.0 and s * P[I_LAM] <= TAYLOR_REACH:
         zs = 0.0
         vs = 0.0
@@ -311,6 +313,17 @@ def evaluate(P, S, s):
         zstop = zs * s
         v = vs
         x = 1.0 + zstop
+        y = x - xp
+        yd = v - vp
+    else:
+        Ec, Es = transition(P, s)
+        y0 = S[J_Y]
+        yd0 = S[J_YD]
+        y = (Ec + z * Es) * y0 + Es * yd0
+        yd = -Es * y0 + (Ec - z * Es) * yd0
+        x = xp + y
+        v = vp + yd
+        zstop = x - 1.0
     a = P[I_F] * c - 2.0 * z * v - x
     return x, v, a, y, yd, zstop
 
@@ -457,20 +470,41 @@ def _safeguard_newton(s, sn, lo, hi):
 
 
 @jit
-def _root(P, S, c, sig, which, lo, hi, flo, fhi):
-    """Bracketed root of f on [lo, hi] with f(lo) < 0 <= f(hi).
+def _halley_step(s, f, fp, fpp):
+    """Halley's step from s (Newton's where Halley's denominator is small); -1 if fp <= 0."""
+    if not fp > 0.0:
+        return -1.0
+    den = 2.0 * fp * fp - f * fpp
+    if den > 0.5 * fp * fp:
+        return s - 2.0 * f * fp / den
+    return s - f / fp
+
+
+@jit
+def _root(P, S, c, sig, which, lo, hi, flo, fhi, dlo, dhi, d2lo, d2hi):
+    """Bracketed root of f on [lo, hi] with f(lo) < 0 <= f(hi); f', f'' there.
 
     which = 0: f = g (returns the smallest point found with g >= 0);
     which = 1: f = -g' (critical point of g, a maximum).
-    Safeguarded Newton with bisection fallback; converges to rounding.
+    Safeguarded Newton with bisection fallback; converges to rounding.  The first
+    iterate is the Newton step from the end where |f| is smaller, if it falls inside
+    the bracket, else the secant.
     """
     if fhi == 0.0:
         return hi
-    den = fhi - flo
-    s = hi - fhi * ((hi - lo) / den) if den > 0.0 else 0.5 * (lo + hi)
+    s = -1.0
+    if -flo < fhi:
+        s = _halley_step(lo, flo, dlo, d2lo)
+    else:
+        s = _halley_step(hi, fhi, dhi, d2hi)
+    if not (lo < s < hi):
+        den = fhi - flo
+        s = hi - fhi * ((hi - lo) / den) if den > 0.0 else 0.5 * (lo + hi)
     if not (lo < s < hi):
         s = 0.5 * (lo + hi)
     width_old = hi - lo
+    f_old = math.inf
+    probe = 0.0  # length of the last probe from an end of the bracket (0: none)
     for it in range(200):
         g, gv, ga, y, yd = level_values(P, S, s, c, sig)
         if which == 0:
@@ -485,11 +519,29 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi):
         tol = 2.0 * EPS * max(abs(lo), abs(hi), 1e-300)
         if hi - lo <= tol:
             break
-        sn = s - f / fp if fp != 0.0 else 0.5 * (lo + hi)
-        if it % 3 == 2:
-            if hi - lo > 0.5 * width_old:
+        if which == 0 and fp != 0.0:
+            # Halley's step (g'' comes with g and g' at no cost): cubic convergence
+            den2 = 2.0 * fp * fp - f * ga
+            sn = s - 2.0 * f * fp / den2 if den2 > 0.5 * fp * fp else s - f / fp
+        else:
+            sn = s - f / fp if fp != 0.0 else 0.5 * (lo + hi)
+        # Newton has converged onto one end of the bracket (a step within rounding, to
+        # that end or past it): the root is within rounding of that end, so probe just
+        # inside it, doubling the probe while the sign stays, instead of halving the
+        # whole bracket from the far side (which took ~25 evaluations where one Newton
+        # sequence had converged from one side).
+        if abs(sn - s) <= 4.0 * tol and (sn <= lo + tol or sn >= hi - tol):
+            probe = tol if probe == 0.0 else 2.0 * probe
+            sn = lo + probe if f < 0.0 else hi - probe
+        else:
+            probe = 0.0
+            # every third step: bisect if neither the bracket halved nor |f| fell 4-fold
+            # (a Newton sequence converging from one side shrinks |f|, not the bracket)
+            if it % 3 == 2 and hi - lo > 0.5 * width_old and not abs(f) < 0.25 * f_old:
                 sn = 0.5 * (lo + hi)
+        if it % 3 == 2:
             width_old = hi - lo
+            f_old = abs(f)
         s, converged = _safeguard_newton(s, sn, lo, hi)
         if converged:
             break
@@ -566,7 +618,6 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
         xa = c + sig * ga
         vxa = sig * gva
         M2 = deriv_bound(P, 2, ya, yda, b0, xa, vxa, L)
-        M3 = deriv_bound(P, 3, ya, yda, b0, xa, vxa, L)
         tiny = L <= 4.0 * EPS * max(abs(b0), 1e-300) or level >= MAX_LEVEL
         work += 1
         if work > MAX_WORK:
@@ -576,24 +627,26 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
         if gbb >= 0.0:
             # a root lies in (a0, b0]; find the earliest one
             if _lower_line_bound(gva, gvbb, M2, L) > 0.0 or tiny:
-                return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+                return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
+            M3 = deriv_bound(P, 3, ya, yda, b0, xa, vxa, L)  # only where M2 did not settle it
             uba = _upper_line_bound(gaa, gabb, M3, L)
             lba = _lower_line_bound(gaa, gabb, M3, L)
             if lba > 0.0:  # convex: a single crossing
-                return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+                return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
             if uba < 0.0:  # concave: rises to one maximum then falls
                 if gvbb >= 0.0 or gva <= 0.0:
-                    return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
-                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb)
+                    return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
+                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb, -gaa, -gabb, 0.0, 0.0)
                 gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
                 if gc >= 0.0:
-                    return _root(P, S, c, sig, 0, a0, sc, ga, gc)
-                return _root(P, S, c, sig, 0, a0, b0, ga, gbb)
+                    return _root(P, S, c, sig, 0, a0, sc, ga, gc, gva, gvc, gaa, gac)
+                return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
         else:
             if graze and gbb >= -GRAZE_TOL and gvbb >= 0.0:
                 return b0  # touches the stop (within rounding) at the chunk end
             if _max_min_parabolas(ga, gva, gbb, gvbb, M2, L) < -gtol:
                 continue
+            M3 = deriv_bound(P, 3, ya, yda, b0, xa, vxa, L)
             uba = _upper_line_bound(gaa, gabb, M3, L)
             lba = _lower_line_bound(gaa, gabb, M3, L)
             if lba > 0.0:
@@ -601,10 +654,10 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
             if uba < 0.0:
                 if gva <= 0.0 or gvbb >= 0.0:
                     continue  # monotone: the maximum is at an end
-                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb)
+                sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb, -gaa, -gabb, 0.0, 0.0)
                 gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
                 if gc >= 0.0:
-                    return _root(P, S, c, sig, 0, a0, sc, ga, gc)
+                    return _root(P, S, c, sig, 0, a0, sc, ga, gc, gva, gvc, gaa, gac)
                 if gc >= -gtol:
                     return sc  # grazing contact: the maximum touches the stop
                 continue
@@ -681,9 +734,17 @@ def micro_flight(P, S, s_hi):
         return -1.0
     lb = t2
     sk = 1.0
+    # The Newton iteration below sums the series only up to the last term that can
+    # still reach the rounding of p: |t_k| s^(k-1) > 2^-80 |t_1| on [0, s_max]
+    # (a term below that is 2^-27 of an ulp of t_1, the size of p's terms at the root).
+    thr = 2.0 ** -80 * abs(t1)
+    n_use = 2
     for k in range(3, N_TAYLOR + 1):
         sk *= s_max
-        lb -= (k - 1) * abs(S[J_TAY + k]) * sk
+        term = abs(S[J_TAY + k]) * sk
+        lb -= (k - 1) * term
+        if term * s_max > thr:
+            n_use = k
     if lb <= 0.25 * t2:
         return -1.0
     ph = 0.0
@@ -697,9 +758,9 @@ def micro_flight(P, S, s_hi):
     for it in range(100):
         f = 0.0
         fp = 0.0
-        for k in range(N_TAYLOR, 0, -1):
+        for k in range(n_use, 0, -1):
             f = f * s + S[J_TAY + k]
-        for k in range(N_TAYLOR, 1, -1):
+        for k in range(n_use, 1, -1):
             fp = fp * s + (k - 1) * S[J_TAY + k]
         if f == 0.0:
             return s
@@ -713,30 +774,66 @@ def micro_flight(P, S, s_hi):
 
 
 @jit
-def stop_exit(P, S, hmax):
-    """Leave the stop: (+1, 0) if the motion pushes into the stop (stick), else
-    (-1, u1) with g < 0 proven on (0, u1].  Uses the leading nonzero Taylor term."""
-    y = S[J_Y]
-    yd = S[J_YD]
+def stop_sign(P, S):
+    """Leaving the stop or pushed into it, from the leading nonzero Taylor term.
+
+    Returns (+1, 0) if the motion pushes into the stop (stick), else (-1, k) with
+    ``k`` the order of the leading nonzero term ``t_k < 0`` (0: all of t_1..t_4
+    vanish, degenerate).
+    """
     for k in range(1, 5):
         tk = S[J_TAY + k]
         if tk > 0.0:
-            return 1.0, 0.0
+            return 1.0, 0
         if tk < 0.0:
-            u = hmax
-            # g(u) <= t_k u^k + M_{k+1} u^{k+1} / (k+1)!  < 0  for u < |t_k| (k+1)! / M
-            for it in range(60):
-                M = deriv_bound(P, k + 1, y, yd, u, 1.0, S[J_TAY + 1], u)
-                fact = 1.0
-                for j in range(2, k + 2):
-                    fact *= j
-                u_ok = abs(tk) * fact / M
-                if u_ok > u:
-                    break
-                u = 0.5 * u_ok
-            return -1.0, u
-    # all leading terms vanish (degenerate): leave with a tiny advance
-    return -1.0, 64.0 * EPS
+            return -1.0, k
+    return -1.0, 0
+
+
+@jit
+def stop_clear(P, S, hmax, k):
+    """Advance u with g < 0 proven on (0, u], leaving the stop with leading term t_k < 0."""
+    if k == 0:
+        # all leading terms vanish (degenerate): leave with a tiny advance
+        return 64.0 * EPS
+    y = S[J_Y]
+    yd = S[J_YD]
+    tk = S[J_TAY + k]
+    u = hmax
+    # g(u) <= t_k u^k + M_{k+1} u^{k+1} / (k+1)!  < 0  for u < |t_k| (k+1)! / M
+    for it in range(60):
+        M = deriv_bound(P, k + 1, y, yd, u, 1.0, S[J_TAY + 1], u)
+        fact = 1.0
+        for j in range(2, k + 2):
+            fact *= j
+        u_ok = abs(tk) * fact / M
+        if u_ok > u:
+            break
+        u = 0.5 * u_ok
+    return u
+
+
+@jit
+def stop_exit(P, S, hmax):
+    """Leave the stop: (+1, 0) if the motion pushes into the stop (stick), else
+    (-1, u1) with g < 0 proven on (0, u1].  Uses the leading nonzero Taylor term.
+
+    (:func:`run` calls the two halves, :func:`stop_sign` and :func:`stop_clear`, and the
+    second only when the flight is not a micro-flight, which needs no ``u1``.)
+    """
+    sgn, k = stop_sign(P, S)
+    if sgn > 0.0:
+        return 1.0, 0.0
+    return -1.0, stop_clear(P, S, hmax, k)
+
+
+@jit
+def taylor_velocity(S, s):
+    """x'(s) of a flight from the stop, from its Taylor series (as :func:`evaluate`)."""
+    vs = 0.0
+    for k in range(N_TAYLOR, 0, -1):
+        vs = vs * s + k * S[J_TAY + k]
+    return vs
 
 
 @jit
@@ -983,21 +1080,25 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             n_seg += 1
         Wn = min(W, rem)
         s_lo = 0.0
+        sgn = 1.0
+        k_lead = 0
         if on_stop:
-            sgn, u1 = stop_exit(P, S, hmax)
+            sgn, k_lead = stop_sign(P, S)
             if sgn > 0.0 and not released_now:
                 stuck = True
                 x = 1.0
                 v = 0.0
                 n_seg -= 1 if want_segs else 0
                 continue
-            s_lo = min(u1, Wn)
         released_now = False
         s_imp = -1.0
         micro = False
         if on_stop:
             s_imp = micro_flight(P, S, Wn)
             micro = s_imp >= 0.0
+            if not micro and sgn < 0.0:
+                # the first instants, proven clear of the stop (a micro-flight needs none)
+                s_lo = min(stop_clear(P, S, hmax, k_lead), Wn)
         if not micro and s_lo < Wn:
             s_imp = first_reach(P, S, 1.0, 1.0, s_lo, Wn, hmax, diag, work)
         s_end = s_imp if s_imp >= 0.0 else Wn
@@ -1038,7 +1139,10 @@ def run(F, omega, zeta, e, t0, x0, v0, th0, stuck0, duration, want_cross, want_s
             last_was_impact = False
             continue
         # impact
-        xi, v_in, ai, yi, ydi, zi = evaluate(P, S, s_imp)
+        if micro:  # evaluate() would take the Taylor branch; only its velocity is needed
+            v_in = taylor_velocity(S, s_imp)
+        else:
+            xi, v_in, ai, yi, ydi, zi = evaluate(P, S, s_imp)
         if v_in < 0.0:
             v_in = 0.0  # grazing: the crossing velocity is zero to rounding
         t_imp = _time_at(t, t_lo, s_imp)

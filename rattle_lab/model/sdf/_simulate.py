@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from types import ModuleType
 from typing import Literal
 
 import numpy as np
@@ -28,6 +27,7 @@ Method = Literal["exact", "exact-python", "rk4-thesis"]
 DenseField = Literal["x", "v", "a", "forced", "transient", "excitation"]
 _METHODS = ("exact", "exact-python", "rk4-thesis")
 _DENSE_FIELDS = ("x", "v", "a", "forced", "transient", "excitation")
+_DENSE_DEFAULT: tuple[DenseField, ...] = ("x", "v", "a")
 
 
 def simulate(
@@ -38,7 +38,7 @@ def simulate(
     state: SDFState | None = None,
     crossings: bool = False,
     dense_t: ArrayLike | None = None,
-    dense_fields: Sequence[DenseField] = ("x", "v", "a"),
+    dense_fields: Sequence[DenseField] = _DENSE_DEFAULT,
     method: Method = "exact",
     steps_per_period: int = 200,
     max_events: int | None = None,
@@ -101,61 +101,70 @@ def simulate(
     >>> bool(len(res.impacts) > 0 and np.all(res.impacts.v_in > 0))
     True
     """
-    if not isinstance(params, SDFParams):
+    # The checks come in the order of the common call (exact method, `cycles`, a state,
+    # no dense output): each is a cheap test on the fast path, and every failure raises
+    # a ParameterError naming the argument.  A call's fixed cost is a few microseconds
+    # (benchmarks/speed_goals.py), so the order and the number of steps here matter.
+    if type(params) is not SDFParams and not isinstance(params, SDFParams):
         raise ParameterError(f"`params` must be an SDFParams, was {type(params).__name__}")
     if method not in _METHODS:
         raise ParameterError(f"`method` must be one of {_METHODS}, was {method!r}")
-    if (duration is None) == (cycles is None):
-        raise ParameterError("give exactly one of `duration` and `cycles`")
+    omega = params.omega
     if cycles is not None:
-        cycles = float(cycles)
-        if not (math.isfinite(cycles) and cycles >= 0):
+        if duration is not None:
+            raise ParameterError("give exactly one of `duration` and `cycles`")
+        try:
+            cycles = float(cycles)
+        except (TypeError, ValueError):
+            raise ParameterError(f"`cycles` must be a number, was {cycles!r}") from None
+        if not (cycles >= 0.0 and cycles < math.inf):   # NaN fails the first test
             raise ParameterError(f"`cycles` must be finite and >= 0, was {cycles}")
-        duration = cycles * params.period
-    assert duration is not None
-    duration = float(duration)
-    if not (math.isfinite(duration) and duration >= 0):
+        duration = cycles * (TWO_PI / omega)
+    elif duration is None:
+        raise ParameterError("give exactly one of `duration` and `cycles`")
+    else:
+        cycles = None
+    try:
+        duration = float(duration)
+    except (TypeError, ValueError):
+        raise ParameterError(f"`duration` must be a number, was {duration!r}") from None
+    if not (duration >= 0.0 and duration < math.inf):
         raise ParameterError(f"`duration` must be finite and >= 0, was {duration}")
-    state = SDFState() if state is None else state
-    if not isinstance(state, SDFState):
+    if state is None:
+        state = _REST
+    elif type(state) is not SDFState and not isinstance(state, SDFState):
         raise ParameterError(f"`state` must be an SDFState, was {type(state).__name__}")
     if max_events is None:
-        max_events = 10**6 + int(1000 * (duration / params.period + 1.0))
-    if max_events <= 0:
+        n_periods = cycles if cycles is not None else duration * omega / TWO_PI
+        max_events = 10**6 + int(1000 * (n_periods + 1.0))
+    elif isinstance(max_events, bool) or not isinstance(max_events, int | np.integer):
+        raise ParameterError(f"`max_events` must be an integer, was {max_events!r}")
+    elif max_events <= 0:
         raise ParameterError(f"`max_events` must be > 0, was {max_events}")
-    fields = tuple(dense_fields)
-    for name in fields:
-        if name not in _DENSE_FIELDS:
-            raise ParameterError(f"`dense_fields` entries must be in {_DENSE_FIELDS}, was {name!r}")
+    if dense_fields is not _DENSE_DEFAULT:
+        fields = tuple(dense_fields)
+        for name in fields:
+            if name not in _DENSE_FIELDS:
+                raise ParameterError(
+                    f"`dense_fields` entries must be in {_DENSE_FIELDS}, was {name!r}")
+    else:
+        fields = _DENSE_DEFAULT
     t_grid: np.ndarray | None = None
     if dense_t is not None:
-        t_grid = np.asarray(dense_t, dtype=float)
-        if t_grid.ndim != 1:
-            raise ParameterError(f"`dense_t` must be one-dimensional, had shape {t_grid.shape}")
-        if t_grid.size:
-            if not np.all(np.isfinite(t_grid)):
-                raise ParameterError("`dense_t` must be finite")
-            if np.any(np.diff(t_grid) < 0):
-                raise ParameterError("`dense_t` must be non-decreasing")
-            t_stop = state.t + duration
-            slack = 8 * np.finfo(float).eps * max(1.0, abs(t_stop))
-            if t_grid[0] < state.t - slack or t_grid[-1] > t_stop + slack:
-                raise ParameterError(
-                    f"`dense_t` must lie within [{state.t}, {t_stop}], "
-                    f"was [{t_grid[0]}, {t_grid[-1]}]")
+        t_grid = _checked_grid(dense_t, state.t, duration)
 
     if method == "rk4-thesis":
         return _simulate_rk4(params, state, duration, crossings, t_grid, steps_per_period)
 
-    kernel = _kernels()[method == "exact"]
-    buf = kernel.run_packed(params.F, params.omega, params.zeta, params.e, state.t, state.x,
-                            state.v, state.theta, bool(state.stuck), duration, bool(crossings),
-                            t_grid is not None, int(max_events))
-    head = buf[:_N_HEAD].tolist()
-    status, n_unresolved = head[12], head[13]
+    run = _RUN_PACKED[method == "exact"] or _run_packed(method == "exact")
+    buf = run(params.F, omega, params.zeta, params.e, state.t, state.x, state.v, state.theta,
+              bool(state.stuck), duration, bool(crossings), t_grid is not None,
+              int(max_events))
+    (n_imp, n_acc, n_stk, n_crs, n_seg, n_avg, t_end, x_end, v_end, th_end, stuck_end,
+     n_events, status, n_unresolved) = buf[:_N_HEAD].tolist()
     if status != 0:
         raise SimulationError(
-            f"event budget of {max_events} events exhausted at t = {head[6]:.17g} "
+            f"event budget of {max_events} events exhausted at t = {t_end:.17g} "
             f"(F={params.F}, omega={params.omega}, zeta={params.zeta}, e={params.e}); "
             "raise `max_events` or shorten the run")
     if n_unresolved:
@@ -164,17 +173,22 @@ def simulate(
             f"(F={params.F}, omega={params.omega}, zeta={params.zeta}, e={params.e}); "
             "impacts in them are located only to the resolution reached",
             NumericalWarning, stacklevel=2)
-    n_imp, n_acc, n_stk, n_crs, n_seg, n_avg = map(int, head[:6])
+    end = SDFState._from_kernel(t_end, x_end, v_end, th_end, stuck_end != 0.0)
+    if buf.size == _N_HEAD and t_grid is None:   # nothing logged (a short call): no slicing
+        return SimResult._from_kernel(params, method, _NO_IMPACTS, _NO_ACC, _NO_STICKING,
+                                      _NO_CROSSINGS if crossings else None, None, end,
+                                      int(n_events), _NO_MICRO)
+    n_imp, n_acc, n_stk, n_crs, n_seg, n_avg = (int(n_imp), int(n_acc), int(n_stk),
+                                                int(n_crs), int(n_seg), int(n_avg))
     k = _N_HEAD
     if n_imp:
-        cols = buf[k:k + 4 * n_imp].reshape(4, n_imp)
-        impacts = SimImpacts(t=cols[0], phase=cols[1], v_in=cols[2], v_out=cols[3])
+        impacts = SimImpacts._from_columns(buf[k:k + 4 * n_imp].reshape(4, n_imp))
         k += 4 * n_imp
     else:
         impacts = _NO_IMPACTS
-    acc = buf[k:k + n_acc] if n_acc else np.empty(0)
+    acc = buf[k:k + n_acc] if n_acc else _NO_ACC
     k += n_acc
-    stk = buf[k:k + 2 * n_stk].reshape(n_stk, 2) if n_stk else np.empty((0, 2))
+    stk = buf[k:k + 2 * n_stk].reshape(n_stk, 2) if n_stk else _NO_STICKING
     k += 2 * n_stk
     cross = None
     if crossings:
@@ -190,25 +204,73 @@ def simulate(
                                   state.v - float(vp0), 1.0 if state.stuck else 0.0]])
         dense = dense_from_segments(params, segments, t_grid, fields)
     k += 5 * n_seg
-    avg = buf[k:k + 3 * n_avg].reshape(n_avg, 3) if n_avg else np.empty((0, 3))
-    end = SDFState._from_kernel(head[6], head[7], head[8], head[9], head[10] != 0.0)
+    avg = buf[k:k + 3 * n_avg].reshape(n_avg, 3) if n_avg else _NO_MICRO
     return SimResult._from_kernel(params, method, impacts, acc, stk, cross, dense, end,
-                                  int(head[11]), avg)
+                                  int(n_events), avg)
+
+
+def _checked_grid(dense_t: ArrayLike, t0: float, duration: float) -> np.ndarray:
+    """``dense_t`` as a float array, checked: 1-D, finite, non-decreasing, in the run."""
+    t_grid = np.asarray(dense_t, dtype=float)
+    if t_grid.ndim != 1:
+        raise ParameterError(f"`dense_t` must be one-dimensional, had shape {t_grid.shape}")
+    if t_grid.size:
+        if not np.all(np.isfinite(t_grid)):
+            raise ParameterError("`dense_t` must be finite")
+        if np.any(np.diff(t_grid) < 0):
+            raise ParameterError("`dense_t` must be non-decreasing")
+        t_stop = t0 + duration
+        slack = 8 * np.finfo(float).eps * max(1.0, abs(t_stop))
+        if t_grid[0] < t0 - slack or t_grid[-1] > t_stop + slack:
+            raise ParameterError(
+                f"`dense_t` must lie within [{t0}, {t_stop}], "
+                f"was [{t_grid[0]}, {t_grid[-1]}]")
+    return t_grid
 
 
 _N_HEAD = 14   # rattle_lab.model.sdf._kernel.N_HEAD (asserted in the tests)
 _NO_IMPACTS = SimImpacts(t=np.empty(0), phase=np.empty(0), v_in=np.empty(0), v_out=np.empty(0))
-_KERNELS: tuple[ModuleType, ModuleType] | None = None
+_NO_CROSSINGS = Crossings(t=np.empty(0), v=np.empty(0))
+# the empty logs every short call returns: shared, and read-only as SimImpacts' arrays
+_NO_ACC = np.empty(0)
+_NO_STICKING = np.empty((0, 2))
+_NO_MICRO = np.empty((0, 3))
+for _a in (_NO_ACC, _NO_STICKING, _NO_MICRO):
+    _a.setflags(write=False)
+del _a
+_REST = SDFState()
+#: run_packed of (pure-Python kernel, compiled kernel), looked up on first use
+_RUN_PACKED: list[Callable[..., np.ndarray] | None] = [None, None]
 
 
-def _kernels() -> tuple[ModuleType, ModuleType]:
-    """(pure-Python kernel, compiled kernel), imported on first use."""
-    global _KERNELS
-    if _KERNELS is None:
-        from ._compiled import jit_kernel, python_kernel
+def _run_packed(compiled: bool) -> Callable[..., np.ndarray]:
+    """``run_packed`` of the compiled (or pure-Python) kernel, imported on first use.
 
-        _KERNELS = (python_kernel, jit_kernel)
-    return _KERNELS
+    For the compiled kernel this is the entry point of its one compiled signature, called
+    without numba's dispatcher: the dispatcher works out the types of the 13 arguments
+    on every call (about 0.3-0.5 us, a tenth of a short call), and :func:`simulate`
+    always passes the same types (float, bool, int; the entry point converts them as
+    the dispatcher would).  If that entry point cannot be found (another numba), the
+    dispatcher is used.
+    """
+    from ._compiled import jit_kernel, python_kernel
+
+    if not compiled:
+        func: Callable[..., np.ndarray] = python_kernel.run_packed
+    else:
+        dispatcher = jit_kernel.run_packed
+        func = dispatcher
+        warm = (0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, False, False, 1)
+        dispatcher(*warm)   # loads (or compiles) the signature simulate() uses
+        try:
+            sig = tuple(dispatcher.typeof_pyval(a) for a in warm)
+            entry = dispatcher.overloads[sig].entry_point
+        except (AttributeError, KeyError, TypeError):  # pragma: no cover - another numba
+            entry = None
+        if callable(entry):
+            func = entry
+    _RUN_PACKED[compiled] = func
+    return func
 
 
 @dataclass(frozen=True)

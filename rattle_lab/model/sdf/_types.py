@@ -171,6 +171,24 @@ class SimImpacts:
     def __len__(self) -> int:
         return int(self.t.size)
 
+    @classmethod
+    def _from_columns(cls, cols: np.ndarray) -> SimImpacts:
+        """The log of a kernel's impact block ``cols``, shape (4, n), C-contiguous float.
+
+        The block is made read-only and its rows (contiguous views) become the fields:
+        the same object as ``SimImpacts(*cols)``, without a copy or check per field.
+        """
+        if not (cols.dtype == np.float64 and cols.flags.c_contiguous and cols.shape[0] == 4):
+            return cls(t=cols[0], phase=cols[1], v_in=cols[2], v_out=cols[3])
+        cols.setflags(write=False)
+        obj = object.__new__(cls)
+        d = obj.__dict__   # the frozen dataclass's fields, set without its __setattr__
+        d["t"] = cols[0]
+        d["phase"] = cols[1]
+        d["v_in"] = cols[2]
+        d["v_out"] = cols[3]
+        return obj
+
 
 @dataclass(frozen=True)
 class Crossings:
@@ -274,8 +292,15 @@ class SimResult:
         """The result of a simulator kernel, built without the frozen dataclass's per-field
         ``__setattr__`` (it has no ``__post_init__``; the same object otherwise)."""
         obj = object.__new__(cls)
-        obj.__dict__.update(params=params, method=method, impacts=impacts,
-                            accumulations=accumulations, sticking=sticking,
-                            crossings=crossings, dense=dense, state=state,
-                            n_events=n_events, micro_bounce=micro_bounce)
+        d = obj.__dict__
+        d["params"] = params
+        d["method"] = method
+        d["impacts"] = impacts
+        d["accumulations"] = accumulations
+        d["sticking"] = sticking
+        d["crossings"] = crossings
+        d["dense"] = dense
+        d["state"] = state
+        d["n_events"] = n_events
+        d["micro_bounce"] = micro_bounce
         return obj

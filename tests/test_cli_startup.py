@@ -1,0 +1,50 @@
+"""``rattle-lab --version`` and ``--help`` start without the heavy libraries (issue 13).
+
+The installed entry point is run as a user runs it, with ``PYTHONPROFILEIMPORTTIME=1``:
+Python then writes one ``import time:`` line per module it imports to stderr, so the
+test reads the exact list of imported modules (no wall-clock assert; the start-up time
+itself is measured by ``benchmarks/speed_goals.py``).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+
+import pytest
+from conftest import RATTLE_LAB
+
+#: Libraries that take 0.1-1 s to import; none is needed to print a version or a help text.
+HEAVY = ("numpy", "scipy", "numba", "llvmlite", "h5py", "matplotlib", "lmfit", "dask")
+
+
+def _imported_modules(*args: str) -> tuple[subprocess.CompletedProcess[str], set[str]]:
+    env = dict(os.environ, PYTHONPROFILEIMPORTTIME="1")
+    proc = subprocess.run([str(RATTLE_LAB), *args], capture_output=True, text=True, env=env,
+                          timeout=120)
+    names = set()
+    for line in proc.stderr.splitlines():
+        if line.startswith("import time:") and line.count("|") == 2:
+            name = line.rsplit("|", 1)[1].strip()
+            if name != "imported package":  # the header line
+                names.add(name)
+    return proc, names
+
+
+@pytest.mark.parametrize("args", [("--version",), ("--help",), ("model", "--help")])
+def test_start_up_imports_no_heavy_library(args: tuple[str, ...]) -> None:
+    proc, names = _imported_modules(*args)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    # the profile really ran: the CLI package itself is in the list
+    assert "rattle_lab.cli" in names
+    heavy = sorted(n for n in names if n.split(".")[0] in HEAVY)
+    assert heavy == [], f"`rattle-lab {' '.join(args)}` imported {heavy[:10]}"
+
+
+def test_version_prints_the_package_version() -> None:
+    from rattle_lab import __version__
+
+    proc = subprocess.run([str(RATTLE_LAB), "--version"], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0
+    assert proc.stdout.strip() == f"rattle-lab {__version__}"
