@@ -336,7 +336,7 @@ def test_negative_hysteresis_is_flagged(stores: dict[str, Path], tmp_path: Path)
 def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -> None:
     from matplotlib.lines import Line2D
 
-    from rattle_lab.model.analysis.bifsets import _LINESTYLES
+    from rattle_lab.plot._bifsets import _LINESTYLES
     from rattle_lab.report._pages import model_pages
 
     import rattle_lab.model.analysis as analysis
