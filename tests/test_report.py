@@ -382,3 +382,19 @@ def test_smooth_region_follows_the_boundary() -> None:
     r = np.hypot(ww2 - 0.5, ff2 - 0.5)
     cell = w[1] - w[0]
     assert np.all(z[r < 0.3 - cell] > 0.5) and np.all(z[r > 0.3 + cell] < 0.5)
+
+
+def test_building_the_content_leaves_the_gathered_data_alone(stores: dict[str, Path]) -> None:
+    # issue 12: the report used to write the missing sections into the frozen ReportData
+    from rattle_lab.report import build_report_content, render_pages
+
+    data = gather(stores["bare"])
+    before = dict(data.missing)
+    content = build_report_content(data, model=False)
+    assert data.missing == before
+    assert set(content.missing) == set(before) | {"thresholds", "impact patterns", "waveforms",
+                                                  "SPL law", "acoustics", "model predictions"}
+    assert [name for name, _ in content.sections] == ["rig and calibration"]
+    pages, sections = render_pages(content)
+    assert sections == ("summary", "rig and calibration") and len(pages) == 2
+    assert data.missing == before

@@ -105,7 +105,8 @@ def threshold_content(data: ReportData) -> ThresholdContent:
         raise Missing("no ramp thresholds in /results/thresholds (needs amplitude_ramp_up/down "
                       "runs with a base accelerometer)")
     g = fits_of(data).grazing
-    curve, missing = None, ()
+    curve: GrazingCurve | None = None
+    missing: tuple[tuple[str, str], ...] = ()
     if g is not None:
         lo_f = min(f.min(), pval(g, "f_s_hz", f.min())) - 2.0
         hi_f = max(f.max(), pval(g, "f_s_hz", f.max())) + 2.0

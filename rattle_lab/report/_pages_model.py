@@ -36,10 +36,11 @@ def _bifurcation_page(c: ModelContent) -> Figure:
     tab10 = matplotlib.colormaps["tab10"].colors  # type: ignore[attr-defined]
     for k, n in enumerate(sets.ns):
         color = tab10[k % len(tab10)]
-        if c.exists_fields[k] is not None:
-            ax.contourf(*c.exists_fields[k], levels=[0.5, 1.5], colors=[color], alpha=0.15)
-        if c.stable_fields[k] is not None:
-            ax.contourf(*c.stable_fields[k], levels=[0.5, 1.5], colors=[color], alpha=0.45)
+        exists, stable = c.exists_fields[k], c.stable_fields[k]
+        if exists is not None:
+            ax.contourf(*exists, levels=[0.5, 1.5], colors=[color], alpha=0.15)
+        if stable is not None:
+            ax.contourf(*stable, levels=[0.5, 1.5], colors=[color], alpha=0.45)
         for curve in sets.curves_of(n):
             if curve.kind != "grazing":
                 ax.plot(curve.omega, curve.F, color=color, lw=1.3, ls=_LINESTYLES[curve.kind])
