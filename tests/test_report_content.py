@@ -275,3 +275,43 @@ def test_sweep_thresholds_find_the_grazing_onset() -> None:
     assert res.step_F == pytest.approx(grid[1] - grid[0])
     assert abs(res.onset_F - F_g) <= res.step_F / 2 + 1e-12
     assert res.disappearance_F <= res.onset_F + 1e-12
+
+
+def _fitted_data(tmp_path: Path, *, e: float, f_s_hz: float = 96.0) -> ReportData:
+    from types import SimpleNamespace
+
+    from rattle_lab.fit import (FitSummary, Fits, GrazingParameter, GrazingSummary,
+                                RatioRestitution)
+
+    g = GrazingSummary(gap_m=GrazingParameter(1e-3, 1e-4, "m"),
+                       f_s_hz=GrazingParameter(f_s_hz, 0.1, "Hz"),
+                       zeta=GrazingParameter(0.02, 0.001, "1"),
+                       participation=GrazingParameter(1.0, None, "1", vary=False))
+    summary = FitSummary(n_runs=1, n_ok=1, fits=Fits(
+        grazing=g, restitution_ratio=RatioRestitution(e, 0.01, "1", n=10)))
+    results = SimpleNamespace(thresholds={"freq_hz": [90.0, 95.0], "up_ms2": [20.0, 10.0],
+                                          "down_ms2": [18.0, 9.0]}, runs={})
+    return ReportData(tmp_path / "absent.h5", None, (), [], results, {}, summary)
+
+
+def test_model_content_leaves_out_what_the_model_cannot_use(tmp_path: Path) -> None:
+    from rattle_lab.report._common import Missing
+    from rattle_lab.report._content_model import model_content
+
+    # e = 0: the bifurcation sets need e > 0 (once a ParameterError that ended the report)
+    with pytest.raises(Missing, match=r"fitted e = 0 is outside \(0, 1\]"):
+        model_content(_fitted_data(tmp_path, e=0.0))
+    with pytest.raises(Missing, match="unusable for the model"):
+        model_content(_fitted_data(tmp_path, e=0.8, f_s_hz=-5.0), max_freqs=0)
+
+
+def test_model_content_converts_the_thresholds_by_the_scaling(tmp_path: Path) -> None:
+    # eq. (2.28), (2.31) written out here: omega = f / f_s, F = Q A / ((2 pi f_s)^2 h)
+    from rattle_lab.report._content_model import model_content
+
+    c = model_content(_fitted_data(tmp_path, e=0.8), max_freqs=0)
+    np.testing.assert_allclose(c.omega_up, np.array([90.0, 95.0]) / 96.0, rtol=1e-15)
+    np.testing.assert_allclose(c.F_down, np.array([18.0, 9.0]) / ((2 * np.pi * 96.0) ** 2
+                                                                  * 1e-3), rtol=1e-14)
+    assert c.sweeps is None and c.zeta == 0.02 and c.zeta_source == "eq. (3.4) fit"
+    assert len(c.exists_fields) == len(c.sets.ns) == 2

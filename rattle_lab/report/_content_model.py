@@ -118,8 +118,8 @@ def model_content(data: ReportData, *, n_sweep: int = 40, max_freqs: int = 6,
     zeta = ramp_zeta if ramp_zeta is not None else abs(pval(g, "zeta"))
     zeta_src = "ramp model" if ramp_zeta is not None else "eq. (3.4) fit"
     e = e_fit.value
-    if not 0.0 <= e <= 1.0:
-        raise Missing(f"fitted e = {e:.4g} is outside [0, 1]")
+    if not 0.0 < e <= 1.0:  # the bifurcation sets need e > 0 (a plastic impact has no orbit)
+        raise Missing(f"fitted e = {e:.4g} is outside (0, 1]")
     if not (math.isfinite(zeta) and zeta > 0 and math.isfinite(pval(g, "gap_m"))):
         raise Missing(f"fitted zeta {zeta} or gap unusable for the model")
     f_s, gap, q = pval(g, "f_s_hz"), pval(g, "gap_m"), pval(g, "participation", 1.0)
