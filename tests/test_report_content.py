@@ -113,7 +113,8 @@ def _threshold_content() -> ThresholdContent:
     f = np.array([90.0, 95.0, 100.0])
     up, down = np.array([10.0, 8.0, 12.0]), np.array([7.0, 9.0, np.nan])
     grid = np.linspace(88.0, 102.0, 50)
-    curve = GrazingCurve(grid, 5.0 + 0.01 * (grid - 95.0) ** 2, np.full(grid.size, 0.5), 4,
+    y = 5.0 + 0.01 * (grid - 95.0) ** 2
+    curve = GrazingCurve(grid, y, (y - 0.5, y + 0.5), 4,
                          1.2e-3, 96.0, 0.02, np.array([100.0]), np.array([12.0]))
     hyst = up - down
     return ThresholdContent(f, up, down, hyst, np.isfinite(hyst) & (hyst < 0),
@@ -153,7 +154,8 @@ def test_every_page_renders_from_content_without_a_store(tmp_path: Path) -> None
     waves = WaveformContent((WaveformColumn("r1", "sine_dwell", 100.0, "1/1",
                                             (trace, trace, sound)),))
     v = np.linspace(0.1, 0.5, 20)
-    spl = SplContent((SplCurve("first", v, 2.0 * v + 0.1, 2.0, 0.1, 0.99, v, 0.05 * v),))
+    spl = SplContent((SplCurve("first", v, 2.0 * v + 0.1, 2.0, 0.1, 0.99, v, 2.0 * v + 0.1,
+                               (1.9 * v + 0.1, 2.1 * v + 0.1)),))
     f_b = np.array([100.0, 125.0, 160.0])
     rows = tuple({"run_id": f"r{k}", "v_rms_m_s": 0.1 * (k + 1),
                   "acoustics": {"laeq_db": 60.0 + k, "lafmax_db": 65.0 + k,

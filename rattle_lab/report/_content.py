@@ -73,7 +73,7 @@ class GrazingCurve:
 
     grid_hz: np.ndarray
     accel_ms2: np.ndarray
-    half_width_ms2: np.ndarray  # NaN: no band
+    band_ms2: tuple[np.ndarray, np.ndarray] | None  # lower and upper edge (None: no band)
     dof: int | None             # Student t degrees of freedom of the band (None: normal)
     gap_m: float
     f_s_hz: float
@@ -114,7 +114,8 @@ def threshold_content(data: ReportData) -> ThresholdContent:
         y, half = grazing_band_ms2(grid, g)
         out = np.array([np.nan if x is None else x for x in g.outliers_hz], dtype=float)
         sel = np.isin(f, out)
-        curve = GrazingCurve(grid, y, half, band_quantile(g)[1], pval(g, "gap_m"),
+        band = (y - half, y + half) if np.isfinite(half).any() else None
+        curve = GrazingCurve(grid, y, band, band_quantile(g)[1], pval(g, "gap_m"),
                              pval(g, "f_s_hz"), pval(g, "zeta"),
                              f[sel] if out.size else None, up[sel] if out.size else None)
     else:
@@ -205,7 +206,9 @@ class SplCurve:
     intercept: float
     r2: float
     grid_m_s: np.ndarray
-    half_width_pa: np.ndarray | None  # None: fewer than 3 points or no spread in v
+    line_pa: np.ndarray               # the law on the grid
+    band_pa: tuple[np.ndarray, np.ndarray] | None  # 95 % band of the mean (None: < 3 points
+    #                                                or no spread in v)
 
 
 @dataclass(frozen=True)
@@ -247,8 +250,10 @@ def spl_content(data: ReportData) -> SplContent:
         v, p = v[ok], p[ok]
         slope, icpt = _num(law.linear.slope), _num(law.linear.intercept)
         grid = np.linspace(0.0, float(v.max()) * 1.05 if v.size else 1.0, 100)
-        curves.append(SplCurve(n, v, p, slope, icpt, _num(law.linear.r2), grid,
-                               linear_law_band(v, p, slope, icpt, grid)))
+        line = slope * grid + icpt
+        half = linear_law_band(v, p, slope, icpt, grid)
+        curves.append(SplCurve(n, v, p, slope, icpt, _num(law.linear.r2), grid, line,
+                               None if half is None else (line - half, line + half)))
     return SplContent(tuple(curves))
 
 

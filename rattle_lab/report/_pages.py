@@ -8,7 +8,6 @@ its unit.
 
 from __future__ import annotations
 
-import numpy as np
 from matplotlib.figure import Figure
 
 from ._common import LANDSCAPE_IN, fmt, landscape_figure, table
@@ -67,13 +66,12 @@ def threshold_page(c: ThresholdContent) -> list[Figure]:
     ax, ax_h = fig.subplots(1, 2, width_ratios=(2, 1))
     curve = c.curve
     if curve is not None:
-        grid, y, half = curve.grid_hz, curve.accel_ms2, curve.half_width_ms2
-        ax.plot(grid, y, color="k", lw=1.2,
+        ax.plot(curve.grid_hz, curve.accel_ms2, color="k", lw=1.2,
                 label=f"eq. (3.4) fit: gap {1e3 * curve.gap_m:.3g} mm, f_s "
                       f"{curve.f_s_hz:.4g} Hz, zeta {curve.zeta:.3g}")
-        if np.isfinite(half).any():
+        if curve.band_ms2 is not None:
             how = f"Student t, {curve.dof} dof" if curve.dof is not None else "normal"
-            ax.fill_between(grid, y - half, y + half, color="0.6", alpha=0.35,
+            ax.fill_between(curve.grid_hz, *curve.band_ms2, color="0.6", alpha=0.35,
                             label=f"95 % confidence band (delta method, {how})")
         if curve.outlier_freq_hz is not None:
             ax.plot(curve.outlier_freq_hz, curve.outlier_up_ms2, "o", ms=11, mfc="none",
@@ -200,13 +198,11 @@ def spl_page(c: SplContent) -> list[Figure]:
         slope, icpt, grid = curve.slope, curve.intercept, curve.grid_m_s
         ax.plot(curve.v_m_s, curve.p_pa, ".", ms=2.5, alpha=0.5, color=color,
                 label=f"{name}, measured")
-        line = slope * grid + icpt
-        ax.plot(grid, line, color=color, lw=1.3,
+        ax.plot(grid, curve.line_pa, color=color, lw=1.3,
                 label=f"{name}: p = {slope:.3g} Pa/(m/s) |v_in| + {icpt:.3g} Pa (r2 "
                       f"{curve.r2:.3f})")
-        if curve.half_width_pa is not None:  # 95 % band of the mean (OLS)
-            ax.fill_between(grid, line - curve.half_width_pa, line + curve.half_width_pa,
-                            color=color, alpha=0.2)
+        if curve.band_pa is not None:  # 95 % band of the mean (OLS)
+            ax.fill_between(grid, *curve.band_pa, color=color, alpha=0.2)
     ax.set_xlabel("impact velocity |v_in| (m/s)")
     ax.set_ylabel("sound pressure (Pa)")
     ax.set_title("Sound pressure against impact velocity, fitted laws with 95 % bands "
