@@ -55,7 +55,7 @@ PACKAGES: dict[str, list[str]] = {
         "Loudness", "NOMINAL_THIRD_OCTAVE_HZ", "P_REF_PA", "RunAcoustics", "SoundLevels",
         "apply_weighting", "band_edges_hz", "band_gain", "band_mean_squares",
         "channel_calibration", "fast_time_weighted", "loudness", "rattle_episodes",
-        "run_acoustics", "sound_levels", "weighting_db", "weighting_response",
+        "run_acoustics", "sound_levels", "weighting_db", "weighting_response", "energy_mean_db",
     ],
     "rattle_lab.exchange": ["UFF_TYPE_OF_QUANTITY", "export_uff", "uff_sets"],
     "rattle_lab.model.analysis": [
@@ -67,7 +67,7 @@ PACKAGES: dict[str, list[str]] = {
         "LyapunovResult", "AttractorMap", "DisturbanceMap", "classify_impacts", "sweep_values",
         "sweep", "sweep_up_down", "write_sweeps_csv", "lyapunov_exponent",
         "lyapunov_from_result", "tangent_log_growth", "regime_map", "basin_map",
-        "disturbance_threshold", "disturbance_map"
+        "disturbance_threshold", "disturbance_map", "SweepThresholds", "sweep_thresholds"
     ],
     "rattle_lab.cli": [
         "COMMAND_MODULES", "build_parser", "main"
@@ -76,7 +76,7 @@ PACKAGES: dict[str, list[str]] = {
         "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "SoundPeaks", "a_weight",
         "a_weighting_db", "cross_correlation_delay", "detect_impacts", "impact_pattern",
         "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
-        "sound_peaks", "spl_db", "trigger_onsets"
+        "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle"
     ],
     "rattle_lab.explorer": [
         "Explorer", "Histories", "compute_histories", "save_histories", "impacts_path",
@@ -93,7 +93,9 @@ PACKAGES: dict[str, list[str]] = {
         "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
         "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
         "LinearLawSummary", "DbLawSummary", "RunRow", "SkippedRun", "ThresholdTable",
-        "TransientRun", "ParticipationInfo"
+        "TransientRun", "ParticipationInfo",
+        "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
+        "threshold_hysteresis", "negative_hysteresis"
     ],
     "rattle_lab.model.modal": [
         "CONTACT_NAMES", "THESIS_HERTZ_N_M15", "THESIS_PLATE", "THESIS_STRIKER_STIFFNESS_N_M",
@@ -110,7 +112,8 @@ PACKAGES: dict[str, list[str]] = {
     "rattle_lab.model": [],
     "rattle_lab.plot": [
         "FIGURE_SUFFIXES", "check_figure_path", "save_figure", "plot_time_history", "plot_sweeps",
-        "plot_bifurcation_sets", "plot_attractor_map", "plot_disturbance_map"
+        "plot_bifurcation_sets", "plot_attractor_map", "plot_disturbance_map",
+        "smooth_region", "db_slope_guide", "power_law_guide"
     ],
     "rattle_lab.workflow": [
         "STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline", "run_pipeline"
@@ -127,7 +130,8 @@ PACKAGES: dict[str, list[str]] = {
         "NonMonotonicTimestampsWarning", "EmptyChannelWarning", "UncalibratedWarning"
     ],
     "rattle_lab.report": [
-        "write_report", "build_pages", "ReportResult", "ReportData", "gather", "SECTIONS"
+        "write_report", "build_pages", "ReportResult", "ReportData", "gather", "SECTIONS",
+        "ReportContent", "build_report_content", "render_pages"
     ],
     "rattle_lab.rig": [
         "load_scene", "parse_scene", "synthesize", "write_synthetic", "Scene", "SceneError",
@@ -142,7 +146,7 @@ PACKAGES: dict[str, list[str]] = {
         "freq_hz_from_omega", "tau_from_time", "time_s_from_tau", "x_from_displacement",
         "displacement_m_from_x", "impact_velocity_ms", "v_im_from_velocity", "inv_F_from_gap",
         "gap_m_from_inv_F", "v_im_over_F_from_velocity", "velocity_ms_from_v_im_over_F",
-        "NondimensionalExcitation", "PhysicalExcitation", "SDFScaling"
+        "NondimensionalExcitation", "PhysicalExcitation", "SDFScaling", "angular_rad_s_from_freq"
     ],
     "rattle_lab.model.sdf": [
         "SDFParams", "SDFState", "SimImpacts", "Crossings", "DenseSamples", "SimResult",

@@ -22,8 +22,9 @@ from rattle_lab.fit import (DownRestitution, FitSummary, Fits, GrazingParameter,
 from rattle_lab.store import ingest
 from rattle_lab.records._errors import StoreError
 from rattle_lab.report import ReportResult, build_pages, gather, write_report
-from rattle_lab.report._pages import (TEXT_WIDTH, band_quantile, grazing_band_ms2,
-                                      parameter_lines, summary_lines)
+from rattle_lab.fit import band_quantile, grazing_band_ms2
+from rattle_lab.report._common import TEXT_WIDTH
+from rattle_lab.report._summary_text import parameter_lines, summary_lines
 
 
 @pytest.fixture(scope="module")
@@ -337,7 +338,8 @@ def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -
     from matplotlib.lines import Line2D
 
     from rattle_lab.plot._bifsets import _LINESTYLES
-    from rattle_lab.report._pages import model_pages
+    from rattle_lab.report._content_model import model_content
+    from rattle_lab.report._pages_model import model_pages
 
     import rattle_lab.model.analysis as analysis
 
@@ -350,7 +352,7 @@ def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -
 
     analysis.bifurcation_sets = spy
     try:
-        fig = model_pages(gather(stores["fitted"]))[0]
+        fig = model_pages(model_content(gather(stores["fitted"])))[0]
     finally:
         analysis.bifurcation_sets = real
     ax = fig.axes[0]
@@ -368,7 +370,7 @@ def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -
 
 
 def test_smooth_region_follows_the_boundary() -> None:
-    from rattle_lab.report._pages import smooth_region
+    from rattle_lab.plot import smooth_region
 
     # a disc on a coarse grid: the 0.5 level of the smoothed field stays within one cell
     w = np.linspace(0.0, 1.0, 21)
@@ -380,3 +382,19 @@ def test_smooth_region_follows_the_boundary() -> None:
     r = np.hypot(ww2 - 0.5, ff2 - 0.5)
     cell = w[1] - w[0]
     assert np.all(z[r < 0.3 - cell] > 0.5) and np.all(z[r > 0.3 + cell] < 0.5)
+
+
+def test_building_the_content_leaves_the_gathered_data_alone(stores: dict[str, Path]) -> None:
+    # issue 12: the report used to write the missing sections into the frozen ReportData
+    from rattle_lab.report import build_report_content, render_pages
+
+    data = gather(stores["bare"])
+    before = dict(data.missing)
+    content = build_report_content(data, model=False)
+    assert data.missing == before
+    assert set(content.missing) == set(before) | {"thresholds", "impact patterns", "waveforms",
+                                                  "SPL law", "acoustics", "model predictions"}
+    assert [name for name, _ in content.sections] == ["rig and calibration"]
+    pages, sections = render_pages(content)
+    assert sections == ("summary", "rig and calibration") and len(pages) == 2
+    assert data.missing == before

@@ -7,7 +7,8 @@ package apart from its exceptions, so that every stage after ``records`` may use
 
 from ._filters import (NOMINAL_THIRD_OCTAVE_HZ, apply_weighting, band_edges_hz, band_gain,
                        band_mean_squares, weighting_db, weighting_response)
-from ._levels import P_REF_PA, SoundLevels, fast_time_weighted, rattle_episodes, sound_levels
+from ._levels import (P_REF_PA, SoundLevels, energy_mean_db, fast_time_weighted, rattle_episodes,
+                      sound_levels)
 from ._loudness import Loudness, loudness
 from ._run import RunAcoustics, channel_calibration, run_acoustics
 
@@ -15,5 +16,5 @@ __all__ = [
     "Loudness", "NOMINAL_THIRD_OCTAVE_HZ", "P_REF_PA", "RunAcoustics", "SoundLevels",
     "apply_weighting", "band_edges_hz", "band_gain", "band_mean_squares", "channel_calibration",
     "fast_time_weighted", "loudness", "rattle_episodes", "run_acoustics", "sound_levels",
-    "weighting_db", "weighting_response",
+    "weighting_db", "weighting_response", "energy_mean_db",
 ]

@@ -160,3 +160,17 @@ def rattle_episodes(impact_t_s: object, *, start_time_s: float, duration_s: floa
 
 __all__ = ["P_REF_PA", "SoundLevels", "TAU_FAST_S", "fast_time_weighted", "rattle_episodes",
            "sound_levels"]
+
+
+def energy_mean_db(levels_db: object) -> float:
+    """Energy (power) mean of levels: ``10 log10(mean(10^(L/10)))``, dB on the levels' reference.
+
+    Examples
+    --------
+    >>> round(energy_mean_db([60.0, 60.0]), 6), round(energy_mean_db([70.0, 0.0]), 3)
+    (60.0, 66.99)
+    """
+    levels = np.asarray(levels_db, dtype=float)
+    if levels.size == 0:
+        raise ParameterError("`levels_db` must hold at least one level")
+    return float(10 * np.log10(np.mean(10 ** (levels / 10))))

@@ -85,3 +85,42 @@ def impact_pattern(impact_t_s: object, freq_hz: float, t_start_s: float, t_stop_
             if n >= 2 and np.max(freq) >= tolerance * gaps.size:
                 return PatternResult(counts, "1/n", n)
     return PatternResult(counts, "irregular", 0)
+
+
+def impacts_per_cycle(impact_t_s: object, freq_hz: float, t_start_s: float,
+                      duration_s: float) -> np.ndarray:
+    """Impacts in each whole forcing cycle ``[t0 + k/f, t0 + (k+1)/f)`` of a run.
+
+    Unlike :func:`impact_pattern` this only counts (no classification, no checks
+    beyond a positive frequency): the report draws one point per cycle.
+
+    Parameters
+    ----------
+    impact_t_s : array_like
+        Impact times, s.
+    freq_hz : float
+        Excitation frequency, Hz, > 0.
+    t_start_s, duration_s : float
+        Start and length of the run, s; ``floor(duration_s * freq_hz)`` whole cycles.
+
+    Returns
+    -------
+    ndarray of int
+        One count per cycle (impacts outside the whole cycles are left out).
+
+    Raises
+    ------
+    ParameterError
+        For ``freq_hz <= 0``.
+
+    Examples
+    --------
+    >>> impacts_per_cycle([0.001, 0.011, 0.012, 0.035], 100.0, 0.0, 0.04).tolist()
+    [1, 2, 0, 1]
+    """
+    if not (np.isfinite(freq_hz) and freq_hz > 0):
+        raise ParameterError(f"`freq_hz` must be > 0, was {freq_hz}")
+    n_cycles = int(np.floor(duration_s * freq_hz))
+    k = np.floor((np.asarray(impact_t_s, dtype=float) - t_start_s) * freq_hz).astype(int)
+    k = k[(k >= 0) & (k < n_cycles)]
+    return np.bincount(k, minlength=n_cycles)

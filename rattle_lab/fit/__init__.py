@@ -5,6 +5,8 @@ saddle-node) or by replaying the measured ramp through the exact simulator
 (:func:`model_threshold`; :func:`fit_zeta_ramp`, ``fit_restitution_down(method="ramp")``).
 """
 
+from ._bands import (band_quantile, grazing_band_ms2, linear_law_band, negative_hysteresis,
+                     student_t_ci, threshold_hysteresis)
 from ._common import ParamEstimate
 from ._damping import RampDampingFit, fit_zeta_ramp
 from ._grazing import GrazingFit, fit_grazing
@@ -31,4 +33,6 @@ __all__ = [
     "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
     "LinearLawSummary", "DbLawSummary", "RunRow", "SkippedRun", "ThresholdTable",
     "TransientRun", "ParticipationInfo",
+    "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
+    "threshold_hysteresis", "negative_hysteresis",
 ]

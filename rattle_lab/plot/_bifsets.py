@@ -5,6 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from rattle_lab.model.analysis.bifsets import BifurcationSets
 
 from ._figures import check_figure_path, save_figure
@@ -78,3 +80,34 @@ def plot_bifurcation_sets(sets: BifurcationSets, path: str | Path, *, dpi: int =
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
               borderaxespad=0.0)
     return save_figure(fig, path, dpi=dpi)
+
+
+def smooth_region(omega: np.ndarray, F: np.ndarray, mask: np.ndarray,
+                  factor: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A boolean region on a grid as a smooth field on a finer grid (for contourf at 0.5).
+
+    The 0/1 field is blurred by a Gaussian of one cell and interpolated cubically
+    onto a grid ``factor`` times finer: the 0.5 contour then runs smoothly, within a
+    cell of the computed boundary, instead of in grid-cell steps.
+
+    Parameters
+    ----------
+    omega, F : ndarray
+        The grid's axes (``mask`` is ``(F.size, omega.size)``).
+    mask : ndarray of bool
+        The region.
+    factor : int
+        Refinement of the grid.
+
+    Returns
+    -------
+    (ndarray, ndarray, ndarray)
+        The finer axes and the smoothed field (``contourf(w, f, z, levels=[0.5, 1.5])``).
+    """
+    from scipy import ndimage
+
+    z = ndimage.gaussian_filter(np.asarray(mask, dtype=float), sigma=1.0, mode="nearest")
+    z = ndimage.zoom(z, factor, order=3, mode="nearest", grid_mode=False)
+    w = np.linspace(omega[0], omega[-1], z.shape[1])
+    f = np.linspace(F[0], F[-1], z.shape[0])
+    return w, f, z

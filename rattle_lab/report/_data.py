@@ -69,7 +69,8 @@ class ReportData:
         Its summary, typed (:meth:`~rattle_lab.fit.FitSummary.from_stored`); None exactly
         when ``results`` is.
     missing : dict of str to str
-        Section name -> why it is left out (filled while gathering and plotting).
+        Section name -> why it is left out, as gathering found (not modified later: the
+        report's content adds the sections' reasons to a copy).
     """
 
     store: Path

@@ -24,6 +24,7 @@ from ._sweep import (
     sweep_values,
     write_sweeps_csv,
 )
+from ._sweep_thresholds import SweepThresholds, sweep_thresholds
 from .bifsets import BifurcationSets, BoundaryCurve, bifurcation_sets
 from .lyapunov import LyapunovResult, lyapunov_exponent, lyapunov_from_result, tangent_log_growth
 from .maps import AttractorMap, basin_map, regime_map
@@ -82,4 +83,6 @@ __all__ = [
     "basin_map",
     "disturbance_threshold",
     "disturbance_map",
+    "SweepThresholds",
+    "sweep_thresholds",
 ]

@@ -43,6 +43,7 @@ from ._forcing import (
 )
 from ._plate import f_s_hz, flexural_rigidity_nm, lam_from_f_s, omega_s_rad_s, participation_factor
 from ._variables import (
+    angular_rad_s_from_freq,
     displacement_m_from_x,
     freq_hz_from_omega,
     omega_from_freq,
@@ -90,4 +91,5 @@ __all__ = [
     "NondimensionalExcitation",
     "PhysicalExcitation",
     "SDFScaling",
+    "angular_rad_s_from_freq",
 ]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy.typing as npt
 
-from ._checks import FloatOrArray, _finite, _nonnegative, _positive
+from ._checks import TWO_PI, FloatOrArray, _finite, _nonnegative, _positive
 
 
 # --------------------------------------------------------------------------- frequency, time, state
@@ -34,6 +34,32 @@ def omega_from_freq(freq_hz: npt.ArrayLike, f_s_hz: float) -> FloatOrArray:
     0.95
     """
     return _nonnegative("freq_hz", freq_hz) / _positive("f_s_hz", f_s_hz)
+
+
+def angular_rad_s_from_freq(freq_hz: npt.ArrayLike) -> FloatOrArray:
+    """Angular frequency ``2 pi f`` [rad/s] of a frequency [Hz] (e.g. ``omega_s`` of ``f_s``).
+
+    Parameters
+    ----------
+    freq_hz : float or array
+        Frequency [Hz], >= 0.
+
+    Returns
+    -------
+    float or array
+        Angular frequency [rad/s].
+
+    Raises
+    ------
+    ParameterError
+        If ``freq_hz`` is negative or NaN.
+
+    Examples
+    --------
+    >>> round(float(angular_rad_s_from_freq(0.5)), 12)
+    3.14159265359
+    """
+    return TWO_PI * _nonnegative("freq_hz", freq_hz)
 
 
 def freq_hz_from_omega(omega: npt.ArrayLike, f_s_hz: float) -> FloatOrArray:

@@ -1,0 +1,318 @@
+"""What each report page shows, computed once, before anything is drawn.
+
+:func:`build_content` turns the gathered :class:`ReportData` into a frozen
+:class:`ReportContent`: per section the arrays and values the page draws
+(band curves, thresholds, impacts per cycle, SPL points and bands, acoustic rows,
+waveform windows, the model's bifurcation sets and sweeps) or the reason the section
+is left out.  The builders here only call the functions that own each computation
+(:mod:`rattle_lab.fit` for bands and intervals, :mod:`rattle_lab.detect` for
+impacts per cycle, :mod:`rattle_lab.model` for conversions and simulations) and
+store their results; the page modules (``_pages*``) only draw.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rattle_lab.detect import impacts_per_cycle
+from rattle_lab.fit import (Fits, GrazingSummary, SplLawSummary, band_quantile, grazing_band_ms2,
+                            linear_law_band, threshold_hysteresis)
+from ._common import Missing
+from ._data import ReportData, RecordInfo
+from ._summary_text import report_negative_hysteresis, summary_lines, threshold_arrays
+
+
+def fits_of(data: ReportData) -> Fits:
+    """The typed fits of the summary (empty without results)."""
+    return data.summary.fits if data.summary is not None else Fits()
+
+
+def pval(g: GrazingSummary, name: str, default: float = float("nan")) -> float:
+    """A fitted grazing parameter's value (``default`` where the fit has none)."""
+    value = g.parameters()[name].value
+    return default if value is None else value
+
+
+def require_results(data: ReportData) -> None:
+    """Raise :class:`Missing` (with the gathering's reason) when the store has no results."""
+    if data.results is None or data.summary is None:
+        raise Missing(data.missing.get("results", "no results"))
+
+
+def not_fitted(data: ReportData, key: str, default: str) -> str:
+    """Why the fit ``key`` is absent, as the summary says."""
+    return data.summary.not_fitted.get(key, default) if data.summary is not None else default
+
+
+# --- rig -------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class RigContent:
+    """The records whose rig facts and channels the rig page tabulates."""
+
+    records: tuple[RecordInfo, ...]
+
+
+def rig_content(data: ReportData) -> RigContent:
+    """The rig page's content (raises :class:`Missing` without a readable record)."""
+    if not data.records:
+        raise Missing("no readable record in the store")
+    return RigContent(data.records)
+
+
+# --- thresholds ------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class GrazingCurve:
+    """Eq. (3.4) at the fitted parameters on a frequency grid, with its 95 % band."""
+
+    grid_hz: np.ndarray
+    accel_ms2: np.ndarray
+    band_ms2: tuple[np.ndarray, np.ndarray] | None  # lower and upper edge (None: no band)
+    dof: int | None             # Student t degrees of freedom of the band (None: normal)
+    gap_m: float
+    f_s_hz: float
+    zeta: float
+    outlier_freq_hz: np.ndarray | None  # None: the fit left no threshold out
+    outlier_up_ms2: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class ThresholdContent:
+    """Measured thresholds, their hysteresis and the eq. (3.4) fit curve (None: not fitted)."""
+
+    freq_hz: np.ndarray
+    up_ms2: np.ndarray
+    down_ms2: np.ndarray
+    hysteresis_ms2: np.ndarray
+    negative: np.ndarray        # bool: disappearance above onset
+    both: np.ndarray            # bool: onset and disappearance measured
+    bar_width_hz: float
+    curve: GrazingCurve | None
+    missing: tuple[tuple[str, str], ...] = ()  # parts left out (name, why)
+
+
+def threshold_content(data: ReportData) -> ThresholdContent:
+    """The threshold page's content (raises :class:`Missing` without ramp thresholds)."""
+    require_results(data)
+    f, up, down = threshold_arrays(data)
+    if f.size == 0 or not (np.isfinite(up).any() or np.isfinite(down).any()):
+        raise Missing("no ramp thresholds in /results/thresholds (needs amplitude_ramp_up/down "
+                      "runs with a base accelerometer)")
+    g = fits_of(data).grazing
+    curve: GrazingCurve | None = None
+    missing: tuple[tuple[str, str], ...] = ()
+    if g is not None:
+        lo_f = min(f.min(), pval(g, "f_s_hz", f.min())) - 2.0
+        hi_f = max(f.max(), pval(g, "f_s_hz", f.max())) + 2.0
+        grid = np.linspace(max(lo_f, 0.1), hi_f, 200)
+        y, half = grazing_band_ms2(grid, g)
+        out = np.array([np.nan if x is None else x for x in g.outliers_hz], dtype=float)
+        sel = np.isin(f, out)
+        band = (y - half, y + half) if np.isfinite(half).any() else None
+        curve = GrazingCurve(grid, y, band, band_quantile(g)[1], pval(g, "gap_m"),
+                             pval(g, "f_s_hz"), pval(g, "zeta"),
+                             f[sel] if out.size else None, up[sel] if out.size else None)
+    else:
+        missing = (("eq. 3.4 fit curve", not_fitted(data, "grazing", "grazing fit absent")),)
+    hyst = threshold_hysteresis(up, down)
+    width = 0.6 * (float(np.min(np.diff(f))) if f.size > 1 else 1.0)
+    return ThresholdContent(f, up, down, hyst, np.isfinite(hyst) & (hyst < 0),
+                            np.isfinite(up) & np.isfinite(down), width, curve, missing)
+
+
+# --- impact patterns -------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class PatternContent:
+    """One point per forcing cycle of each analysed run, and one marker per dwell and class.
+
+    ``points`` columns: frequency (Hz, ramps shifted -0.12 up / +0.12 down), nominal level,
+    impacts in the cycle, 1.0 for a dwell (else 0.0).  ``dwell_shares``: ``(class, freq,
+    level, share of the dwell's cycles in the class)``, class 3 meaning >= 3 impacts.
+    """
+
+    points: np.ndarray
+    level_units: tuple[str, ...]
+    dwell_shares: tuple[tuple[int, float, float, float], ...]
+
+
+def _run_info(data: ReportData, key: str, run_id: str) -> dict[str, Any]:
+    for rec in data.records:
+        if rec.input_key == key:
+            return rec.runs.get(run_id, {})
+    return {}
+
+
+def pattern_content(data: ReportData) -> PatternContent:
+    """The impact-pattern page's content (cycle counts by :func:`impacts_per_cycle`)."""
+    require_results(data)
+    cat = data.catalogue
+    pts: list[tuple[float, float, int, float]] = []
+    units = set()
+    for (key, run_id), r in sorted(data.results.runs.items()):
+        if r.get("status") != "ok" or "t_s" not in r:
+            continue
+        info = _run_info(data, key, run_id)
+        f = float(r.get("freq_hz", np.nan))
+        lvl = info.get("level")
+        if not (math.isfinite(f) and f > 0) or lvl is None:
+            continue
+        rows = cat[(cat["input_key"] == key) & (cat["run_id"] == run_id)]
+        if len(rows) == 0:
+            continue
+        t0 = float(np.nan_to_num(rows["start_time_s"].iloc[0]))
+        duration = float(rows["duration_s"].max())
+        counts = impacts_per_cycle(r["t_s"], f, t0, duration)
+        if counts.size == 0:
+            continue
+        lvl_end = info.get("level_end")
+        # the nominal level of each cycle: a ramp goes linearly from level to level_end
+        levels = np.linspace(float(lvl), float(lvl if lvl_end is None else lvl_end), counts.size)
+        protocol = str(r.get("protocol", ""))
+        shift = {"amplitude_ramp_up": -0.12, "amplitude_ramp_down": 0.12}.get(protocol, 0.0)
+        units.add(info.get("level_units") or "?")
+        dwell = float(lvl_end is None or lvl_end == lvl)
+        pts.extend((f + shift, lv, int(c), dwell) for lv, c in zip(levels, counts))
+    if not pts:
+        raise Missing("no analysed run with an excitation frequency and level")
+    arr = np.array(pts, dtype=float).reshape(-1, 4)
+    shares: list[tuple[int, float, float, float]] = []
+    for n in range(4):
+        sel = arr[:, 2] == n if n < 3 else arr[:, 2] >= 3
+        dwell = sel & (arr[:, 3] == 1)
+        for fx, lv in sorted({(a, b) for a, b in arr[dwell, :2]}):
+            share = float(np.mean(arr[(arr[:, 0] == fx) & (arr[:, 1] == lv)][:, 2]
+                                  .clip(max=3) == n))
+            shares.append((n, float(fx), float(lv), share))
+    return PatternContent(arr, tuple(sorted(units)), tuple(shares))
+
+
+# --- SPL law ---------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class SplCurve:
+    """One fitted SPL law with its measured points and the 95 % band of its mean."""
+
+    name: str                     # "first", "max" or "rms"
+    v_m_s: np.ndarray
+    p_pa: np.ndarray
+    slope: float
+    intercept: float
+    r2: float
+    grid_m_s: np.ndarray
+    line_pa: np.ndarray               # the law on the grid
+    band_pa: tuple[np.ndarray, np.ndarray] | None  # 95 % band of the mean (None: < 3 points
+    #                                                or no spread in v)
+
+
+@dataclass(frozen=True)
+class SplContent:
+    """The SPL laws in drawing order (RMS, maximum, first peak)."""
+
+    curves: tuple[SplCurve, ...]
+
+
+def _num(x: Any) -> float:
+    return float("nan") if x is None else float(x)
+
+
+def spl_content(data: ReportData) -> SplContent:
+    """The SPL-law page's content (band by :func:`rattle_lab.fit.linear_law_band`)."""
+    require_results(data)
+    fits = fits_of(data)
+    laws: dict[str, SplLawSummary | None] = {n: fits.spl_law(n) for n in ("first", "max", "rms")}
+    if all(v is None for v in laws.values()):
+        raise Missing(f"no SPL law in /results "
+                      f"({not_fitted(data, 'spl_law_first', 'not fitted')})")
+    v_all: dict[str, list[np.ndarray]] = {"first": [], "max": [], "rms": []}
+    p_all: dict[str, list[np.ndarray]] = {"first": [], "max": [], "rms": []}
+    for r in data.results.runs.values():
+        if r.get("status") != "ok" or "v_in_m_s" not in r or "p_first_pa" not in r:
+            continue
+        v = np.abs(np.asarray(r["v_in_m_s"], dtype=float))
+        for n, key in (("first", "p_first_pa"), ("max", "p_max_pa"), ("rms", "p_rms_pa")):
+            if key in r and np.asarray(r[key]).shape == v.shape:
+                v_all[n].append(v)
+                p_all[n].append(np.abs(np.asarray(r[key], dtype=float)))
+    curves = []
+    for n in ("rms", "max", "first"):  # the first-peak law (the thesis's) drawn on top
+        law = laws[n]
+        if law is None or not v_all[n]:
+            continue
+        v, p = np.concatenate(v_all[n]), np.concatenate(p_all[n])
+        ok = np.isfinite(v) & np.isfinite(p) & (v > 0) & (p > 0)
+        v, p = v[ok], p[ok]
+        slope, icpt = _num(law.linear.slope), _num(law.linear.intercept)
+        grid = np.linspace(0.0, float(v.max()) * 1.05 if v.size else 1.0, 100)
+        line = slope * grid + icpt
+        half = linear_law_band(v, p, slope, icpt, grid)
+        curves.append(SplCurve(n, v, p, slope, icpt, _num(law.linear.r2), grid, line,
+                               None if half is None else (line - half, line + half)))
+    return SplContent(tuple(curves))
+
+
+# --- the whole report ------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ReportContent:
+    """Everything the report draws, computed.
+
+    Attributes
+    ----------
+    data : ReportData
+        What was gathered (store name, catalogue, records, typed summary).
+    summary_lines : tuple of str
+        The summary page's text (parameters, flags, provenance), before the section list.
+    sections : tuple of (str, object)
+        The sections present, in page order, with their page content.
+    missing : Mapping of str to str
+        Sections (or parts) left out and why: the gathering's, then the sections'.
+    """
+
+    data: ReportData
+    summary_lines: tuple[str, ...]
+    sections: tuple[tuple[str, Any], ...]
+    missing: Mapping[str, str]
+
+
+def build_content(data: ReportData, builders: tuple[tuple[str, Callable[..., Any]], ...], *,
+                  model: bool = True, quiet: bool = True, version: str = "") -> ReportContent:
+    """Compute every page's content; a section whose builder raises :class:`Missing` is left out.
+
+    Parameters
+    ----------
+    data : ReportData
+        From :func:`gather` (not modified).
+    builders : tuple of (str, callable)
+        Section name and content builder, in page order; the ``"model predictions"``
+        builder also takes ``quiet``.
+    model : bool
+        Build the model predictions (else recorded as not requested).
+    quiet : bool
+        No progress bar.
+    version : str
+        The rattle_lab version named on the summary page.
+    """
+    missing = dict(data.missing)
+    sections: list[tuple[str, Any]] = []
+    for name, build in builders:
+        if name == "model predictions" and not model:
+            missing[name] = "not requested (model=False)"
+            continue
+        try:
+            content = build(data, quiet=quiet) if name == "model predictions" else build(data)
+        except Missing as exc:
+            missing[name] = " ".join(str(exc).split())
+            continue
+        sections.append((name, content))
+        missing.update(getattr(content, "missing", ()))
+    return ReportContent(data, tuple(summary_lines(data, version)), tuple(sections), missing)
+
+
+__all__ = ["ReportContent", "build_content", "report_negative_hysteresis"]

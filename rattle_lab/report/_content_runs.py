@@ -1,0 +1,213 @@
+"""Content of the pages drawn from single runs: example waveforms and acoustics.
+
+Like :mod:`._content`, this only reads and calls: the stored channels (windows
+around the detected impacts), :func:`rattle_lab.acoustics.energy_mean_db` and the
+guide lines of :mod:`rattle_lab.plot`; the pages draw what it returns.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rattle_lab.acoustics import energy_mean_db
+from rattle_lab.plot import db_slope_guide, power_law_guide
+from ._common import Missing
+from ._content import require_results
+from ._data import ReportData
+
+WAVEFORM_QUANTITIES = (("plate_acceleration", "plate acceleration (m/s^2)"),
+                       ("plate_velocity", "plate velocity (m/s)"),
+                       ("sound_pressure", "sound pressure (Pa)"))
+
+
+# --- waveforms -------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Trace:
+    """A window of one stored channel with the detected events inside it.
+
+    ``impact_t_s``: impacts in the window; ``impact_y``: the trace at those times;
+    ``peaks``: for the sound pressure, ``(which, t_s, y)`` of the first and maximum
+    peaks (empty where the run has no sound peaks).
+    """
+
+    t_s: np.ndarray
+    y: np.ndarray
+    impact_t_s: np.ndarray
+    impact_y: np.ndarray
+    peaks: tuple[tuple[str, np.ndarray, np.ndarray], ...] = ()
+
+
+@dataclass(frozen=True)
+class WaveformColumn:
+    """One example run: its facts and one trace per quantity (None: no such channel)."""
+
+    run_id: str
+    protocol: str
+    freq_hz: float
+    pattern: str
+    traces: tuple[Trace | None, ...]  # in WAVEFORM_QUANTITIES order
+
+
+@dataclass(frozen=True)
+class WaveformContent:
+    """The example runs, steady (dwell) runs first."""
+
+    columns: tuple[WaveformColumn, ...]
+
+
+def _window(ch: Any, t_mid: float, f: float, n_cycles: int) -> tuple[np.ndarray, np.ndarray]:
+    fs = float(ch.sample_rate_hz)
+    t0 = float(ch.start_time_s or 0.0)
+    i0 = max(0, int(round((t_mid - t0 - n_cycles / (2 * f)) * fs)))
+    i1 = min(ch.n_samples, i0 + int(round(n_cycles / f * fs)))
+    return t0 + np.arange(i0, i1) / fs, np.asarray(ch.read(i0, i1))
+
+
+def _trace(quantity: str, t: np.ndarray, x: np.ndarray, t_imp: np.ndarray,
+           r: Mapping[str, Any]) -> Trace:
+    win = (t_imp >= t[0]) & (t_imp <= t[-1]) if t.size else t_imp < 0
+    t_win = t_imp[win]
+    y_win = np.interp(t_win, t, x) if quantity == "plate_velocity" and win.any() \
+        else np.zeros(0)
+    peaks: list[tuple[str, np.ndarray, np.ndarray]] = []
+    if quantity == "sound_pressure" and "t_first_s" in r:
+        # marked on the recorded trace at the detected times (the peak heights in /results
+        # are of the pressure less the forced-mode part)
+        for which, key in (("first", "t_first_s"), ("max", "t_max_s")):
+            tt = np.asarray(r[key], dtype=float)
+            sel = np.isfinite(tt) & (tt >= t[0]) & (tt <= t[-1]) if t.size else tt < 0
+            peaks.append((which, tt[sel], np.interp(tt[sel], t, x)))
+    return Trace(t, x, t_win, y_win, tuple(peaks))
+
+
+def waveform_content(data: ReportData, *, n_examples: int = 2, n_cycles: int = 5
+                     ) -> WaveformContent:
+    """Windows of ``n_cycles`` forcing periods around the middle impact of up to ``n_examples``
+    runs with impacts (read from the store)."""
+    from rattle_lab.store import open_stored_record
+
+    require_results(data)
+    candidates = [(k, r) for k, r in sorted(data.results.runs.items())
+                  if r.get("status") == "ok" and int(r.get("n_impacts", 0)) > 0
+                  and math.isfinite(float(r.get("freq_hz", np.nan)))]
+    # steady runs first (thesis Fig. 6-4 shows dwells), then the rest
+    candidates.sort(key=lambda kr: (kr[1].get("protocol") != "sine_dwell", kr[0]))
+    chosen = candidates[:n_examples]
+    if not chosen:
+        raise Missing("no analysed run with impacts")
+    columns = []
+    for (key, run_id), r in chosen:
+        f = float(r["freq_hz"])
+        t_imp = np.asarray(r.get("t_s", []), dtype=float)
+        t_mid = float(np.median(t_imp))
+        traces: list[Trace | None] = []
+        with open_stored_record(data.store, key) as record:
+            by_q: dict[str, Any] = {}
+            for channel in record.run(run_id).channels:
+                by_q.setdefault(channel.quantity, channel)
+            for quantity, _ in WAVEFORM_QUANTITIES:
+                ch = by_q.get(quantity)
+                if ch is None or not ch.sample_rate_hz:
+                    traces.append(None)
+                    continue
+                t, x = _window(ch, t_mid, f, n_cycles)
+                traces.append(_trace(quantity, t, x, t_imp, r))
+        columns.append(WaveformColumn(run_id, str(r.get("protocol", "")), f,
+                                      str(r.get("pattern") or "-"), tuple(traces)))
+    return WaveformContent(tuple(columns))
+
+
+# --- acoustics -------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class AcousticsContent:
+    """Per-run acoustic results against the run's RMS impact velocity.
+
+    ``rows``: the summary rows of the runs with acoustics (``RunRow.to_dict()``) with
+    ``v_rms_m_s`` added.  ``band_traces``: ``("rattle" | "background", f_hz, level_db)``
+    per run; ``band_means``: the energy mean over runs of each (None: no bands).
+    ``level_guide`` / ``loudness_guide``: 20 dB per decade and ``N ~ v^0.602`` through
+    the points (None: no finite point).
+    """
+
+    rows: tuple[dict[str, Any], ...]
+    band_traces: tuple[tuple[str, np.ndarray, np.ndarray], ...]
+    band_means: Mapping[str, tuple[np.ndarray, np.ndarray] | None]
+    v_rms_m_s: np.ndarray
+    laeq_db: np.ndarray
+    lafmax_db: np.ndarray
+    n5_sone: np.ndarray
+    nmax_sone: np.ndarray
+    level_guide: tuple[np.ndarray, np.ndarray] | None
+    loudness_guide: tuple[np.ndarray, np.ndarray] | None
+
+
+def _num(x: Any) -> float:
+    return float("nan") if x is None else float(x)
+
+
+def _band_arrays(bands: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    items = sorted((float(k), _num(v)) for k, v in bands.items())
+    if not items:
+        return np.zeros(0), np.zeros(0)
+    f, db = np.array(items).T
+    return f, db
+
+
+def acoustic_rows(data: ReportData) -> list[dict[str, Any]]:
+    """Summary rows of the runs with an ``acoustics`` object, with their RMS impact velocity."""
+    if data.results is None or data.summary is None:
+        return []
+    out = []
+    for run in data.summary.runs:
+        if run.acoustics is None:
+            continue
+        row = run.to_dict()
+        r = data.results.runs.get((run.input_key, run.run_id), {})
+        v = np.abs(np.asarray(r.get("v_in_m_s", []), dtype=float))
+        v = v[np.isfinite(v)]
+        out.append({**row, "v_rms_m_s": float(np.sqrt(np.mean(v**2))) if v.size else np.nan})
+    return out
+
+
+def acoustics_content(data: ReportData) -> AcousticsContent:
+    """The acoustics page's content."""
+    require_results(data)
+    rows = acoustic_rows(data)
+    if not rows:
+        raise Missing("no run with a microphone has acoustic results (fit with this version)")
+    traces: list[tuple[str, np.ndarray, np.ndarray]] = []
+    pooled: dict[str, dict[float, list[float]]] = {"rattle": {}, "background": {}}
+    for r in rows:
+        ac = r["acoustics"]
+        for what, key in (("rattle", "rattle_third_octave_db"),
+                          ("background", "background_third_octave_db")):
+            f, db = _band_arrays(ac.get(key) or {})
+            if f.size:
+                traces.append((what, f, db))
+                for fk, dk in zip(f, db):
+                    pooled[what].setdefault(fk, []).append(dk)
+    means: dict[str, tuple[np.ndarray, np.ndarray] | None] = {}
+    for what in ("rattle", "background"):
+        means[what] = None
+        if pooled[what]:
+            f = np.array(sorted(pooled[what]))
+            means[what] = (f, np.array([energy_mean_db(pooled[what][k]) for k in f]))
+    v = np.array([r["v_rms_m_s"] for r in rows])
+    laeq = np.array([_num(r["acoustics"].get("laeq_db")) for r in rows])
+    lafmax = np.array([_num(r["acoustics"].get("lafmax_db")) for r in rows])
+    n5 = np.array([_num(r["acoustics"].get("loudness_n5_sone")) for r in rows])
+    nmax = np.array([_num(r["acoustics"].get("loudness_max_sone")) for r in rows])
+    ok = np.isfinite(v) & (v > 0)
+    level_guide = (db_slope_guide(v[ok], laeq[ok], 20.0)
+                   if ok.sum() >= 1 and np.isfinite(laeq[ok]).any() else None)
+    sel = ok & np.isfinite(n5) & (n5 > 0)
+    loudness_guide = power_law_guide(v[sel], n5[sel], 0.602) if sel.any() else None
+    return AcousticsContent(tuple(rows), tuple(traces), means, v, laeq, lafmax, n5, nmax,
+                            level_guide, loudness_guide)

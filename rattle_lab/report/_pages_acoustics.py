@@ -1,0 +1,122 @@
+"""The acoustics page: third-octave spectra, levels and loudness against impact velocity.
+
+Draws :class:`._content_runs.AcousticsContent`; nothing is computed here.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+from ._common import fmt, landscape_figure, table
+from ._content_runs import AcousticsContent
+
+
+def calibration_note(rows: list[dict[str, Any]]) -> str:
+    """One line saying how the microphones were calibrated (calibrator or declared)."""
+    sources = sorted({str((r.get("calibration") or {}).get("source", "declared")) for r in rows})
+    flags = sorted({f for r in rows for f in (r.get("calibration") or {}).get("flags", [])})
+    if sources == ["calibrator"]:
+        text = "microphone sensitivity from the campaign's calibrator records"
+    elif "calibrator" in sources:
+        text = "microphone sensitivity from calibrator records for some runs, declared for others"
+    elif sources == ["none"]:
+        text = "microphone UNCALIBRATED (full-scale units): levels are not in dB re 20 uPa"
+    else:
+        text = "no calibrator record: the declared microphone sensitivity is used"
+    if flags:
+        text += "; FLAGGED: " + ", ".join(flags) + " (pre/post calibration differ by > 0.5 dB)"
+    return text
+
+
+def acoustics_page(c: AcousticsContent) -> list[Figure]:
+    """Third-octave spectra of rattle against background; level and loudness against velocity."""
+    rows = list(c.rows)
+    fig = landscape_figure()
+    (ax_b, ax_l), (ax_n, ax_t) = fig.subplots(2, 2)
+    # (a) band spectra: each run thin, energy mean over runs thick
+    thin = {"rattle": "tab:red", "background": "0.45"}
+    for what, f, db in c.band_traces:
+        ax_b.plot(f, db, drawstyle="steps-mid", color=thin[what], lw=0.5, alpha=0.35)
+    for what, color in (("rattle", "tab:red"), ("background", "0.2")):
+        mean = c.band_means.get(what)
+        if mean is not None:
+            ax_b.plot(mean[0], mean[1], drawstyle="steps-mid", color=color, lw=1.8,
+                      label=f"{what}: energy mean of {len(rows)} runs"
+                      if what == "rattle" else f"{what} (no impacts): energy mean")
+    ax_b.set_xscale("log")
+    ax_b.set_xlabel("third-octave band centre frequency (Hz)")
+    ax_b.set_ylabel("band level (dB re 20 uPa)")
+    ax_b.set_title("Third-octave spectra (IEC 61260-1 class 1): rattle against background",
+                   fontsize=9)
+    ax_b.grid(alpha=0.3, which="both")
+    if ax_b.get_legend_handles_labels()[0]:
+        ax_b.legend(fontsize=7, loc="lower left")
+    v, laeq, lafmax, n5, nmax = c.v_rms_m_s, c.laeq_db, c.lafmax_db, c.n5_sone, c.nmax_sone
+    ok = np.isfinite(v) & (v > 0)
+    # (b) levels against impact velocity, with the 20 dB/decade of a linear SPL law
+    ax_l.plot(v[ok], laeq[ok], "o", color="tab:blue", label="LAeq of the run")
+    ax_l.plot(v[ok], lafmax[ok], "^", color="tab:purple", label="LAFmax of the run")
+    if c.level_guide is not None:
+        ax_l.plot(*c.level_guide, "--", color="0.4",
+                  label="20 dB per decade (p proportional to v, the SPL law)")
+    ax_l.set_xscale("log")
+    ax_l.set_xlabel("RMS impact velocity of the run (m/s)")
+    ax_l.set_ylabel("A-weighted level (dB re 20 uPa)")
+    ax_l.set_title("Level against impact velocity (IEC 61672-1)", fontsize=9)
+    ax_l.grid(alpha=0.3, which="both")
+    ax_l.legend(fontsize=7)
+    # (c) loudness against impact velocity: is the SPL law a loudness law?
+    ax_n.plot(v[ok], n5[ok], "o", color="tab:green", label="N5 (exceeded 5 % of the time)")
+    ax_n.plot(v[ok], nmax[ok], "s", mfc="none", color="tab:green", label="Nmax")
+    if c.loudness_guide is not None:
+        ax_n.plot(*c.loudness_guide, "--", color="0.4",
+                  label="N proportional to v^0.6 (SPL law with loudness doubling per 10 dB)")
+    ax_n.set_xscale("log")
+    ax_n.set_yscale("log")
+    for axis in (ax_l.xaxis, ax_n.xaxis, ax_n.yaxis):
+        _label_log_axis(axis)
+    ax_n.set_xlabel("RMS impact velocity of the run (m/s)")
+    ax_n.set_ylabel("ISO 532-1 loudness (sone)")
+    field = sorted({str(r["acoustics"].get("sound_field") or "free") for r in rows})
+    ax_n.set_title(f"Loudness against impact velocity ({'/'.join(field)} field)", fontsize=9)
+    ax_n.grid(alpha=0.3, which="both")
+    ax_n.legend(fontsize=7)
+    # (d) the table
+    ax_t.axis("off")
+    cols = ["run", "LAeq", "LAFmax", "LCpeak", "N5", "Nmax", "S", "calibration"]
+    table_rows = [[str(r["run_id"]), fmt(r["acoustics"].get("laeq_db"), ".1f"),
+                   fmt(r["acoustics"].get("lafmax_db"), ".1f"),
+                   fmt(r["acoustics"].get("lcpeak_db"), ".1f"),
+                   fmt(r["acoustics"].get("loudness_n5_sone"), ".3g"),
+                   fmt(r["acoustics"].get("loudness_max_sone"), ".3g"),
+                   fmt(r["acoustics"].get("sharpness_acum"), ".2f"),
+                   str((r.get("calibration") or {}).get("source", "declared"))]
+                  for r in rows[:14]]
+    table(ax_t, table_rows, cols, 7.0)
+    ax_t.set_title("Per run: levels in dB re 20 uPa, loudness in sone, sharpness (DIN 45692) "
+                   "in acum", fontsize=9, loc="left")
+    if len(rows) > 14:
+        ax_t.text(0.0, 0.0, f"... and {len(rows) - 14} more runs", fontsize=7,
+                  transform=ax_t.transAxes)
+    from matplotlib.ticker import LogFormatterSciNotation, ScalarFormatter
+
+    for ax in (ax_l, ax_n):  # log axes over less than a decade: plain numbers, no minor labels
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_formatter(NullFormatter())
+    ax_n.yaxis.set_major_formatter(ScalarFormatter())
+    ax_n.yaxis.set_minor_formatter(NullFormatter())
+    ax_b.xaxis.set_major_formatter(LogFormatterSciNotation())
+    fig.suptitle("Sound levels, third-octave bands and loudness\n" + calibration_note(rows),
+                 fontsize=11)
+    return [fig]
+
+
+def _label_log_axis(axis: Any) -> None:
+    """Numbers at 1, 2 and 5 per decade: a log axis inside one decade still has labels."""
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda value, _pos: f"{value:g}"))
+    axis.set_minor_formatter(NullFormatter())

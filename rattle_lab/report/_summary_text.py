@@ -1,0 +1,197 @@
+"""The summary page's text: the fitted-parameter table, data-quality flags, provenance.
+
+Content, not drawing: the lines are built here from the gathered data (every fitted
+number from ``/results``; a missing interval is the Student t interval of
+:func:`rattle_lab.fit.student_t_ci`) and drawn by :func:`._common.text_pages`.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from rattle_lab.fit import Estimate, Fits, GrazingSummary, RatioRestitution, negative_hysteresis
+from rattle_lab.fit import student_t_ci
+from ._common import TEXT_WIDTH, fmt, wrapped
+from ._data import ReportData
+
+_COLS = (("quantity", 34), ("value", 11), ("std. error", 11), ("95 % CI", 25), ("unit", 0))
+
+
+def _fits(data: ReportData) -> Fits:
+    return data.summary.fits if data.summary is not None else Fits()
+
+
+def _grazing(data: ReportData) -> GrazingSummary | None:
+    return _fits(data).grazing
+
+
+def _row(quantity: str, value: Any = None, stderr: Any = None,
+         ci: tuple[Any, Any] | None = None, unit: str = "", note: str = "",
+         scale: float = 1.0) -> list[str]:
+    """One aligned row of the parameter table (and its note, wrapped, below it)."""
+    def sc(x: Any) -> Any:
+        return None if x is None else float(x) * scale
+
+    ci_txt = "-" if ci is None or None in ci else f"[{fmt(sc(ci[0]))}, {fmt(sc(ci[1]))}]"
+    err_txt = stderr if isinstance(stderr, str) else fmt(sc(stderr))
+    cells = (quantity, fmt(sc(value), ".5g"), err_txt, ci_txt, unit)
+    line = "  " + " ".join(c.ljust(w) if w else c for c, (_, w) in zip(cells, _COLS))
+    out = [line.rstrip()]
+    if note:
+        out.extend(textwrap.wrap(note, TEXT_WIDTH, initial_indent="      ",
+                                 subsequent_indent="      "))
+    return out
+
+
+def _not_fitted(data: ReportData, key: str) -> str:
+    if data.summary is None:
+        return data.missing.get("results", "no results")
+    return " ".join(data.summary.not_fitted.get(key, "not fitted").split())
+
+
+def parameter_lines(data: ReportData) -> list[str]:
+    """The table of fitted parameters: value, standard error, 95 % interval, unit."""
+    header = "  " + " ".join(n.ljust(w) if w else n for n, w in _COLS)
+    lines = [header, "  " + "-" * (len(header) - 2)]
+    fits = _fits(data)
+    g = _grazing(data)
+    names = {"gap_m": ("gap h", 1e3, "mm"), "f_s_hz": ("f_s (modal frequency)", 1.0, "Hz"),
+             "zeta": ("zeta (damping ratio)", 1.0, "1"),
+             "participation": ("participation Q1/Q2", 1.0, "1")}
+    if g is not None:
+        for key, (label, scale, unit) in names.items():
+            p = g.parameters()[key]
+            if not p.vary:
+                lines += _row(label, p.value, "fixed", None, unit, scale=scale)
+                continue
+            lines += _row(label, p.value, p.stderr, (p.ci_low, p.ci_high), unit, scale=scale)
+        notes = list(g.unidentifiable)
+        if g.outliers_hz:
+            notes.append("thresholds left out as outliers at " + ", ".join(
+                f"{fmt(f)} Hz" for f in g.outliers_hz))
+        for note in notes:
+            lines += textwrap.wrap("note: " + note, TEXT_WIDTH, initial_indent="      ",
+                                   subsequent_indent="      ")
+    else:
+        lines += _row("gap h, f_s, zeta", note="not fitted: " + _not_fitted(data, "grazing"))
+    not_fitted = data.summary.not_fitted if data.summary is not None else {}
+    for key, label, what in (("damping_ramp", "zeta (ramp model)", "upward ramps"),
+                             ("restitution_ratio", "e (velocity ratios)", "impacts"),
+                             ("restitution_down", "e (disappearance thresholds)", "thresholds")):
+        est: Estimate | None = getattr(fits, key)
+        if est is None:
+            if key != "damping_ramp" or key in not_fitted:  # an optional fit: only if tried
+                lines += _row(label, note="not fitted: " + _not_fitted(data, key))
+            continue
+        n = int(getattr(est, "n", 0))
+        method = getattr(est, "method", "")
+        note = f"from {n} {what}" + (f" ({method})" if method else "")
+        if isinstance(est, RatioRestitution) and est.median is not None:
+            note += f"; median {fmt(est.median)}, scatter (std) {fmt(est.std)}"
+        err = est.stderr
+        if err is not None and est.value is not None and err > abs(est.value):
+            note += "; NOT IDENTIFIED: the standard error exceeds the value"
+        for extra in est.notes:
+            note += f"; {extra}"
+        ci: tuple[float | None, float | None] = (est.ci_low, est.ci_high)
+        if None in ci:
+            ci = student_t_ci(est.value, err, n - 1)
+        lines += _row(label, est.value, err, ci, "1", note)
+    for name, label in (("first", "first peak"), ("max", "maximum peak"),
+                        ("rms", "RMS per impact")):
+        law = fits.spl_law(name)
+        if law is None:
+            lines += _row(f"SPL law, {label}",
+                          note="not fitted: " + _not_fitted(data, f"spl_law_{name}"))
+            continue
+        lin, db = law.linear, law.db
+        lines += _row(f"SPL {label}: slope", lin.slope, None,
+                      (lin.slope_ci_low, lin.slope_ci_high), "Pa/(m/s)",
+                      f"p = slope * |v_in| + intercept, r2 = {fmt(lin.r2, '.3f')}, "
+                      f"{lin.n} impacts")
+        lines += _row(f"SPL {label}: intercept", lin.intercept, None,
+                      (lin.intercept_ci_low, lin.intercept_ci_high), "Pa")
+        lines += _row(f"SPL {label}: C", db.c_db, None,
+                      (db.c_ci_low, db.c_ci_high), "dB re 20 uPa at 1 m/s",
+                      f"L = 20 log10(|v_in| / (1 m/s)) + C; free-slope check k = "
+                      f"{fmt(db.k_db_per_decade, '.3g')} dB/decade (20 for a linear law)")
+    return lines
+
+
+def summary_lines(data: ReportData, version: str) -> list[str]:
+    """Text lines of the summary page (fitted values, flags, provenance), <= TEXT_WIDTH wide."""
+    lines = [f"store: {data.store.name}"]
+    if data.summary is not None:
+        summ = data.summary
+        n_imp = sum(r.n_impacts for r in summ.runs)
+        lines.append(f"runs: {summ.n_runs} ({summ.n_ok} analysed, "
+                     f"{len(summ.skipped)} skipped), {n_imp} impacts detected")
+    lines += ["", "Fitted parameters (95 % CI: as the fit gives it, e.g. profile likelihood for "
+              "eq. (3.4); else Student t from the standard error; OLS t for the SPL laws)"]
+    lines += parameter_lines(data)
+    lines += ["", "Data-quality flags (catalogue)"]
+    cat = data.catalogue
+    flagged = cat[cat["flags"].astype(str) != ""]
+    negative = report_negative_hysteresis(data)
+    if len(flagged) == 0 and not negative:
+        lines.append("  none")
+    for f_hz, h in negative:
+        lines.append(f"  thresholds: NEGATIVE hysteresis at {f_hz:g} Hz ({h:.3g} m/s^2): the "
+                     "disappearance lies above the onset")
+    for _, row in flagged.head(12).iterrows():
+        lines.append(f"  {row['input_key']}/{row['run_id']}/{row['channel']}: {row['flags']}")
+    if len(flagged) > 12:
+        lines.append(f"  ... and {len(flagged) - 12} more flagged channels")
+    if data.summary is not None:  # issue 15: the fit's own flags (e.g. participation_assumed)
+        part = data.summary.participation
+        for flag in data.summary.data_quality:
+            lines.append(f"  fit: {flag} (participation {part.value if part else None} from "
+                         f"{part.source if part else '?'})" if flag.startswith("participation")
+                         else f"  fit: {flag}")
+    skipped = data.summary.skipped if data.summary is not None else ()
+    for item in skipped[:6]:
+        lines.append(f"  run skipped by the fit: {item.input_key}/{item.run_id}: "
+                     f"{item.reason}")
+    lines += ["", "Provenance", f"  report: rattle_lab {version} (rattle_lab.report.write_report)"]
+    if data.results is not None:
+        prov = data.results.provenance
+        via = f" via {prov['via']} ({prov.get('pipeline', '')})" if prov.get("via") else ""
+        lines.append(f"  results: {prov.get('function', '?')}{via}, rattle_lab "
+                     f"{prov.get('rattle_lab_version', data.results.rattle_lab_version)}, "
+                     f"written {data.results.created_iso}")
+        params = prov.get("parameters") or {}
+        for table in ("detect", "fit"):
+            if isinstance(params.get(table), Mapping):
+                text = ", ".join(f"{k} = {v}" for k, v in sorted(params[table].items()))
+                lines.append(f"  [{table}] {text or '(defaults)'}")
+    versions = sorted({str(e.get("rattle_lab_version", "?")) for e in data.provenance_log})
+    lines.append(f"  ingest: {len(data.provenance_log)} logged call(s), rattle_lab "
+                 f"{', '.join(versions) or '?'}")
+    inputs = cat.drop_duplicates("input_key")
+    hash_col = "file_hash" if "file_hash" in cat.columns else "file_sha256"
+    for _, row in inputs.head(10).iterrows():
+        lines.append(f"  input {row['input_key']}: {row['file']} ({row['campaign_id']}, "
+                     f"{row['source']}), {row[hash_col]}")
+    if len(inputs) > 10:
+        lines.append(f"  ... and {len(inputs) - 10} more inputs")
+    return [w for line in lines for w in wrapped(line)]
+
+
+def threshold_arrays(data: ReportData) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``freq_hz, up_ms2, down_ms2`` as ``/results/thresholds`` holds them (NaN: not measured)."""
+    th = data.results.thresholds
+    f = np.asarray(th.get("freq_hz", []), dtype=float)
+    up = np.asarray(th.get("up_ms2", np.full(f.size, np.nan)), dtype=float)
+    down = np.asarray(th.get("down_ms2", np.full(f.size, np.nan)), dtype=float)
+    return f, up, down
+
+
+def report_negative_hysteresis(data: ReportData) -> list[tuple[float, float]]:
+    """``(freq_hz, onset - disappearance)`` of the stored thresholds where it is negative."""
+    if data.results is None:
+        return []
+    return negative_hysteresis(*threshold_arrays(data))

@@ -1,0 +1,319 @@
+"""The report computes nothing (issue 12): content is computed first, pages only draw it.
+
+* The page modules import no computation: an AST check of their imports against an
+  allow-list (drawing libraries, the report's own content dataclasses, the shared
+  drawing helpers), which is shown to fail on a page importing a fit function.
+* Every page renders from a hand-built content object, with no store on disk.
+* The functions the content builders call (moved out of the report) are checked
+  against independent references.
+"""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from rattle_lab.acoustics import energy_mean_db
+from rattle_lab.detect import impacts_per_cycle
+from rattle_lab.fit import linear_law_band, negative_hysteresis
+from rattle_lab.model.analysis import bifurcation_sets, grazing_forcing, sweep_thresholds
+from rattle_lab.plot import db_slope_guide, power_law_guide
+from rattle_lab.report import ReportContent, ReportData, render_pages
+from rattle_lab.report._content import (GrazingCurve, PatternContent, RigContent, SplContent,
+                                        SplCurve, ThresholdContent)
+from rattle_lab.report._content_model import ModelContent, SweepComparison
+from rattle_lab.report._content_runs import (AcousticsContent, Trace, WaveformColumn,
+                                             WaveformContent)
+from rattle_lab.report._data import ChannelInfo, RecordInfo
+from rattle_lab.report._pages import (pattern_page, rig_page, spl_page, threshold_page,
+                                      waveform_page)
+from rattle_lab.report._pages_acoustics import acoustics_page
+from rattle_lab.report._pages_model import model_pages
+
+REPORT = Path(__file__).resolve().parents[1] / "rattle_lab" / "report"
+#: The modules that draw.  Everything they may import: (module, names or None for any).
+PAGE_MODULES = ("_pages.py", "_pages_acoustics.py", "_pages_model.py", "_common.py")
+ALLOWED: dict[str, set[str] | None] = {
+    "__future__": None, "typing": None, "collections.abc": None, "math": None,
+    "textwrap": None, "numpy": None, "matplotlib": None, "matplotlib.figure": None,
+    "matplotlib.lines": None, "matplotlib.patches": None, "matplotlib.ticker": None,
+    "rattle_lab.report._common": None,
+    # the content modules: only their dataclasses and constants, never a builder
+    "rattle_lab.report._content": {"PatternContent", "RigContent", "SplContent",
+                                   "ThresholdContent"},
+    "rattle_lab.report._content_runs": {"WAVEFORM_QUANTITIES", "WaveformContent",
+                                        "AcousticsContent"},
+    "rattle_lab.report._content_model": {"ModelContent", "SweepComparison"},
+    "rattle_lab.plot._bifsets": {"_LINESTYLES"},  # a style table, shared with `model bifsets`
+}
+
+
+def _disallowed_imports(path: Path) -> list[str]:
+    bad = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name not in ALLOWED:
+                    bad.append(f"line {node.lineno}: import {alias.name}")
+        elif isinstance(node, ast.ImportFrom):
+            module = node.module or ""
+            if node.level:  # relative: inside rattle_lab.report
+                module = "rattle_lab.report" + ("." + module if module else "")
+            allowed = ALLOWED.get(module, set())
+            for alias in node.names:
+                if module not in ALLOWED or (allowed is not None and alias.name not in allowed):
+                    bad.append(f"line {node.lineno}: from {module} import {alias.name}")
+    return bad
+
+
+@pytest.mark.parametrize("name", PAGE_MODULES)
+def test_page_modules_import_no_computation(name: str) -> None:
+    bad = _disallowed_imports(REPORT / name)
+    assert not bad, f"{name} imports beyond drawing: " + "; ".join(bad)
+
+
+def test_the_import_check_catches_a_computing_page(tmp_path: Path) -> None:
+    # a page that computes the grazing band itself, smooths a region and calls a builder
+    probe = tmp_path / "_pages_probe.py"
+    probe.write_text("from rattle_lab.fit import grazing_band_ms2\n"
+                     "import scipy\n"
+                     "from ._content import ThresholdContent, threshold_content\n"
+                     "from rattle_lab.plot._bifsets import smooth_region\n")
+    bad = _disallowed_imports(probe)
+    assert [b.split(":")[0] for b in bad] == ["line 1", "line 2", "line 3", "line 4"]
+    assert "threshold_content" in bad[2] and "smooth_region" in bad[3]
+
+
+def test_no_report_module_is_over_600_lines() -> None:
+    for path in REPORT.glob("*.py"):
+        assert len(path.read_text().splitlines()) <= 600, path.name
+
+
+# --- pages from hand-built content, no store ---------------------------------------------
+
+def _texts(fig: Figure) -> str:
+    out = [t.get_text() for t in fig.texts]
+    for ax in fig.axes:
+        out += [ax.get_xlabel(), ax.get_ylabel(), ax.get_title()]
+        legend = ax.get_legend()
+        if legend is not None:
+            out += [t.get_text() for t in legend.get_texts()]
+        out += [t.get_text() for t in ax.texts]
+        out += [cell.get_text().get_text() for tab in ax.tables
+                for cell in tab.get_celld().values()]
+    return "\n".join(out)
+
+
+def _threshold_content() -> ThresholdContent:
+    f = np.array([90.0, 95.0, 100.0])
+    up, down = np.array([10.0, 8.0, 12.0]), np.array([7.0, 9.0, np.nan])
+    grid = np.linspace(88.0, 102.0, 50)
+    y = 5.0 + 0.01 * (grid - 95.0) ** 2
+    curve = GrazingCurve(grid, y, (y - 0.5, y + 0.5), 4,
+                         1.2e-3, 96.0, 0.02, np.array([100.0]), np.array([12.0]))
+    hyst = up - down
+    return ThresholdContent(f, up, down, hyst, np.isfinite(hyst) & (hyst < 0),
+                            np.isfinite(up) & np.isfinite(down), 3.0, curve)
+
+
+def test_threshold_page_draws_its_content() -> None:
+    (fig,) = threshold_page(_threshold_content())
+    ax, ax_h = fig.axes
+    text = _texts(fig)
+    for key in ("eq. (3.4) fit: gap 1.2 mm, f_s 96 Hz, zeta 0.02", "Student t, 4 dof",
+                "left out of the fit (outlier)", "NEGATIVE: disappearance above onset",
+                "negative\n-1 m/s^2"):
+        assert key in text, key
+    # the fit curve is drawn at the content's values, not recomputed
+    curve = _threshold_content().curve
+    assert curve is not None
+    np.testing.assert_array_equal(ax.lines[0].get_ydata(), curve.accel_ms2)
+    # the hysteresis bars are the content's: two expected (one NaN), one negative
+    heights = sorted(h for h in (p.get_height() for p in ax_h.patches) if np.isfinite(h))
+    np.testing.assert_allclose(heights, [-1.0, 3.0])
+
+
+def test_every_page_renders_from_content_without_a_store(tmp_path: Path) -> None:
+    channel = ChannelInfo("in1", "acc", "plate_acceleration", "m/s^2", "mV", 0.1, "10 mV/g",
+                          51200.0, "PCB 352C33", "123", "2024-01-01", "-50 .. 50", "(0, 0, 0)")
+    record = RecordInfo("in1", "camp", "generated", {"apparatus": "plate", "gap_m": 1e-3},
+                        (channel,), {})
+    pattern = PatternContent(np.array([[94.88, 1.0, 0, 0.0], [94.88, 2.0, 1, 0.0],
+                                       [100.0, 3.0, 2, 1.0], [100.0, 3.0, 1, 1.0]]),
+                             ("m/s^2",), ((1, 100.0, 3.0, 0.5), (2, 100.0, 3.0, 0.5)))
+    t = np.linspace(0.0, 0.05, 500)
+    trace = Trace(t, np.sin(200 * t), np.array([0.01, 0.03]), np.array([0.1, 0.2]))
+    sound = Trace(t, np.cos(200 * t), np.zeros(0), np.zeros(0),
+                  (("first", np.array([0.011]), np.array([0.3])),
+                   ("max", np.array([0.012]), np.array([0.5]))))
+    waves = WaveformContent((WaveformColumn("r1", "sine_dwell", 100.0, "1/1",
+                                            (trace, trace, sound)),))
+    v = np.linspace(0.1, 0.5, 20)
+    spl = SplContent((SplCurve("first", v, 2.0 * v + 0.1, 2.0, 0.1, 0.99, v, 2.0 * v + 0.1,
+                               (1.9 * v + 0.1, 2.1 * v + 0.1)),))
+    f_b = np.array([100.0, 125.0, 160.0])
+    rows = tuple({"run_id": f"r{k}", "v_rms_m_s": 0.1 * (k + 1),
+                  "acoustics": {"laeq_db": 60.0 + k, "lafmax_db": 65.0 + k,
+                                "loudness_n5_sone": 2.0 + k, "loudness_max_sone": 3.0 + k}}
+                 for k in range(3))
+    acoustics = AcousticsContent(rows, (("rattle", f_b, np.array([50.0, 55.0, 52.0])),),
+                                 {"rattle": (f_b, np.array([50.0, 55.0, 52.0])),
+                                  "background": None},
+                                 np.array([0.1, 0.2, 0.3]), np.array([60.0, 61.0, 62.0]),
+                                 np.array([65.0, 66.0, 67.0]), np.array([2.0, 3.0, 4.0]),
+                                 np.array([3.0, 4.0, 5.0]), None, None)
+    sets = bifurcation_sets((1, 2), omega_range=(0.8, 1.2), F_range=(0.0, 0.2), zeta=0.02,
+                            e=0.8, n_omega=9, n_F=8, n_v=11)
+    none = tuple(None for _ in sets.ns)
+    sweeps = SweepComparison(np.array([95.0]), np.array([9.0]), np.array([np.nan]), 0.2, 20.0,
+                             40, np.array([95.0]), np.array([8.0]), np.array([7.0]))
+    model = ModelContent(sets, none, none, None, np.array([0.99]), np.array([0.05]),
+                         np.array([0.99]), np.array([0.04]), 0.02, "ramp model", 0.8, sweeps)
+    absent = tmp_path / "no_such_store.h5"  # nothing may be read: it does not exist
+    data = ReportData(absent, None, (record,), [], None)
+    sections = (("rig and calibration", RigContent((record,))),
+                ("thresholds", _threshold_content()), ("impact patterns", pattern),
+                ("waveforms", waves), ("SPL law", spl), ("acoustics", acoustics),
+                ("model predictions", model))
+    content = ReportContent(data, ("store: no_such_store.h5", "  a summary line"), sections,
+                            {"eq. 3.4 fit curve": "a hand-built reason"})
+    pages, names = render_pages(content)
+    assert not absent.exists()
+    assert names == ("summary", *(n for n, _ in sections))
+    assert len(pages) == 9  # summary, one page per section, two model pages
+    texts = [_texts(fig) for _, fig in pages]
+    assert "a summary line" in texts[0]
+    assert "missing: eq. 3.4 fit curve: a hand-built reason" in texts[0]
+    for i, (_, fig) in enumerate(pages, start=1):
+        assert f"Page {i} of 9" in texts[i - 1]
+        fig.canvas.draw()  # Agg: the page really renders
+    expected = {1: "PCB 352C33", 2: "hysteresis", 3: "sine dwell (size: share of its cycles)",
+                4: "r1 (sine_dwell, 100 Hz, pattern 1/1)", 5: "p = 2 Pa/(m/s) |v_in| + 0.1 Pa",
+                6: "rattle: energy mean of 3 runs", 7: "ramp model",
+                8: "up to 20 m/s^2"}
+    for page, key in expected.items():
+        assert key in texts[page], (page, key)
+    # the single pages draw exactly the content they were given
+    (wave,) = waveform_page(waves)
+    np.testing.assert_array_equal(wave.axes[1].lines[1].get_ydata(), [0.1, 0.2])
+    (spl_fig,) = spl_page(spl)
+    np.testing.assert_array_equal(spl_fig.axes[0].lines[1].get_ydata(), 2.0 * v + 0.1)
+    assert len(rig_page(RigContent((record,)))) == 1
+    assert len(pattern_page(pattern)) == 1 and len(acoustics_page(acoustics)) == 1
+    assert len(model_pages(dataclasses.replace(model, sweeps=None))) == 1
+
+
+def test_content_is_frozen() -> None:
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        _threshold_content().curve = None  # type: ignore[misc]
+
+
+# --- the computations the report now calls ------------------------------------------------
+
+def test_impacts_per_cycle_against_a_loop() -> None:
+    rng = np.random.default_rng(3)
+    t = np.sort(rng.uniform(-0.05, 1.05, 300))
+    f, t0, dur = 37.0, 0.01, 0.97
+    n = int(np.floor(dur * f))
+    expected = [sum(1 for x in t if t0 + k / f <= x < t0 + (k + 1) / f) for k in range(n)]
+    # exact: cycle edges t0 + k / f and floor((t - t0) f) agree away from rounding at an edge
+    assert impacts_per_cycle(t, f, t0, dur).tolist() == expected
+
+
+def test_energy_mean_db_closed_form() -> None:
+    # two levels 10 dB apart: 10 log10((10 + 1) / 2) dB above the lower one (exact to 1e-12)
+    assert energy_mean_db([50.0, 60.0]) == pytest.approx(50.0 + 10 * np.log10(5.5), abs=1e-12)
+    assert energy_mean_db([42.0]) == pytest.approx(42.0, abs=1e-12)
+
+
+def test_linear_law_band_against_the_ols_covariance() -> None:
+    # independent reference: the band of the mean is t * sqrt(x0' C x0), with C the OLS
+    # coefficient covariance from numpy's polyfit (matrix form); agreement to 1e-9 relative
+    from scipy import stats
+
+    rng = np.random.default_rng(7)
+    v = rng.uniform(0.1, 1.0, 40)
+    p = 3.0 * v + 0.2 + rng.normal(0, 0.1, v.size)
+    (slope, icpt), cov = np.polyfit(v, p, 1, cov=True)
+    grid = np.linspace(0.0, 1.1, 12)
+    x0 = np.vstack([grid, np.ones_like(grid)])
+    ref = stats.t.ppf(0.975, v.size - 2) * np.sqrt(np.einsum("ik,ij,jk->k", x0, cov, x0))
+    band = linear_law_band(v, p, slope, icpt, grid)
+    assert band is not None
+    np.testing.assert_allclose(band, ref, rtol=1e-9)
+    assert linear_law_band(v[:2], p[:2], slope, icpt, grid) is None
+    assert linear_law_band(np.ones(5), p[:5], slope, icpt, grid) is None
+
+
+def test_negative_hysteresis_lists_only_negative_finite_values() -> None:
+    got = negative_hysteresis([90.0, 95.0, 100.0], [5.0, 4.0, np.nan], [4.0, 4.5, 3.0])
+    assert got == [(95.0, -0.5)]
+
+
+def test_guides_have_the_law_slopes() -> None:
+    v = np.array([0.1, 0.2, 0.4])
+    x, level = db_slope_guide(v, [50.0, 56.0, np.nan], 20.0)
+    # 20 dB per decade exactly; through (geometric median of v, median of the levels)
+    assert np.allclose(np.diff(level) / np.diff(np.log10(x)), 20.0)
+    assert np.interp(np.log10(0.2), np.log10(x), level) == pytest.approx(53.0)
+    x, n = power_law_guide(v, [1.0, 2.0, 4.0], 0.602)
+    assert np.allclose(np.diff(np.log(n)) / np.diff(np.log(x)), 0.602)
+    assert x[0] == pytest.approx(0.1 / 1.2) and x[-1] == pytest.approx(0.4 * 1.2)
+
+
+def test_sweep_thresholds_find_the_grazing_onset() -> None:
+    # below resonance the impact-free response loses to impacts where it grazes the stop:
+    # eq. (3.4) F = sqrt((1 - w^2)^2 + (2 zeta w)^2).  The sweep resolves it to half a
+    # step (the threshold is reported mid-step); the return down never stops above it.
+    omega, zeta = 0.8, 0.05
+    F_g = float(grazing_forcing(omega, zeta))
+    grid = np.linspace(0.5 * F_g, 1.5 * F_g, 21)
+    res = sweep_thresholds(omega, grid, zeta=zeta, e=0.8)
+    assert res.step_F == pytest.approx(grid[1] - grid[0])
+    assert abs(res.onset_F - F_g) <= res.step_F / 2 + 1e-12
+    assert res.disappearance_F <= res.onset_F + 1e-12
+
+
+def _fitted_data(tmp_path: Path, *, e: float, f_s_hz: float = 96.0) -> ReportData:
+    from types import SimpleNamespace
+
+    from rattle_lab.fit import (FitSummary, Fits, GrazingParameter, GrazingSummary,
+                                RatioRestitution)
+
+    g = GrazingSummary(gap_m=GrazingParameter(1e-3, 1e-4, "m"),
+                       f_s_hz=GrazingParameter(f_s_hz, 0.1, "Hz"),
+                       zeta=GrazingParameter(0.02, 0.001, "1"),
+                       participation=GrazingParameter(1.0, None, "1", vary=False))
+    summary = FitSummary(n_runs=1, n_ok=1, fits=Fits(
+        grazing=g, restitution_ratio=RatioRestitution(e, 0.01, "1", n=10)))
+    results = SimpleNamespace(thresholds={"freq_hz": [90.0, 95.0], "up_ms2": [20.0, 10.0],
+                                          "down_ms2": [18.0, 9.0]}, runs={})
+    return ReportData(tmp_path / "absent.h5", None, (), [], results, {}, summary)
+
+
+def test_model_content_leaves_out_what_the_model_cannot_use(tmp_path: Path) -> None:
+    from rattle_lab.report._common import Missing
+    from rattle_lab.report._content_model import model_content
+
+    # e = 0: the bifurcation sets need e > 0 (once a ParameterError that ended the report)
+    with pytest.raises(Missing, match=r"fitted e = 0 is outside \(0, 1\]"):
+        model_content(_fitted_data(tmp_path, e=0.0))
+    with pytest.raises(Missing, match="unusable for the model"):
+        model_content(_fitted_data(tmp_path, e=0.8, f_s_hz=-5.0), max_freqs=0)
+
+
+def test_model_content_converts_the_thresholds_by_the_scaling(tmp_path: Path) -> None:
+    # eq. (2.28), (2.31) written out here: omega = f / f_s, F = Q A / ((2 pi f_s)^2 h)
+    from rattle_lab.report._content_model import model_content
+
+    c = model_content(_fitted_data(tmp_path, e=0.8), max_freqs=0)
+    np.testing.assert_allclose(c.omega_up, np.array([90.0, 95.0]) / 96.0, rtol=1e-15)
+    np.testing.assert_allclose(c.F_down, np.array([18.0, 9.0]) / ((2 * np.pi * 96.0) ** 2
+                                                                  * 1e-3), rtol=1e-14)
+    assert c.sweeps is None and c.zeta == 0.02 and c.zeta_source == "eq. (3.4) fit"
+    assert len(c.exists_fields) == len(c.sets.ns) == 2
