@@ -332,7 +332,7 @@ def test_packed_result_unpacks_to_the_kernels_arrays():
     from rattle_lab.model.sdf import _kernel
     import importlib
 
-    simulate_module = importlib.import_module("rattle_lab.model.sdf.simulate")
+    simulate_module = importlib.import_module("rattle_lab.model.sdf._simulate")
     from rattle_lab.model.sdf._compiled import jit_kernel
 
     assert simulate_module._N_HEAD == _kernel.N_HEAD
