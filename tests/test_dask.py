@@ -16,7 +16,7 @@ import pytest
 
 from rattle_lab.model.analysis import _dask
 from rattle_lab.model.analysis._dask import chunk_rows, run_chunks
-from rattle_lab.model.analysis.maps import AttractorMap, disturbance_map, regime_map
+from rattle_lab.model.analysis import AttractorMap, disturbance_map, regime_map
 from rattle_lab.exceptions import ParameterError
 
 F = np.linspace(0.1, 0.4, 4)
