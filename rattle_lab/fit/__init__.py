@@ -8,6 +8,7 @@ saddle-node) or by replaying the measured ramp through the exact simulator
 from ._common import ParamEstimate
 from ._damping import RampDampingFit, fit_zeta_ramp
 from ._grazing import GrazingFit, fit_grazing
+from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._ramp_model import ModelThreshold, RampSpec, model_threshold
 from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_down,
                            restitution_from_ratios, saddle_node_threshold_ms2)
@@ -21,5 +22,6 @@ __all__ = [
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
     "restitution_from_ratios", "saddle_node_threshold_ms2",
     "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
+    "RampGrazingFit", "fit_grazing_ramp",
     "RunResult", "StoreFit",
 ]
