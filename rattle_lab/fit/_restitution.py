@@ -36,6 +36,7 @@ from typing import Any, Literal
 
 import lmfit
 import numpy as np
+from scipy import stats
 
 from rattle_lab.model.analysis import saddle_node_forcing
 from rattle_lab.exceptions import ConvergenceError, ParameterError
@@ -56,8 +57,8 @@ class RestitutionStats:
         Number of ratios used.
     stderr : float
         Standard error of ``mean``: ``std / sqrt(n)``, or, with the runs the ratios came
-        from (``groups``), the larger of that and the run-clustered standard error
-        (:func:`restitution_from_ratios`).
+        from (``groups``), the larger of that and the run-clustered standard error with the
+        few-runs t factor (:func:`restitution_from_ratios`).
     n_groups : int
         Number of runs with a ratio (0 when no groups were given).
     """
@@ -112,8 +113,10 @@ def restitution_from_ratios(e_values: object, groups: object = None) -> Restitut
         scatter by +-0.5 % while a run's own standard error is 0.2 %).  ``std / sqrt(n)``
         then treats thousands of impacts as independent and its interval is far too narrow;
         with ``groups`` the standard error is the larger of that and the run-clustered one
-        (:func:`clustered_stderr`), which measures the run-to-run scatter of that error.
-        A bias common to every run is not in it.
+        (:func:`clustered_stderr`), which measures the run-to-run scatter of that error,
+        times ``t_{0.975, G-1} / 1.96`` (``G`` runs: with few runs the clustered error is
+        itself uncertain, and ``mean +- 1.96 stderr`` is then the Student-t 95 % interval;
+        x1.12 for 12 runs).  A bias common to every run is not in it.
 
     Examples
     --------
@@ -137,8 +140,11 @@ def restitution_from_ratios(e_values: object, groups: object = None) -> Restitut
     if groups is not None:
         gk = g[keep]
         n_groups = int(np.unique(gk).size)
+        # few runs: the sandwich is itself uncertain (G - 1 degrees of freedom); users take
+        # mean +- 1.96 stderr, so the t quantile is folded in: stderr = cl t_{G-1} / 1.96
         cl = clustered_stderr(e, gk)
         if np.isfinite(cl):
+            cl *= float(stats.t.ppf(0.975, n_groups - 1)) / float(stats.norm.ppf(0.975))
             se = max(se, cl) if np.isfinite(se) else cl
     return RestitutionStats(float(np.mean(e)), std, float(np.median(e)), int(e.size), se,
                             n_groups)
