@@ -179,6 +179,17 @@ def test_fit_store_ramp_model_on_the_default_scene(rig_store):
     assert down["ci"][0] < 0.6 < down["ci"][1] and 0 < down["stderr"] < 0.05
     assert abs(down["value"] - 0.6) < min(3 * down["stderr"], 0.06)
     assert "restitution_down" not in fit.summary["not_fitted"]
+    # issue 15: the ramp lag biases eq. (3.4)'s gap too (-0.3 %, outside its own interval);
+    # the ramp-corrected fit removes each threshold's replayed lag: its intervals hold the
+    # truth (1.3 mm, 96 Hz, 0.0085) and it is closer than eq. (3.4) on the raw levels
+    ramp = fits["grazing_ramp"]
+    for name, truth in (("gap_m", 1.3e-3), ("f_s_hz", 96.0), ("zeta", 0.0085)):
+        assert ramp[name]["ci"][0] <= truth <= ramp[name]["ci"][1], name
+    gap_qs = fits["grazing"]["gap_m"]
+    assert abs(ramp["gap_m"]["value"] / 1.3e-3 - 1) < abs(gap_qs["value"] / 1.3e-3 - 1)
+    assert gap_qs["bias_rel"] == pytest.approx(gap_qs["value"] / ramp["gap_m"]["value"] - 1)
+    assert "the ramp lag bends eq. (3.4): gap is -" in gap_qs["bias_note"]
+    assert down["zeta_used"] == pytest.approx(ramp["zeta"]["value"], rel=0.01)
     res = read_results(rig_store)
     assert res.summary["fits"]["restitution_down"]["method"] == "ramp"
     run = next(v for k, v in res.runs.items() if k[1] == "down_098")

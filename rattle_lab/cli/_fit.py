@@ -94,6 +94,9 @@ def as_table(summary: dict[str, Any]) -> str:
         if isinstance(p, dict) and "value" in p:
             rows.append((f"grazing.{name}" + ("" if p["vary"] else " (fixed)"), p["value"],
                          p["stderr"], p["unit"]))
+    for name, p in fits.get("grazing_ramp", {}).items():
+        if isinstance(p, dict) and "value" in p:
+            rows.append((f"grazing_ramp.{name}", p["value"], p["stderr"], p["unit"]))
     if "damping_ramp" in fits:
         rows.append(("damping_ramp.zeta (ramp replay)", fits["damping_ramp"]["value"],
                      fits["damping_ramp"]["stderr"], "1"))
@@ -121,9 +124,10 @@ def as_table(summary: dict[str, Any]) -> str:
         lines.append(f"data-quality flag: {flag}")
     for note in fits.get("grazing", {}).get("unidentifiable", []):
         lines.append(f"note: {note}")
-    zeta_note = fits.get("grazing", {}).get("zeta", {}).get("bias_note")
-    if zeta_note:
-        lines.append(f"note: grazing.zeta: {zeta_note}")
+    for name in ("gap_m", "zeta"):
+        bias_note = fits.get("grazing", {}).get(name, {}).get("bias_note")
+        if bias_note:
+            lines.append(f"note: grazing.{name}: {bias_note}")
     for key in ("damping_ramp", "restitution_down"):
         for note in fits.get(key, {}).get("notes", []):
             lines.append(f"note: {key}: {note}")
