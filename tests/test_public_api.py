@@ -89,6 +89,7 @@ PACKAGES: dict[str, list[str]] = {
         "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
         "restitution_from_ratios", "saddle_node_threshold_ms2",
         "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
+        "RampGrazingFit", "fit_grazing_ramp",
         "RunResult", "StoreFit"
     ],
     "rattle_lab.model.modal": [
