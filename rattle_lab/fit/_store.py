@@ -491,8 +491,14 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         row per analysed run: protocol, freq_hz, n_impacts, pattern, delays in s, SPL
         in dB, threshold in m/s^2), ``thresholds`` (freq_hz, up_ms2, down_ms2,
         hysteresis_ms2), ``fits`` (``grazing``: per parameter value, stderr, unit,
-        95 % ci, vary, plus correlation; ``restitution_ratio``: value, stderr, unit, n;
-        ``restitution_down`` and ``damping_ramp``: see :func:`restitution_down_summary`;
+        95 % ci, vary, plus correlation, and for gap_m and zeta with the ramp method
+        ``bias_rel`` against ``grazing_ramp``; ``grazing_ramp`` (ramp method): gap_m,
+        f_s_hz, zeta of eq. (3.4) on the thresholds less each ramp's replayed lag
+        (:func:`~rattle_lab.fit.fit_grazing_ramp`), value, stderr, unit, 95 % ci, plus
+        lag_rel per threshold; ``restitution_ratio``: value, stderr (run-clustered, see
+        :func:`~rattle_lab.fit.restitution_from_ratios`), unit, n, n_runs;
+        ``restitution_down`` and ``damping_ramp``: see :func:`restitution_down_summary`,
+        at ``grazing_ramp``'s gap and f_s when it was fitted;
         ``spl_law_first|max|rms``: linear and dB laws) and
         ``not_fitted`` (fit name -> reason); ``transients`` (transient runs: the shock on
         each channel, cause first); ``participation`` (value, source) and
