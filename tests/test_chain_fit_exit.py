@@ -47,6 +47,9 @@ def test_fit_with_some_runs_analysed_exits_0(synthetic_campaign_record, tmp_path
     assert f"participation Q1/Q2 = {q:.6g} (rig modal_participation)" in proc.stdout
     # the bias of eq. (3.4)'s zeta (the ramp lag) is named, against the ramp replay
     assert "note: grazing.zeta: eq. (3.4) reads the ramp lag as damping: zeta is +" in proc.stdout
+    # ... and so is that of its gap, against the ramp-corrected fit printed beside it
+    assert "note: grazing.gap_m: the ramp lag bends eq. (3.4): gap is -" in proc.stdout
+    assert "grazing_ramp.gap_m" in proc.stdout
     out = json.loads(run_cli("fit", str(store), "--json", "--quiet").stdout)
     z, ramp = out["fits"]["grazing"]["zeta"], out["fits"]["damping_ramp"]
     assert z["bias_rel"] == pytest.approx(z["value"] / ramp["value"] - 1, rel=1e-12)

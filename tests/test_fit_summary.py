@@ -17,7 +17,8 @@ from hypothesis import strategies as st
 from rattle_lab.exceptions import RattleLabError, SummaryFormatError, SummaryVersionError
 from rattle_lab.fit import (SUMMARY_SCHEMA_VERSION, DbLawSummary, DownRestitution, Estimate,
                             FitSummary, Fits, GrazingParameter, GrazingSummary,
-                            LinearLawSummary, ParticipationInfo, RampDamping, RatioRestitution,
+                            LinearLawSummary, ParticipationInfo, RampDamping, RampGrazing,
+                            RatioRestitution,
                             RunRow, SkippedRun, SplLawSummary, ThresholdTable, TransientRun,
                             fit_store)
 from rattle_lab.records import write_record
@@ -59,7 +60,11 @@ _GRAZING = st.builds(
     correlation_names=_NOTES,
     correlation=st.integers(0, 3).flatmap(
         lambda n: st.lists(st.lists(_FLOAT, min_size=n, max_size=n), min_size=n, max_size=n)))
-_RATIO = st.builds(RatioRestitution, **_estimate_kw(), std=_FLOAT, median=_FLOAT, n=_COUNT)
+_RATIO = st.builds(RatioRestitution, **_estimate_kw(), std=_FLOAT, median=_FLOAT, n=_COUNT,
+                   n_runs=_COUNT)
+_EST = st.builds(Estimate, **_estimate_kw())
+_RAMP_GRAZING = st.builds(RampGrazing, gap_m=_EST, f_s_hz=_EST, zeta=_EST, method=_TEXT,
+                          lag_rel=_NUMS, iterations=_COUNT)
 _RAMP = st.builds(RampDamping, **_estimate_kw(), method=_TEXT, n=_COUNT, residuals_ms2=_NUMS)
 _DOWN = st.builds(DownRestitution, **_estimate_kw(), method=_TEXT, n=_COUNT,
                   residuals_ms2=_NUMS, run_ids=_NOTES, zeta_used=_FLOAT,
@@ -68,7 +73,8 @@ _LAW = st.builds(SplLawSummary,
                  st.builds(LinearLawSummary, _FLOAT, _FLOAT, _FLOAT, _FLOAT, _FLOAT, _FLOAT,
                            _FLOAT, _COUNT),
                  st.builds(DbLawSummary, _FLOAT, _FLOAT, _FLOAT, _FLOAT, _COUNT))
-_FITS = st.builds(Fits, grazing=st.none() | _GRAZING, restitution_ratio=st.none() | _RATIO,
+_FITS = st.builds(Fits, grazing=st.none() | _GRAZING, grazing_ramp=st.none() | _RAMP_GRAZING,
+                  restitution_ratio=st.none() | _RATIO,
                   damping_ramp=st.none() | _RAMP, restitution_down=st.none() | _DOWN,
                   spl_law_first=st.none() | _LAW, spl_law_max=st.none() | _LAW,
                   spl_law_rms=st.none() | _LAW)

@@ -97,6 +97,10 @@ def as_table(summary: FitSummary) -> str:
         for name, p in fits.grazing.parameters().items():
             rows.append((f"grazing.{name}" + ("" if p.vary else " (fixed)"), p.value, p.stderr,
                          p.unit))
+    if fits.grazing_ramp is not None:
+        for name in fits.grazing_ramp.PARAMETERS:
+            est = getattr(fits.grazing_ramp, name)
+            rows.append((f"grazing_ramp.{name}", est.value, est.stderr, est.unit))
     if fits.damping_ramp is not None:
         rows.append(("damping_ramp.zeta (ramp replay)", fits.damping_ramp.value,
                      fits.damping_ramp.stderr, "1"))
@@ -125,8 +129,10 @@ def as_table(summary: FitSummary) -> str:
     if fits.grazing is not None:
         for note in fits.grazing.unidentifiable:
             lines.append(f"note: {note}")
-        if fits.grazing.zeta.bias_note:
-            lines.append(f"note: grazing.zeta: {fits.grazing.zeta.bias_note}")
+        for name in ("gap_m", "zeta"):
+            bias_note = getattr(fits.grazing, name).bias_note
+            if bias_note:
+                lines.append(f"note: grazing.{name}: {bias_note}")
     for key, entry in (("damping_ramp", fits.damping_ramp),
                        ("restitution_down", fits.restitution_down)):
         for note in entry.notes if entry is not None else ():

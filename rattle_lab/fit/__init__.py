@@ -10,6 +10,7 @@ from ._bands import (band_quantile, grazing_band_ms2, linear_law_band, negative_
 from ._common import ParamEstimate
 from ._damping import RampDampingFit, fit_zeta_ramp
 from ._grazing import GrazingFit, fit_grazing
+from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._ramp_model import ModelThreshold, RampSpec, model_threshold
 from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_down,
                            restitution_from_ratios, saddle_node_threshold_ms2)
@@ -17,8 +18,8 @@ from ._results import RunResult, StoreFit
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
 from ._store import analyse_run, fit_runs, fit_store, json_ready, load_pipeline, summarise_fits
 from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
-                         GrazingSummary, LinearLawSummary, RampDamping, RatioRestitution,
-                         SplLawSummary)
+                         GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
+                         RatioRestitution, SplLawSummary)
 from ._summary import (SUMMARY_SCHEMA_VERSION, FitSummary, ParticipationInfo, RunRow,
                        SkippedRun, ThresholdTable, TransientRun)
 
@@ -28,10 +29,11 @@ __all__ = [
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
     "restitution_from_ratios", "saddle_node_threshold_ms2",
     "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
+    "RampGrazingFit", "fit_grazing_ramp",
     "RunResult", "StoreFit",
     "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
     "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
-    "LinearLawSummary", "DbLawSummary", "RunRow", "SkippedRun", "ThresholdTable",
+    "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun", "ThresholdTable",
     "TransientRun", "ParticipationInfo",
     "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
     "threshold_hysteresis", "negative_hysteresis",

@@ -309,15 +309,18 @@ class RatioRestitution(Estimate):
         Spread and median of the ratios.
     n : int
         Impacts with a velocity on both sides.
+    n_runs : int
+        Runs they come from; ``stderr`` is clustered by run (0 in summaries that predate it).
     """
 
     std: float | None = None
     median: float | None = None
     n: int = 0
+    n_runs: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         d = {**self._base(ci=self.ci_low is not None or self.ci_high is not None),
-             "std": self.std, "median": self.median, "n": self.n}
+             "std": self.std, "median": self.median, "n": self.n, "n_runs": self.n_runs}
         if self.notes:
             d["notes"] = list(self.notes)
         return d
@@ -327,7 +330,7 @@ class RatioRestitution(Estimate):
                   ) -> RatioRestitution:
         r = _In(d, path)
         return r.build(cls, **cls._read(r, ci=False), std=r["std"],  # type: ignore[no-any-return]
-                       median=r["median"], n=r["n"])
+                       median=r["median"], n=r["n"], n_runs=r.get("n_runs", 0))
 
 
 @dataclass(frozen=True)
@@ -469,8 +472,47 @@ class SplLawSummary:
                    DbLawSummary.from_dict(r["db"], f"{path}.db"))
 
 
+@dataclass(frozen=True)
+class RampGrazing(_Normalised):
+    """Eq. (3.4) refitted to the upward thresholds less each ramp's replayed lag
+    (:func:`~rattle_lab.fit.fit_grazing_ramp`).
+
+    Attributes
+    ----------
+    gap_m, f_s_hz, zeta : Estimate
+        Gap (m), natural frequency (Hz) and damping ratio, fitted together.
+    method : str
+        How it was fitted.
+    lag_rel : tuple of float or None
+        Each threshold's replayed ramp lag relative to its level.
+    iterations : int
+        Rounds of lag replay and refit.
+    """
+
+    gap_m: Estimate
+    f_s_hz: Estimate
+    zeta: Estimate
+    method: str = ""
+    lag_rel: tuple[float | None, ...] = ()
+    iterations: int = 0
+
+    PARAMETERS = ("gap_m", "f_s_hz", "zeta")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**{n: getattr(self, n).to_dict() for n in self.PARAMETERS},
+                "method": self.method, "lag_rel": list(self.lag_rel),
+                "iterations": self.iterations}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], path: str = "fits.grazing_ramp") -> RampGrazing:
+        r = _In(d, path)
+        params = {n: Estimate.from_dict(r[n], f"{path}.{n}") for n in cls.PARAMETERS}
+        return r.build(cls, **params, method=r["method"],  # type: ignore[no-any-return]
+                       lag_rel=r["lag_rel"], iterations=r["iterations"])
+
+
 _FIT_TYPES: dict[str, Any] = {
-    "grazing": GrazingSummary, "restitution_ratio": RatioRestitution,
+    "grazing": GrazingSummary, "grazing_ramp": RampGrazing, "restitution_ratio": RatioRestitution,
     "damping_ramp": RampDamping, "restitution_down": DownRestitution,
     "spl_law_first": SplLawSummary, "spl_law_max": SplLawSummary, "spl_law_rms": SplLawSummary,
 }
@@ -481,6 +523,7 @@ class Fits:
     """The fits that were made (None: not made; :attr:`FitSummary.not_fitted` says why)."""
 
     grazing: GrazingSummary | None = None
+    grazing_ramp: RampGrazing | None = None
     restitution_ratio: RatioRestitution | None = None
     damping_ramp: RampDamping | None = None
     restitution_down: DownRestitution | None = None
@@ -507,5 +550,5 @@ class Fits:
 
 
 __all__ = ["DbLawSummary", "DownRestitution", "Estimate", "Fits", "GrazingParameter",
-           "GrazingSummary", "LinearLawSummary", "RampDamping", "RatioRestitution",
+           "GrazingSummary", "LinearLawSummary", "RampDamping", "RampGrazing", "RatioRestitution",
            "SplLawSummary"]

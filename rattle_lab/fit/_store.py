@@ -38,11 +38,13 @@ from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
                      transient_shocks)
 from ._grazing import GrazingFit, fit_grazing
+from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._damping import fit_zeta_ramp
 from ._restitution import METHODS, fit_restitution_down, restitution_from_ratios
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
-from ._estimates import (DbLawSummary, DownRestitution, Fits, GrazingParameter, GrazingSummary,
-                         LinearLawSummary, RampDamping, RatioRestitution, SplLawSummary)
+from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
+                         GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
+                         RatioRestitution, SplLawSummary)
 from ._summary import (FitSummary, ParticipationInfo, RunRow, SkippedRun, ThresholdTable,
                        TransientRun)
 
@@ -461,10 +463,23 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
 _UNITS = {"gap_m": "m", "f_s_hz": "Hz", "zeta": "1", "participation": "1"}
 
 
-def _grazing_summary(grazing: GrazingFit, ramp: RampDamping | None) -> GrazingSummary:
-    """The grazing fit's entry; with a ramp-replay damping, the bias of its ``zeta`` named."""
+def _grazing_summary(grazing: GrazingFit, ramp: RampDamping | None,
+                     rg: RampGrazingFit | None = None) -> GrazingSummary:
+    """The grazing fit's entry; against the ramp-corrected fits, the biases of its ``gap_m``
+    and ``zeta`` named (their intervals leave the ramp lag out)."""
     params = {n: GrazingParameter(p.value, p.stderr, _UNITS[n], p.ci_low, p.ci_high,
                                   vary=p.vary) for n, p in grazing.params.items()}
+    if rg is not None:
+        for n in ("gap_m", "zeta"):
+            ref, q = rg.grazing.params[n].value, params[n]
+            if q.value is not None and ref:
+                params[n] = dataclasses.replace(q, bias_rel=q.value / ref - 1.0)
+        gap = params["gap_m"]
+        if gap.bias_rel is not None:
+            params["gap_m"] = dataclasses.replace(gap, bias_note=(
+                f"the ramp lag bends eq. (3.4): gap is {100 * gap.bias_rel:+.2f} % against the "
+                "ramp-corrected fit (grazing_ramp), which corrects it; this interval does not "
+                "include the lag"))
     zeta = params["zeta"]
     if ramp is not None and ramp.value is not None and ramp.value > 0 \
             and zeta.value is not None:
@@ -558,22 +573,46 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     else:
         missing["grazing"] = f"needs >= 4 upward thresholds, had {n_up}"
     e_all = np.concatenate([r.impacts.e for r in ok if r.impacts is not None] or [np.zeros(0)])
-    st = restitution_from_ratios(e_all)
+    # a run's impacts share its frequency, level and ringing: the stderr is clustered by run
+    e_run = np.concatenate([np.full(r.impacts.e.size, i) for i, r in enumerate(ok)
+                            if r.impacts is not None] or [np.zeros(0)])
+    st = restitution_from_ratios(e_all, groups=e_run)
     ratio = None
     if st.n:
-        ratio = RatioRestitution(st.mean, st.stderr, "1", std=st.std, median=st.median, n=st.n)
+        ratio = RatioRestitution(st.mean, st.stderr, "1", std=st.std, median=st.median, n=st.n,
+                                 n_runs=st.n_groups)
     else:
         missing["restitution_ratio"] = "no impact with a velocity on both sides"
+    # issue 15: the ramp lag biases eq. (3.4)'s gap as well as its zeta; the ramp-corrected
+    # fit removes each threshold's replayed lag and gives gap, f_s and zeta together
+    rg: RampGrazingFit | None = None
+    ramp_grazing = None
+    if (grazing_fit is not None and not fit["vary_participation"]
+            and fit.get("restitution_method", FIT_KEYS["restitution_method"]) == "ramp"):
+        try:
+            rg = fit_grazing_ramp(runs_thresholds(ok), participation=fit["participation"],
+                                  e=st.mean if st.n else 0.6,
+                                  n_confirm=int(fit.get("n_confirm", 3)),
+                                  level_hold_periods=int(fit.get("level_hold_periods", 1)))
+            ramp_grazing = RampGrazing(
+                **{n: Estimate(p.value, p.stderr, u, p.ci_low, p.ci_high)
+                   for n, u in (("gap_m", "m"), ("f_s_hz", "Hz"), ("zeta", "1"))
+                   for p in (rg.grazing.params[n],)},
+                method="eq. (3.4) on the thresholds less each ramp's replayed lag",
+                lag_rel=tuple((rg.lag_ms2 / rg.accel_ms2).tolist()), iterations=rg.iterations)
+        except RattleLabError as exc:
+            missing["grazing_ramp"] = str(exc)
     down, ramp = None, None
     if grazing_fit is not None and np.isfinite(curve.down_ms2).any():
         down, ramp, missing_down = restitution_down_summary(
-            [r.threshold for r in ok if r.threshold is not None], grazing_fit, fit,
+            [r.threshold for r in ok if r.threshold is not None],
+            rg.grazing if rg is not None else grazing_fit, fit,
             e_guess=st.mean if st.n else 0.6)
         missing.update(missing_down)
     else:
         missing["restitution_down"] = "needs a grazing fit and downward thresholds"
     if grazing_fit is not None:
-        grazing = _grazing_summary(grazing_fit, ramp)
+        grazing = _grazing_summary(grazing_fit, ramp, rg)
     v = np.concatenate([np.abs(r.impacts.v_in_m_s) for r in ok if r.peaks is not None
                         and r.impacts is not None] or [np.zeros(0)])
     laws: dict[str, SplLawSummary] = {}
@@ -597,7 +636,8 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                       for r in runs if r.status == "skipped"),
         thresholds=ThresholdTable(curve.freq_hz, curve.up_ms2, curve.down_ms2,
                                   curve.hysteresis_ms2),
-        fits=Fits(grazing=grazing, restitution_ratio=ratio, damping_ramp=ramp,
+        fits=Fits(grazing=grazing, grazing_ramp=ramp_grazing, restitution_ratio=ratio,
+                  damping_ramp=ramp,
                   restitution_down=down, **laws),
         not_fitted=missing,
         participation=ParticipationInfo(participation.value, participation.source),
