@@ -142,10 +142,11 @@ def test_normalisation_by_hand():
     assert row.n_impacts == 4 and type(row.n_impacts) is int
     assert row.acoustics == {"third_octave_db": {"1000": 60.0, "2000": None},
                              "episodes": [{"t_s": 0.5}]}
-    # the layout of the fits the CLI printed before: no "ci" for the velocity ratios
-    ratio = RatioRestitution(0.6, 0.01, "1", std=0.05, median=0.61, n=40)
+    # the layout of the fits the CLI printed before: no "ci" for the velocity ratios; the
+    # runs the clustered stderr came from are added
+    ratio = RatioRestitution(0.6, 0.01, "1", std=0.05, median=0.61, n=40, n_runs=4)
     assert ratio.to_dict() == {"value": 0.6, "stderr": 0.01, "unit": "1", "std": 0.05,
-                               "median": 0.61, "n": 40}
+                               "median": 0.61, "n": 40, "n_runs": 4}
     assert FitSummary(n_runs=0, n_ok=0).shocks_only is False
 
 
