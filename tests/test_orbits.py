@@ -483,6 +483,7 @@ def test_public_surface_is_pinned() -> None:
         "classify_impacts", "sweep_values", "sweep", "sweep_up_down",
         "write_sweeps_csv", "lyapunov_exponent", "lyapunov_from_result", "tangent_log_growth",
         "regime_map", "basin_map", "disturbance_threshold", "disturbance_map",
+        "SweepThresholds", "sweep_thresholds",
     ]
     for name in analysis.__all__:
         assert getattr(analysis, name).__doc__
