@@ -55,6 +55,11 @@ def truth_table(fits: Fits, truth: Any) -> list[str]:
                                   ("zeta", "zeta", "1", truth.zeta)):
         p = graz.parameters()[key] if graz is not None else None
         lines.append(_row(name, unit, p and p.value, p and p.stderr, true))
+    if fits.grazing_ramp is not None:  # eq. (3.4) less each ramp's replayed lag
+        for key, name, unit, true in (("gap_m", "gap (ramp-corrected)", "m", truth.gap_m),
+                                      ("zeta", "zeta (ramp-corrected)", "1", truth.zeta)):
+            est = getattr(fits.grazing_ramp, key)
+            lines.append(_row(name, unit, est.value, est.stderr, true))
     if fits.damping_ramp is not None:  # zeta from replaying the ramps, if fitted
         z = fits.damping_ramp
         lines.append(_row("zeta (ramp model)", "1", z.value, z.stderr, truth.zeta))
