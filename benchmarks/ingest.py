@@ -40,7 +40,8 @@ import numpy as np
 
 import hashlib
 
-from rattle_lab.store import HASH_BLOCK_BYTES, file_hash, ingest
+from rattle_lab.store import file_hash, ingest
+from rattle_lab.store._ingest_types import HASH_BLOCK_BYTES
 from rattle_lab.records import Channel, GeneratedData, Record, Rig, Run, write_record
 
 FS_HZ = 51200.0
