@@ -50,7 +50,7 @@ _LAZY: dict[str, str] = {
     "detect_impacts": "rattle_lab.detect",
     "sound_peaks": "rattle_lab.detect",
     "fit_grazing": "rattle_lab.fit",
-    "fit_store": "rattle_lab.fit",
+    "fit_store": "rattle_lab.workflow",
     "read_results": "rattle_lab.fit._results",
     # reports and pipelines
     "write_report": "rattle_lab.report",

@@ -19,7 +19,8 @@ import pytest
 
 from rattle_lab.rig._handbuilt import synthetic_campaign
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.fit import fit_store, load_pipeline
+from rattle_lab.fit import load_pipeline
+from rattle_lab.workflow import fit_store
 from rattle_lab.store import ingest
 from rattle_lab.records import write_record
 from rattle_lab.records._errors import StoreError
@@ -76,7 +77,7 @@ def test_cli_fit_table_and_results_in_store(campaign):
     assert "damping_ramp.zeta (ramp replay)" in proc.stdout
     assert "restitution_down.e (ramp)" in proc.stdout
     res = read_results(store)
-    assert res.provenance["function"] == "rattle_lab.fit.fit_store"
+    assert res.provenance["function"] == "rattle_lab.workflow.fit_store"
     assert len(res.provenance["inputs"]) == 1
     assert set(res.thresholds) == {"freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2"}
     key = next(k for k in res.runs if k[1] == "ramp_up_96p0")

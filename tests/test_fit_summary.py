@@ -19,8 +19,8 @@ from rattle_lab.fit import (SUMMARY_SCHEMA_VERSION, DbLawSummary, DownRestitutio
                             FitSummary, Fits, GrazingParameter, GrazingSummary,
                             LinearLawSummary, ParticipationInfo, RampDamping, RampGrazing,
                             RatioRestitution,
-                            RunRow, SkippedRun, SplLawSummary, ThresholdTable, TransientRun,
-                            fit_store)
+                            RunRow, SkippedRun, SplLawSummary, ThresholdTable, TransientRun)
+from rattle_lab.workflow import fit_store
 from rattle_lab.records import write_record
 from rattle_lab.rig._handbuilt import synthetic_campaign
 from rattle_lab.store import ingest, read_results

@@ -22,7 +22,7 @@ from conftest import RATTLE_LAB
 
 import rattle_lab.workflow.pipeline as pipeline_module
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.fit import fit_store
+from rattle_lab.workflow import fit_store
 from rattle_lab.workflow.pipeline import (Pipeline, code_fingerprint, load_pipeline_file, needed_stages,
                                  parse_pipeline, read_detections, run_pipeline)
 from rattle_lab.fit._results import read_results

@@ -84,7 +84,8 @@ PACKAGES: dict[str, list[str]] = {
         "DEFAULT_SAVE_PATH"
     ],
     "rattle_lab.fit": [
-        "DbLaw", "GrazingFit", "analyse_run", "fit_runs", "fit_store", "json_ready", "load_pipeline",
+        "DbLaw", "GrazingFit", "analyse_run", "check_fit_params", "fit_runs", "json_ready",
+        "load_pipeline",
         "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
         "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
         "restitution_from_ratios", "saddle_node_threshold_ms2",
@@ -117,7 +118,8 @@ PACKAGES: dict[str, list[str]] = {
         "smooth_region", "db_slope_guide", "power_law_guide"
     ],
     "rattle_lab.workflow": [
-        "STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline", "run_pipeline"
+        "STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline", "run_pipeline",
+        "detect_runs", "fit_store"
     ],
     "rattle_lab.records": [
         "read", "write_record", "detect_format", "load_schema", "validate_tree", "load_mapping",

@@ -18,7 +18,8 @@ import pytest
 
 from rattle_lab.exceptions import OutputError, ParameterError, RattleLabError
 from rattle_lab.fit import (DownRestitution, FitSummary, Fits, GrazingParameter, GrazingSummary,
-                            RatioRestitution, fit_store)
+                            RatioRestitution)
+from rattle_lab.workflow import fit_store
 from rattle_lab.store import ingest
 from rattle_lab.records._errors import StoreError
 from rattle_lab.report import ReportResult, build_pages, gather, write_report

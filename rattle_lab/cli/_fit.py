@@ -1,4 +1,4 @@
-"""``rattle-lab fit store.h5 [--pipeline FILE] [--json]``: a thin layer over :func:`rattle_lab.fit.fit_store`.
+"""``rattle-lab fit store.h5 [--pipeline FILE] [--json]``: a thin layer over :func:`rattle_lab.workflow.fit_store`.
 
 Detects impacts, sound peaks, patterns and ramp thresholds in every run of an
 ingest store, fits the grazing curve, the restitution and the SPL laws, and
@@ -45,7 +45,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from rattle_lab.fit import fit_store, load_pipeline
+    from rattle_lab.fit import load_pipeline
+    from rattle_lab.workflow import fit_store
 
     params = load_pipeline(args.pipeline)
     source = "pipeline"

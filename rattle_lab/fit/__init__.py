@@ -16,7 +16,8 @@ from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_dow
                            restitution_from_ratios, saddle_node_threshold_ms2)
 from ._results import RunResult, StoreFit
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
-from ._store import analyse_run, fit_runs, fit_store, json_ready, load_pipeline, summarise_fits
+from ._store import (analyse_run, check_fit_params, fit_runs, json_ready, load_pipeline,
+                     summarise_fits)
 from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
                          GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
                          RatioRestitution, SplLawSummary)
@@ -24,7 +25,8 @@ from ._summary import (SUMMARY_SCHEMA_VERSION, FitSummary, ParticipationInfo, Ru
                        SkippedRun, ThresholdTable, TransientRun)
 
 __all__ = [
-    "DbLaw", "GrazingFit", "analyse_run", "fit_runs", "fit_store", "json_ready", "load_pipeline",
+    "DbLaw", "GrazingFit", "analyse_run", "check_fit_params", "fit_runs", "json_ready",
+    "load_pipeline",
     "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
     "restitution_from_ratios", "saddle_node_threshold_ms2",

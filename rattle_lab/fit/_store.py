@@ -22,7 +22,6 @@ from typing import Any
 
 import numpy as np
 
-from rattle_lab._progress import progress_bar
 from rattle_lab._resources import find_resource
 from rattle_lab._version import __version__
 from rattle_lab.acoustics import run_acoustics  # [issue 17]
@@ -31,8 +30,7 @@ from rattle_lab.detect import (ImpactLog, ImpactParams, cross_correlation_delay,
 from rattle_lab.exceptions import ParameterError, RattleLabError
 from rattle_lab.records._chain import Participation, resolve_participation
 from rattle_lab.fit._results import RunResult, StoreFit
-from rattle_lab.store import (check_linked_inputs, input_hashes, open_stored_record, read_catalogue,
-                     write_results)
+from rattle_lab.store import (input_hashes, open_stored_record, read_catalogue)
 from rattle_lab.detect.thresholds import Threshold, ramp_threshold, tabulate_thresholds
 from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
@@ -294,58 +292,20 @@ def store_participation(store: str | os.PathLike[str], given: float | None,
     return resolve_participation(rigs, given, source)
 
 
-def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None = None,
-              fit: Mapping[str, Any] | None = None, write: bool = True,
-              quiet: bool = True, participation_source: str = "pipeline") -> StoreFit:
-    """Detect and fit everything in an ingest store; write ``/results`` (see :mod:`rattle_lab.fit._results`).
-
-    Parameters
-    ----------
-    store : path-like
-        An ingest store.
-    detect, fit : mapping, optional
-        Keyword parameters of the detection and the fits (see :func:`load_pipeline`).
-    write : bool
-        Write ``/results`` into the store (atomically).
-    quiet : bool
-        No progress bar over the runs (one is drawn on a terminal otherwise).
-    participation_source : str
-        Where ``fit["participation"]`` came from, when given (``"pipeline"``,
-        ``"command line"``); named in the summary's ``participation`` entry.
+def check_fit_params(fit: Mapping[str, Any] | None) -> dict[str, Any]:
+    """``fit`` completed with the defaults of ``FIT_KEYS`` and checked.
 
     Raises
     ------
-    StoreError
-        If ``store`` is not an ingest store.
     ParameterError
-        For an unknown parameter.
+        For an unknown parameter or a value out of range.
     """
-    detect = dict(detect or {})
-    fit = {**FIT_KEYS, **dict(fit or {})}
-    unknown = sorted(set(fit) - set(FIT_KEYS))
+    out = {**FIT_KEYS, **dict(fit or {})}
+    unknown = sorted(set(out) - set(FIT_KEYS))
     if unknown:
         raise ParameterError(f"unknown fit parameter {unknown[0]!r}")
-    _check_fit_values(fit)
-    store = Path(store)
-    catalogue = read_catalogue(store, level="runs")
-    keys = list(dict.fromkeys(catalogue["input_key"]))
-    runs: list[RunResult] = []
-    check_linked_inputs(store, keys)  # the bytes read are those ingested (full re-hash)
-    with progress_bar(int(catalogue.shape[0]), desc="detect", unit="run", quiet=quiet) as bar:
-        for key in keys:
-            record = open_stored_record(store, key)
-            try:
-                for run in record.runs:
-                    runs.append(analyse_run(key, run, detect=detect, fit=fit,
-                                            mic_distance_m=record.rig.mic_distance_m))
-                    bar.update()
-            finally:
-                record.close()
-    result = fit_runs(store, runs, detect=detect, fit=fit,
-                      participation_source=participation_source)
-    if write:
-        write_results(store, result)
-    return result
+    _check_fit_values(out)
+    return out
 
 
 def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
@@ -383,7 +343,7 @@ def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
         curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
     participation = store_participation(store, fit.get("participation"), participation_source)
     summary = summarise_fits(list(runs), curve, fit, participation=participation)
-    prov = {"function": "rattle_lab.fit.fit_store", **dict(provenance or {}),
+    prov = {"function": "rattle_lab.workflow.fit_store", **dict(provenance or {}),
             "rattle_lab_version": __version__, "python": sys.version.split()[0],
             "parameters": {"detect": dict(detect), "fit": dict(fit)},
             "inputs": input_hashes(store, list(dict.fromkeys(r.input_key for r in runs)))}
@@ -648,6 +608,6 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                          for r in ok if r.protocol == "transient"))
 
 
-__all__ = ["analyse_run", "fit_runs", "fit_store", "json_ready", "load_pipeline", "paired_plate_channels",
+__all__ = ["analyse_run", "check_fit_params", "fit_runs", "json_ready", "load_pipeline", "paired_plate_channels",
            "relative_to_striker", "restitution_down_summary", "run_chain_flags",
            "store_participation", "summarise_fits", "transient_shocks"]

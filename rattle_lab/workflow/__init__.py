@@ -4,8 +4,9 @@
 runs any pipeline file; ``rattle-lab demo`` is simulate, ingest, fit and report.
 """
 
-from rattle_lab.workflow.pipeline import (STAGES, Pipeline, PipelineRun, load_pipeline_file,
-                                          parse_pipeline, run_pipeline)
+from rattle_lab.workflow._fit import fit_store
+from rattle_lab.workflow.pipeline import (STAGES, Pipeline, PipelineRun, detect_runs,
+                                          load_pipeline_file, parse_pipeline, run_pipeline)
 
 __all__ = ["STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline",
-           "run_pipeline"]
+           "run_pipeline", "detect_runs", "fit_store"]

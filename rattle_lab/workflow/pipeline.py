@@ -359,8 +359,19 @@ def _connect(scheduler: Any) -> tuple[Any, bool]:
                              f"({' '.join(str(exc).split()) or type(exc).__name__})") from None
 
 
-def _detect_all(store: Path, detect: Mapping[str, Any], fit: Mapping[str, Any],
-                scheduler: Any, quiet: bool = True) -> list[Any]:
+def detect_runs(store: str | os.PathLike[str], detect: Mapping[str, Any],
+                fit: Mapping[str, Any], *, scheduler: Any = None, quiet: bool = True
+                ) -> list[Any]:
+    """Every stored run's detections (:func:`detect_run`), serially or on a Dask cluster.
+
+    The detect stage of a pipeline and of :func:`fit_store`.  The inputs the store links
+    to are re-hashed first (they must be the bytes that were ingested).
+
+    Returns
+    -------
+    list of RunResult
+        In the catalogue's order of runs.
+    """
     from rattle_lab.store import read_catalogue
 
     catalogue = read_catalogue(store, level="runs")
@@ -580,7 +591,8 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
         elif stage == "detect":
             if fresh("detect", key, has_path(store_path, f"{CACHE_GROUP}/detect")):
                 continue
-            runs = _detect_all(store_path, p["detect"], {**p["fit"]}, scheduler, quiet)
+            runs = detect_runs(store_path, p["detect"], {**p["fit"]}, scheduler=scheduler,
+                               quiet=quiet)
             write_cached(store_path, "detect", runs)
             done("detect", key)
         elif stage == "thresholds":
@@ -618,4 +630,5 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
 
 __all__ = ["Pipeline", "PipelineRun", "STAGES", "DEPENDS", "OUTPUTS", "load_pipeline_file",
            "parse_pipeline", "run_pipeline", "needed_stages", "read_detections", "detect_run",
+           "detect_runs",
            "code_fingerprint"]
