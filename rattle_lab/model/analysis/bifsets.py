@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Literal, cast
+from typing import Any, Literal, cast
 
 import numpy as np
 
@@ -302,12 +302,13 @@ def _curves_for_n(n: int, wg: np.ndarray, F_range: tuple[float, float], zeta: fl
     return curves
 
 
-def _sets_for_n(job: tuple[int, np.ndarray, np.ndarray, tuple[float, float], float, float, int]
-                ) -> tuple[np.ndarray, np.ndarray, list[BoundaryCurve]]:
-    """Regions and boundary curves of one orbit type: one chunk of :func:`bifurcation_sets`."""
-    n, wg, Fg, F_lim, zeta, e, n_v = job
-    exists, stable = _regions(n, wg, Fg, zeta, e)
-    return exists, stable, list(_curves_for_n(n, wg, F_lim, zeta, e, n_v))
+def _part_for_n(job: tuple[str, int, np.ndarray, np.ndarray, tuple[float, float], float, float,
+                           int]) -> Any:
+    """One chunk of :func:`bifurcation_sets`: the regions or the boundary curves of one 1/n."""
+    part, n, wg, Fg, F_lim, zeta, e, n_v = job
+    if part == "regions":
+        return _regions(n, wg, Fg, zeta, e)
+    return list(_curves_for_n(n, wg, F_lim, zeta, e, n_v))
 
 
 def bifurcation_sets(ns: Sequence[int] = (1, 2, 3, 4), *,
@@ -368,12 +369,17 @@ def bifurcation_sets(ns: Sequence[int] = (1, 2, 3, 4), *,
     stable = np.zeros_like(exists)
     curves: list[BoundaryCurve] = []
     F_lim = (float(F_range[0]), float(F_range[1]))
-    jobs = [(n, wg, Fg, F_lim, float(zeta), float(e), int(n_v)) for n in ns_t]
-    parts = run_chunks(_sets_for_n, jobs, workers=workers_i, scheduler=sched,
-                       desc="bifurcation sets")
-    for k, (ex, st, cv) in enumerate(parts):
-        exists[k], stable[k] = ex, st
-        curves.extend(cv)
+    # Regions and curves of each 1/n are independent chunks, largest first (the cost grows
+    # with n; tracing costs about twice the regions): a pool of workers stays busy to the end.
+    jobs = sorted(((part, n, wg, Fg, F_lim, float(zeta), float(e), int(n_v))
+                   for n in ns_t for part in ("curves", "regions")),
+                  key=lambda job: (-job[1], job[0]))
+    parts = dict(zip(((job[0], job[1]) for job in jobs),
+                     run_chunks(_part_for_n, jobs, workers=workers_i, scheduler=sched,
+                                desc="bifurcation sets")))
+    for k, n in enumerate(ns_t):
+        exists[k], stable[k] = parts["regions", n]
+        curves.extend(parts["curves", n])
     wf = np.linspace(wg[0], wg[-1], 4 * wg.size)
     Fgr = np.sqrt(((1.0 - wf) * (1.0 + wf)) ** 2 + (2.0 * zeta * wf) ** 2)
     inside = (Fgr >= Fg[0]) & (Fgr <= Fg[-1])
