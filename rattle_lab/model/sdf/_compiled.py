@@ -1,11 +1,13 @@
 """The two builds of :mod:`rattle_lab.model.sdf._kernel`: plain Python and numba.
 
-The kernel source is executed a second time as the module
-``rattle_lab.model.sdf._kernel_jit`` with ``__rattle_jit__ = True`` in its globals,
-which makes its ``@jit`` decorator compile every function with
-``numba.njit(cache=True)``.  The plain import :mod:`rattle_lab.model.sdf._kernel`
-stays pure Python: the reference the tests compare the compiled kernel with.
-Compilation is lazy (first call) and cached on disk by numba.
+The kernel package's files are loaded a second time as the package
+``rattle_lab.model.sdf._kernel_jit`` (same folder, its own modules) with
+``__rattle_jit__ = True`` among the package's globals, which makes the ``@jit`` of
+every module of that package (:mod:`rattle_lab.model.sdf._kernel._jit`) compile its
+functions with ``numba.njit(cache=True)``.  The modules import their siblings
+relatively, so the compiled functions call compiled functions.  The plain import
+:mod:`rattle_lab.model.sdf._kernel` stays pure Python: the reference the tests compare
+the compiled kernel with.  Compilation is lazy (first call) and cached on disk by numba.
 """
 
 from __future__ import annotations
@@ -26,13 +28,20 @@ _NAME = "rattle_lab.model.sdf._kernel_jit"
 def _load_jit() -> ModuleType:
     if _NAME in sys.modules:
         return sys.modules[_NAME]
-    origin = python_kernel.__file__
-    spec = importlib.util.spec_from_file_location(_NAME, origin)
+    # the package's __init__, with the same folder to find its submodules in: its
+    # relative imports load the siblings again, as modules of this package
+    spec = importlib.util.spec_from_file_location(
+        _NAME, python_kernel.__file__, submodule_search_locations=list(python_kernel.__path__))
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
-    module.__dict__["__rattle_jit__"] = True
+    module.__dict__["__rattle_jit__"] = True  # read by each submodule's copy of _jit
     sys.modules[_NAME] = module
-    spec.loader.exec_module(module)
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        for name in [n for n in sys.modules if n == _NAME or n.startswith(_NAME + ".")]:
+            del sys.modules[name]
+        raise
     return module
 
 
