@@ -1,6 +1,6 @@
 """Work the exact kernel does per impact: counted closed-form evaluations, no clocks.
 
-The impact root finder (``_kernel._root``) used to bisect the whole bracket from its
+The impact root finder (``_kernel._search._root``) used to bisect the whole bracket from its
 far end once Newton had converged onto the other end from one side: up to 53
 evaluations for one impact where the root was already known to rounding (issue 13;
 the chatter cases of ``benchmarks/work_precision.py`` spent most of their time
@@ -22,6 +22,7 @@ import math
 import pytest
 
 from rattle_lab.model.sdf import _kernel
+from rattle_lab.model.sdf._kernel import _search
 
 CASES = {
     "1/1 orbit": (0.2, 1.0, 0.05, 0.6, 0.0, 0.0, 0.0, 40.0),
@@ -36,8 +37,8 @@ CASES = {
 @pytest.mark.parametrize("name", list(CASES))
 def test_impact_roots_take_few_evaluations(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
     F, w, z, e, x0, v0, th0, cycles = CASES[name]
-    level_values = _kernel.level_values
-    root = _kernel._root
+    level_values = _search.level_values
+    root = _search._root
     depth: list[int] = []
     per_root: list[int] = []
     contract: list[tuple[float, float, float]] = []
@@ -60,8 +61,9 @@ def test_impact_roots_take_few_evaluations(name: str, monkeypatch: pytest.Monkey
             contract.append((s, g_at, g_before))
         return s
 
-    monkeypatch.setattr(_kernel, "level_values", counting_level_values)
-    monkeypatch.setattr(_kernel, "_root", counting_root)
+    # replaced where the search looks them up: the globals of _search_chunk and _root
+    monkeypatch.setattr(_search, "level_values", counting_level_values)
+    monkeypatch.setattr(_search, "_root", counting_root)
     out = _kernel.run(F, w, z, e, 0.0, x0, v0, th0, False, cycles * 2.0 * math.pi / w,
                       False, False, 10**6)
     n_imp = out[1]
