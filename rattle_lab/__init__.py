@@ -53,7 +53,7 @@ _LAZY: dict[str, str] = {
     "fit_store": "rattle_lab.workflow",
     "read_results": "rattle_lab.fit._results",
     # reports and pipelines
-    "write_report": "rattle_lab.report",
+    "write_report": "rattle_lab.workflow",
     "load_pipeline_file": "rattle_lab.workflow.pipeline",
     "run_pipeline": "rattle_lab.workflow.pipeline",
 }

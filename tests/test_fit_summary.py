@@ -264,7 +264,7 @@ def test_a_summary_written_before_the_versioning_is_read(fitted, tmp_path):
 
 
 def test_the_report_reads_old_summaries_and_names_an_unsupported_one(fitted, tmp_path):
-    from rattle_lab.report import gather
+    from rattle_lab.workflow import gather
 
     store, result, _ = fitted
     copy = tmp_path / "copy.h5"

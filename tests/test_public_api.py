@@ -119,7 +119,8 @@ PACKAGES: dict[str, list[str]] = {
     ],
     "rattle_lab.workflow": [
         "STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline", "run_pipeline",
-        "detect_runs", "fit_store"
+        "detect_runs", "fit_store", "write_report", "build_report_content", "build_pages",
+        "gather", "ReportData", "SECTIONS"
     ],
     "rattle_lab.records": [
         "read", "write_record", "detect_format", "load_schema", "validate_tree", "load_mapping",
@@ -132,10 +133,7 @@ PACKAGES: dict[str, list[str]] = {
         "ClippingWarning", "DropoutWarning", "SampleRateMismatchWarning",
         "NonMonotonicTimestampsWarning", "EmptyChannelWarning", "UncalibratedWarning"
     ],
-    "rattle_lab.report": [
-        "write_report", "build_pages", "ReportResult", "ReportData", "gather", "SECTIONS",
-        "ReportContent", "build_report_content", "render_pages"
-    ],
+    "rattle_lab.report": ["write_pdf", "render_pages", "ReportResult", "ReportContent", "PAGES"],
     "rattle_lab.rig": [
         "load_scene", "parse_scene", "synthesize", "write_synthetic", "Scene", "SceneError",
         "StageCounter", "Synthesis", "RunSummary", "Modal", "Piece", "RunMotion", "schedule",

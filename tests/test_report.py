@@ -22,10 +22,11 @@ from rattle_lab.fit import (DownRestitution, FitSummary, Fits, GrazingParameter,
 from rattle_lab.workflow import fit_store
 from rattle_lab.store import ingest
 from rattle_lab.records._errors import StoreError
-from rattle_lab.report import ReportResult, build_pages, gather, write_report
+from rattle_lab.report import ReportResult
+from rattle_lab.workflow import build_pages, gather, write_report
 from rattle_lab.fit import band_quantile, grazing_band_ms2
 from rattle_lab.report._common import TEXT_WIDTH
-from rattle_lab.report._summary_text import parameter_lines, summary_lines
+from rattle_lab.workflow._report._summary import parameter_lines, summary_lines
 
 
 @pytest.fixture(scope="module")
@@ -339,8 +340,8 @@ def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -
     from matplotlib.lines import Line2D
 
     from rattle_lab.plot._bifsets import _LINESTYLES
-    from rattle_lab.report._content_model import model_content
     from rattle_lab.report._pages_model import model_pages
+    from rattle_lab.workflow._report._content_model import model_content
 
     import rattle_lab.model.analysis as analysis
 
@@ -387,7 +388,8 @@ def test_smooth_region_follows_the_boundary() -> None:
 
 def test_building_the_content_leaves_the_gathered_data_alone(stores: dict[str, Path]) -> None:
     # issue 12: the report used to write the missing sections into the frozen ReportData
-    from rattle_lab.report import build_report_content, render_pages
+    from rattle_lab.report import render_pages
+    from rattle_lab.workflow import build_report_content
 
     data = gather(stores["bare"])
     before = dict(data.missing)

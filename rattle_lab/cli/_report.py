@@ -1,4 +1,4 @@
-"""``rattle-lab report store.h5 -o report.pdf``: a thin layer over :func:`rattle_lab.report.write_report`.
+"""``rattle-lab report store.h5 -o report.pdf``: a thin layer over :func:`rattle_lab.workflow.write_report`.
 
 Sections whose data are missing are listed on stderr (and on the summary
 page); the PDF path is printed on stdout at the end.
@@ -28,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from rattle_lab.report import write_report
+    from rattle_lab.workflow import write_report
 
     result = write_report(args.store, args.output, model=not args.no_model, quiet=args.quiet)
     for name, why in result.missing.items():

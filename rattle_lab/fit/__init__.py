@@ -16,8 +16,8 @@ from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_dow
                            restitution_from_ratios, saddle_node_threshold_ms2)
 from ._results import RunResult, StoreFit
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
-from ._store import (analyse_run, check_fit_params, fit_runs, json_ready, load_pipeline,
-                     summarise_fits)
+from ._params import check_fit_params, load_pipeline
+from ._store import analyse_run, fit_runs, json_ready, summarise_fits
 from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
                          GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
                          RatioRestitution, SplLawSummary)

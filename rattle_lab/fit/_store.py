@@ -15,19 +15,16 @@ import dataclasses
 import math
 import os
 import sys
-import tomllib
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from rattle_lab._resources import find_resource
 from rattle_lab._version import __version__
 from rattle_lab.acoustics import run_acoustics  # [issue 17]
 from rattle_lab.detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
                       impact_pattern, impulse_train, rms_spl_db, sound_peaks)
-from rattle_lab.exceptions import ParameterError, RattleLabError
+from rattle_lab.exceptions import RattleLabError
 from rattle_lab.records._chain import Participation, resolve_participation
 from rattle_lab.fit._results import RunResult, StoreFit
 from rattle_lab.store import (input_hashes, open_stored_record, read_catalogue)
@@ -38,81 +35,16 @@ from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
 from ._grazing import GrazingFit, fit_grazing
 from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._damping import fit_zeta_ramp
-from ._restitution import METHODS, fit_restitution_down, restitution_from_ratios
+from ._restitution import fit_restitution_down, restitution_from_ratios
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
 from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
                          GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
                          RatioRestitution, SplLawSummary)
 from ._summary import (FitSummary, ParticipationInfo, RunRow, SkippedRun, ThresholdTable,
                        TransientRun)
+from ._params import FIT_KEYS, SOUND_KEYS, check_fit_params, load_pipeline
 
-SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01, "channel": None}
-FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0,
-            "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3,
-            "restitution_method": "ramp", "level_hold_periods": 1,
-            "sound_field": "free", "loudness": True}  # [issue 17] acoustics options
 _QUANTITIES = ("plate_velocity", "plate_acceleration", "sound_pressure", "base_acceleration")
-
-
-def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, Any]]:
-    """Keyword parameters ``{"detect": {...}, "fit": {...}}`` from a pipeline TOML (or defaults).
-
-    ``[detect]`` takes the fields of :class:`~rattle_lab.detect.ImpactParams`,
-    ``window_s``, ``first_fraction``, ``max_lag_s`` and ``channel`` (the channel to detect
-    on; default: chosen by what each channel measures); ``[fit]`` takes
-    ``participation`` (``Q1/Q2``; absent: from the records' rig metadata, see
-    :func:`store_participation`), ``vary_participation``, ``outlier_k``, ``conf_interval``,
-    ``speed_of_sound_m_s``, ``n_confirm``, ``restitution_method`` (``"ramp"``, the
-    default, or ``"quasi-static"``: see :func:`~rattle_lab.fit.fit_restitution_down`),
-    ``level_hold_periods`` (forcing periods the drive holds each level of a ramp: 1 for
-    a continuous ramp, the default; the synthetic rig holds ``piece_periods``),
-    ``sound_field`` (``"free"``, the default, or ``"diffuse"``: the loudness's sound field,
-    unless a run says ``x_sound_field``) and ``loudness`` (compute ISO 532-1 loudness,
-    default true).
-    Other tables are ignored (they belong to other stages); unknown keys in these two
-    are errors.
-
-    Raises
-    ------
-    ParameterError
-        For an unreadable file, an unknown key, an unknown ``restitution_method`` or a
-        ``level_hold_periods`` that is not an integer >= 1.
-    """
-    out: dict[str, dict[str, Any]] = {"detect": {}, "fit": {}}
-    if path is None:
-        return out
-    if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
-        path = find_resource("pipelines", str(path)) or path
-    try:
-        doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise ParameterError(f"{path}: cannot read pipeline TOML: {exc}") from exc
-    allowed = {"detect": {f.name for f in dataclasses.fields(ImpactParams)} | set(SOUND_KEYS),
-               "fit": set(FIT_KEYS)}
-    for table in ("detect", "fit"):
-        values = doc.get(table, {})
-        if not isinstance(values, dict):
-            raise ParameterError(f"{path}: [{table}] must be a table")
-        unknown = sorted(set(values) - allowed[table])
-        if unknown:
-            raise ParameterError(f"{path}: [{table}]: unknown key {unknown[0]!r} "
-                                 f"(known: {', '.join(sorted(allowed[table]))})")
-        out[table] = dict(values)
-    _check_fit_values(out["fit"], f"{path}: [fit]: ")
-    return out
-
-
-def _check_fit_values(fit: Mapping[str, Any], where: str = "") -> None:
-    method = fit.get("restitution_method", FIT_KEYS["restitution_method"])
-    if method not in METHODS:
-        raise ParameterError(f"{where}`restitution_method` must be one of {METHODS}, "
-                             f"was {method!r}")
-    if fit.get("sound_field", "free") not in ("free", "diffuse"):  # [issue 17]
-        raise ParameterError(f"{where}`sound_field` must be 'free' or 'diffuse', "
-                             f"was {fit.get('sound_field')!r}")
-    hold = fit.get("level_hold_periods", FIT_KEYS["level_hold_periods"])
-    if isinstance(hold, bool) or not isinstance(hold, (int, np.integer)) or hold < 1:
-        raise ParameterError(f"{where}`level_hold_periods` must be an integer >= 1, was {hold!r}")
 
 
 def _analyse_transient(run: Any, detect: Mapping[str, Any], base: dict[str, Any]) -> RunResult:
@@ -290,22 +222,6 @@ def store_participation(store: str | os.PathLike[str], given: float | None,
             finally:
                 record.close()
     return resolve_participation(rigs, given, source)
-
-
-def check_fit_params(fit: Mapping[str, Any] | None) -> dict[str, Any]:
-    """``fit`` completed with the defaults of ``FIT_KEYS`` and checked.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown parameter or a value out of range.
-    """
-    out = {**FIT_KEYS, **dict(fit or {})}
-    unknown = sorted(set(out) - set(FIT_KEYS))
-    if unknown:
-        raise ParameterError(f"unknown fit parameter {unknown[0]!r}")
-    _check_fit_values(out)
-    return out
 
 
 def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,

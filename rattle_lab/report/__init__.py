@@ -1,4 +1,4 @@
-"""The PDF report of an ingest store (``rattle-lab report store.h5 -o report.pdf``).
+"""The PDF report: draws a computed :class:`ReportContent`, page by page, into one PDF.
 
 Pages: a summary (fitted gap, zeta, f_s, e, SPL law with uncertainties;
 data-quality flags; provenance; missing sections and why), the rig and
@@ -6,16 +6,15 @@ calibration table, the thresholds with the eq. (3.4) fit (thesis Fig. 6-2,
 6-3), the impact-pattern map (Fig. 6-5), example waveforms (Fig. 6-4, 6-6),
 the SPL law (Fig. 6-7) and model predictions at the fitted parameters.
 
-Three steps: :func:`gather` reads the store, :func:`build_report_content` computes
-what each page shows (calling :mod:`rattle_lab.fit`, :mod:`rattle_lab.model` and
-:mod:`rattle_lab.detect`), :func:`render_pages` draws it; the page modules compute
-nothing.
+The report renders what it is given and computes nothing: :func:`render_pages` draws
+the content's pages and :func:`write_pdf` writes them atomically.  The content, frozen
+plain data (``_content_types``), is computed from a store by
+:func:`rattle_lab.workflow.build_report_content`; ``rattle-lab report`` and
+:func:`rattle_lab.workflow.write_report` do both.  The package imports only the drawing
+libraries, :mod:`rattle_lab.plot`'s styles and its own types (a test pins that).
 """
 
-from ._build import (SECTIONS, ReportResult, build_pages, build_report_content, render_pages,
-                     write_report)
-from ._content import ReportContent
-from ._data import ReportData, gather
+from ._content_types import ReportContent
+from ._render import PAGES, ReportResult, render_pages, write_pdf
 
-__all__ = ["write_report", "build_pages", "ReportResult", "ReportData", "gather", "SECTIONS",
-           "ReportContent", "build_report_content", "render_pages"]
+__all__ = ["write_pdf", "render_pages", "ReportResult", "ReportContent", "PAGES"]

@@ -15,10 +15,6 @@ LANDSCAPE_IN = (11.69, 8.27)
 TEXT_WIDTH = 112
 
 
-class Missing(Exception):
-    """A section cannot be drawn; the message says why (shown on the summary page)."""
-
-
 def landscape_figure() -> Figure:
     """An A4 landscape figure, constrained layout, with the bottom 2.5 % kept for the footer."""
     fig = Figure(figsize=LANDSCAPE_IN, layout="constrained")

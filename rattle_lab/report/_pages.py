@@ -1,6 +1,6 @@
 """Pages drawn from the content of one section each: rig, thresholds, patterns, waveforms, SPL.
 
-Each function takes the section's content (:mod:`._content`, :mod:`._content_runs`)
+Each function takes the section's content (:mod:`._content_types`)
 and returns figures; nothing is computed or read here.  Figures are bare
 :class:`matplotlib.figure.Figure` objects (Agg, no pyplot state); every axis carries
 its unit.
@@ -11,8 +11,8 @@ from __future__ import annotations
 from matplotlib.figure import Figure
 
 from ._common import LANDSCAPE_IN, fmt, landscape_figure, table
-from ._content import PatternContent, RigContent, SplContent, ThresholdContent
-from ._content_runs import WAVEFORM_QUANTITIES, WaveformContent
+from ._content_types import (WAVEFORM_QUANTITIES, PatternContent, RigContent, SplContent,
+                             ThresholdContent, WaveformContent)
 
 _RIG_UNITS = {"plate_length_m": "m", "plate_width_m": "m", "plate_thickness_m": "m",
               "striker_x_m": "m", "striker_y_m": "m", "gap_m": "m", "mic_distance_m": "m"}

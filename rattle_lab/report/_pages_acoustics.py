@@ -1,6 +1,6 @@
 """The acoustics page: third-octave spectra, levels and loudness against impact velocity.
 
-Draws :class:`._content_runs.AcousticsContent`; nothing is computed here.
+Draws :class:`._content_types.AcousticsContent`; nothing is computed here.
 """
 
 from __future__ import annotations
@@ -12,24 +12,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from ._common import fmt, landscape_figure, table
-from ._content_runs import AcousticsContent
-
-
-def calibration_note(rows: list[dict[str, Any]]) -> str:
-    """One line saying how the microphones were calibrated (calibrator or declared)."""
-    sources = sorted({str((r.get("calibration") or {}).get("source", "declared")) for r in rows})
-    flags = sorted({f for r in rows for f in (r.get("calibration") or {}).get("flags", [])})
-    if sources == ["calibrator"]:
-        text = "microphone sensitivity from the campaign's calibrator records"
-    elif "calibrator" in sources:
-        text = "microphone sensitivity from calibrator records for some runs, declared for others"
-    elif sources == ["none"]:
-        text = "microphone UNCALIBRATED (full-scale units): levels are not in dB re 20 uPa"
-    else:
-        text = "no calibrator record: the declared microphone sensitivity is used"
-    if flags:
-        text += "; FLAGGED: " + ", ".join(flags) + " (pre/post calibration differ by > 0.5 dB)"
-    return text
+from ._content_types import AcousticsContent
 
 
 def acoustics_page(c: AcousticsContent) -> list[Figure]:
@@ -81,8 +64,8 @@ def acoustics_page(c: AcousticsContent) -> list[Figure]:
         _label_log_axis(axis)
     ax_n.set_xlabel("RMS impact velocity of the run (m/s)")
     ax_n.set_ylabel("ISO 532-1 loudness (sone)")
-    field = sorted({str(r["acoustics"].get("sound_field") or "free") for r in rows})
-    ax_n.set_title(f"Loudness against impact velocity ({'/'.join(field)} field)", fontsize=9)
+    ax_n.set_title(f"Loudness against impact velocity ({'/'.join(c.sound_fields)} field)",
+                   fontsize=9)
     ax_n.grid(alpha=0.3, which="both")
     ax_n.legend(fontsize=7)
     # (d) the table
@@ -110,7 +93,7 @@ def acoustics_page(c: AcousticsContent) -> list[Figure]:
     ax_n.yaxis.set_major_formatter(ScalarFormatter())
     ax_n.yaxis.set_minor_formatter(NullFormatter())
     ax_b.xaxis.set_major_formatter(LogFormatterSciNotation())
-    fig.suptitle("Sound levels, third-octave bands and loudness\n" + calibration_note(rows),
+    fig.suptitle("Sound levels, third-octave bands and loudness\n" + c.calibration_note,
                  fontsize=11)
     return [fig]
 

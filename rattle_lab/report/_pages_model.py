@@ -1,7 +1,7 @@
 """The model pages: bifurcation sets with the measured thresholds, and the model's sweeps.
 
-Draws :class:`._content_model.ModelContent`; the sets, smoothed regions and sweeps
-were computed by :func:`._content_model.model_content`.
+Draws :class:`._content_types.ModelContent`; the sets, smoothed regions and sweeps
+were computed before (by :mod:`rattle_lab.workflow`).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 
 from rattle_lab.plot._bifsets import _LINESTYLES  # the same styles as `model bifsets`' plot
 from ._common import landscape_figure
-from ._content_model import ModelContent, SweepComparison
+from ._content_types import ModelContent, SweepComparison
 
 
 def model_pages(c: ModelContent) -> list[Figure]:

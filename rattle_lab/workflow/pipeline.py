@@ -26,7 +26,7 @@ detect      :func:`rattle_lab.fit.analyse_run`, per run                 ingest
 thresholds  :func:`rattle_lab.detect.thresholds.tabulate_thresholds`    detect
 fit         :func:`rattle_lab.fit.fit_runs` (as ``rattle-lab fit``),    thresholds, detect
             :func:`rattle_lab.store.write_results`
-report      :func:`rattle_lab.report.write_report`                      fit, ingest
+report      :func:`rattle_lab.workflow.write_report`                    fit, ingest
 ==========  ==========================================================  ==================
 
 Each stage has a *key*: the SHA-256 of its parameters, the package version and
@@ -54,15 +54,13 @@ different code.
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import os
-import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 from rattle_lab._atomic import atomic_path
 from rattle_lab._progress import progress
@@ -71,27 +69,14 @@ from rattle_lab._version import __version__
 from rattle_lab.exceptions import OutputError, ParameterError
 from rattle_lab.store import (CACHE_GROUP, check_linked_inputs, has_path, output_digest,
                     read_cache_keys, read_cached, record_cache_keys, store_lock, write_cached)
+from ._pipeline_spec import (DEPENDS, OUTPUTS, STAGES, Pipeline, Stage, load_pipeline_file,
+                             parse_pipeline)
 
 #: Layout of the cached products (their classes' places and fields); a change re-runs the
 #: stages whose products a store caches.  2: the classes moved with the data-flow layout and
 #: RunResult gained chain_flags and shocks.
 CACHE_FORMAT = 2
 
-Stage = Literal["simulate", "ingest", "detect", "thresholds", "fit", "report"]
-
-#: Stages in execution order.
-STAGES: tuple[Stage, ...] = ("simulate", "ingest", "detect", "thresholds", "fit", "report")
-#: What each stage needs.
-DEPENDS: dict[Stage, tuple[Stage, ...]] = {
-    "simulate": (), "ingest": ("simulate",), "detect": ("ingest",), "thresholds": ("detect",),
-    "fit": ("thresholds", "detect"), "report": ("fit", "ingest")}
-#: Output names a pipeline may request, and the stage that makes each.
-OUTPUTS: dict[str, Stage] = {"store": "ingest", "detections": "detect",
-                             "thresholds": "thresholds", "results": "fit", "report": "report"}
-#: Keys of the tables this module validates itself ([detect] and [fit] are the fit's).
-_OWN_KEYS: dict[str, dict[str, Any]] = {"simulate": {"seed": None},
-                                        "ingest": {"allow_flagged": False},
-                                        "report": {"model": True}}
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
 #: Seconds to wait for a scheduler given by address.
@@ -135,30 +120,6 @@ def code_fingerprint() -> str:
     return _FINGERPRINT
 
 
-@dataclass(frozen=True)
-class Pipeline:
-    """A parsed pipeline file.
-
-    Attributes
-    ----------
-    name : str
-        Names the default store (``OUT/name.h5``) and report (``OUT/name.pdf``).
-    outputs : tuple of str
-        Requested outputs (keys of :data:`OUTPUTS`).
-    params : dict of str to dict
-        Parameters per table: ``simulate, ingest, detect, fit, report``.
-    description : str
-    source : str
-        The file it was read from ("" if built in code).
-    """
-
-    name: str
-    outputs: tuple[str, ...]
-    params: dict[str, dict[str, Any]]
-    description: str = ""
-    source: str = ""
-
-
 @dataclass
 class PipelineRun:
     """What :func:`run_pipeline` did.
@@ -181,85 +142,6 @@ class PipelineRun:
     cached: list[str] = field(default_factory=list)
     outputs: dict[str, Path] = field(default_factory=dict)
     keys: dict[str, str] = field(default_factory=dict)
-
-
-# --- the pipeline file -----------------------------------------------------------------------
-
-def parse_pipeline(doc: Mapping[str, Any], source: str = "<pipeline>") -> Pipeline:
-    """A :class:`Pipeline` from a parsed TOML document.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown table, key or output (the message names it).
-    """
-    from rattle_lab.fit._store import FIT_KEYS, SOUND_KEYS
-    from rattle_lab.detect import ImpactParams
-
-    known = {"pipeline", "simulate", "ingest", "detect", "thresholds", "fit", "report"}
-    unknown = sorted(set(doc) - known)
-    if unknown:
-        raise ParameterError(f"{source}: unknown table [{unknown[0]}] (known: "
-                             f"{', '.join(sorted(known))})")
-    head = doc.get("pipeline", {})
-    if not isinstance(head, Mapping):
-        raise ParameterError(f"{source}: [pipeline] must be a table")
-    bad = sorted(set(head) - {"name", "description", "outputs"})
-    if bad:
-        raise ParameterError(f"{source}: [pipeline]: unknown key {bad[0]!r}")
-    name = head.get("name", Path(source).stem if source != "<pipeline>" else "pipeline")
-    if not isinstance(name, str) or not name or any(c in name for c in "/\\"):
-        raise ParameterError(f"{source}: [pipeline] name must be a plain file stem, was {name!r}")
-    outputs = head.get("outputs", ["report"])
-    if isinstance(outputs, str):
-        outputs = [outputs]
-    for out in outputs:
-        if out not in OUTPUTS:
-            raise ParameterError(f"{source}: [pipeline] outputs: unknown output {out!r} "
-                                 f"(known: {', '.join(OUTPUTS)})")
-    if not outputs:
-        raise ParameterError(f"{source}: [pipeline] outputs must name at least one output")
-    allowed = {"detect": {f.name for f in dataclasses.fields(ImpactParams)} | set(SOUND_KEYS),
-               "fit": set(FIT_KEYS), "thresholds": set(), **{k: set(v) for k, v in
-                                                             _OWN_KEYS.items()}}
-    params: dict[str, dict[str, Any]] = {}
-    for table, keys in allowed.items():
-        values = doc.get(table, {})
-        if not isinstance(values, Mapping):
-            raise ParameterError(f"{source}: [{table}] must be a table")
-        bad = sorted(set(values) - keys)
-        if bad:
-            hint = (" (n_confirm belongs to [fit], as in `rattle-lab fit --pipeline`)"
-                    if table == "thresholds" else "")
-            raise ParameterError(f"{source}: [{table}]: unknown key {bad[0]!r}{hint}")
-        params[table] = {**_OWN_KEYS.get(table, {}), **dict(values)}
-    seed = params["simulate"]["seed"]
-    if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)):
-        raise ParameterError(f"{source}: [simulate] seed must be an integer, was {seed!r}")
-    for table, key in (("ingest", "allow_flagged"), ("report", "model")):
-        if not isinstance(params[table][key], bool):
-            raise ParameterError(f"{source}: [{table}] {key} must be true or false, "
-                                 f"was {params[table][key]!r}")
-    params["fit"] = {**FIT_KEYS, **params["fit"]}
-    params.pop("thresholds")
-    return Pipeline(name, tuple(outputs), params, str(head.get("description", "")), source)
-
-
-def load_pipeline_file(path: str | os.PathLike[str]) -> Pipeline:
-    """Read and validate a pipeline TOML file.
-
-    Raises
-    ------
-    ParameterError
-        If the file cannot be read or is invalid.
-    """
-    if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
-        path = find_resource("pipelines", str(path)) or path
-    try:
-        doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise ParameterError(f"{path}: cannot read pipeline TOML: {exc}") from exc
-    return parse_pipeline(doc, str(path))
 
 
 # --- content keys and the cache in the store -------------------------------------------------
@@ -619,7 +501,7 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
             ok = report_path.is_file() and cache.get("report:hash") == _file_hash(report_path)
             if fresh("report", key, ok):
                 continue
-            from rattle_lab.report import write_report
+            from rattle_lab.workflow._report import write_report
 
             write_report(store_path, report_path, model=p["report"]["model"], quiet=quiet)
             done("report", key, {"report:hash": _file_hash(report_path)})

@@ -1,20 +1,19 @@
 """What each report page shows, computed once, before anything is drawn.
 
 :func:`build_content` turns the gathered :class:`ReportData` into a frozen
-:class:`ReportContent`: per section the arrays and values the page draws
-(band curves, thresholds, impacts per cycle, SPL points and bands, acoustic rows,
-waveform windows, the model's bifurcation sets and sweeps) or the reason the section
-is left out.  The builders here only call the functions that own each computation
-(:mod:`rattle_lab.fit` for bands and intervals, :mod:`rattle_lab.detect` for
-impacts per cycle, :mod:`rattle_lab.model` for conversions and simulations) and
-store their results; the page modules (``_pages*``) only draw.
+:class:`rattle_lab.report.ReportContent`: per section the arrays and values the page
+draws (band curves, thresholds, impacts per cycle, SPL points and bands, acoustic rows,
+waveform windows, the model's bifurcation sets and sweeps) or the reason the section is
+left out.  The builders here only call the functions that own each computation
+(:mod:`rattle_lab.fit` for bands and intervals, :mod:`rattle_lab.detect` for impacts per
+cycle, :mod:`rattle_lab.model` for conversions and simulations) and store their results
+in the report's content types; the report's page modules only draw.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -22,9 +21,15 @@ import numpy as np
 from rattle_lab.detect import impacts_per_cycle
 from rattle_lab.fit import (Fits, GrazingSummary, SplLawSummary, band_quantile, grazing_band_ms2,
                             linear_law_band, threshold_hysteresis)
-from ._common import Missing
-from ._data import ReportData, RecordInfo
-from ._summary_text import report_negative_hysteresis, summary_lines, threshold_arrays
+from rattle_lab.report._content_types import (GrazingCurve, PatternContent, ReportContent,
+                                              RigContent, SplContent, SplCurve,
+                                              ThresholdContent)
+from ._gather import ReportData
+from ._summary import report_negative_hysteresis, summary_lines, threshold_arrays
+
+
+class Missing(Exception):
+    """A section cannot be drawn; the message says why (shown on the summary page)."""
 
 
 def fits_of(data: ReportData) -> Fits:
@@ -51,13 +56,6 @@ def not_fitted(data: ReportData, key: str, default: str) -> str:
 
 # --- rig -------------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class RigContent:
-    """The records whose rig facts and channels the rig page tabulates."""
-
-    records: tuple[RecordInfo, ...]
-
-
 def rig_content(data: ReportData) -> RigContent:
     """The rig page's content (raises :class:`Missing` without a readable record)."""
     if not data.records:
@@ -66,36 +64,6 @@ def rig_content(data: ReportData) -> RigContent:
 
 
 # --- thresholds ------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class GrazingCurve:
-    """Eq. (3.4) at the fitted parameters on a frequency grid, with its 95 % band."""
-
-    grid_hz: np.ndarray
-    accel_ms2: np.ndarray
-    band_ms2: tuple[np.ndarray, np.ndarray] | None  # lower and upper edge (None: no band)
-    dof: int | None             # Student t degrees of freedom of the band (None: normal)
-    gap_m: float
-    f_s_hz: float
-    zeta: float
-    outlier_freq_hz: np.ndarray | None  # None: the fit left no threshold out
-    outlier_up_ms2: np.ndarray | None
-
-
-@dataclass(frozen=True)
-class ThresholdContent:
-    """Measured thresholds, their hysteresis and the eq. (3.4) fit curve (None: not fitted)."""
-
-    freq_hz: np.ndarray
-    up_ms2: np.ndarray
-    down_ms2: np.ndarray
-    hysteresis_ms2: np.ndarray
-    negative: np.ndarray        # bool: disappearance above onset
-    both: np.ndarray            # bool: onset and disappearance measured
-    bar_width_hz: float
-    curve: GrazingCurve | None
-    missing: tuple[tuple[str, str], ...] = ()  # parts left out (name, why)
-
 
 def threshold_content(data: ReportData) -> ThresholdContent:
     """The threshold page's content (raises :class:`Missing` without ramp thresholds)."""
@@ -127,20 +95,6 @@ def threshold_content(data: ReportData) -> ThresholdContent:
 
 
 # --- impact patterns -------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class PatternContent:
-    """One point per forcing cycle of each analysed run, and one marker per dwell and class.
-
-    ``points`` columns: frequency (Hz, ramps shifted -0.12 up / +0.12 down), nominal level,
-    impacts in the cycle, 1.0 for a dwell (else 0.0).  ``dwell_shares``: ``(class, freq,
-    level, share of the dwell's cycles in the class)``, class 3 meaning >= 3 impacts.
-    """
-
-    points: np.ndarray
-    level_units: tuple[str, ...]
-    dwell_shares: tuple[tuple[int, float, float, float], ...]
-
 
 def _run_info(data: ReportData, key: str, run_id: str) -> dict[str, Any]:
     for rec in data.records:
@@ -195,29 +149,6 @@ def pattern_content(data: ReportData) -> PatternContent:
 
 # --- SPL law ---------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class SplCurve:
-    """One fitted SPL law with its measured points and the 95 % band of its mean."""
-
-    name: str                     # "first", "max" or "rms"
-    v_m_s: np.ndarray
-    p_pa: np.ndarray
-    slope: float
-    intercept: float
-    r2: float
-    grid_m_s: np.ndarray
-    line_pa: np.ndarray               # the law on the grid
-    band_pa: tuple[np.ndarray, np.ndarray] | None  # 95 % band of the mean (None: < 3 points
-    #                                                or no spread in v)
-
-
-@dataclass(frozen=True)
-class SplContent:
-    """The SPL laws in drawing order (RMS, maximum, first peak)."""
-
-    curves: tuple[SplCurve, ...]
-
-
 def _num(x: Any) -> float:
     return float("nan") if x is None else float(x)
 
@@ -259,28 +190,6 @@ def spl_content(data: ReportData) -> SplContent:
 
 # --- the whole report ------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class ReportContent:
-    """Everything the report draws, computed.
-
-    Attributes
-    ----------
-    data : ReportData
-        What was gathered (store name, catalogue, records, typed summary).
-    summary_lines : tuple of str
-        The summary page's text (parameters, flags, provenance), before the section list.
-    sections : tuple of (str, object)
-        The sections present, in page order, with their page content.
-    missing : Mapping of str to str
-        Sections (or parts) left out and why: the gathering's, then the sections'.
-    """
-
-    data: ReportData
-    summary_lines: tuple[str, ...]
-    sections: tuple[tuple[str, Any], ...]
-    missing: Mapping[str, str]
-
-
 def build_content(data: ReportData, builders: tuple[tuple[str, Callable[..., Any]], ...], *,
                   model: bool = True, quiet: bool = True, version: str = "") -> ReportContent:
     """Compute every page's content; a section whose builder raises :class:`Missing` is left out.
@@ -312,7 +221,8 @@ def build_content(data: ReportData, builders: tuple[tuple[str, Callable[..., Any
             continue
         sections.append((name, content))
         missing.update(getattr(content, "missing", ()))
-    return ReportContent(data, tuple(summary_lines(data, version)), tuple(sections), missing)
+    return ReportContent(data.store.name, tuple(summary_lines(data, version)),
+                         tuple(sections), missing)
 
 
-__all__ = ["ReportContent", "build_content", "report_negative_hysteresis"]
+__all__ = ["Missing", "build_content", "report_negative_hysteresis"]

@@ -3,7 +3,9 @@
 Each stage's data may be absent (no ``/results``, a fit that did not
 converge, a run without a microphone): :func:`gather` never fails for that;
 it records why in :attr:`ReportData.missing` and the section is left out.
-Only a missing file or a file that is not an ingest store raises.
+Only a missing file or a file that is not an ingest store raises.  The rig facts are the
+report's own types (``RecordInfo``): the rig page
+draws them as gathered.
 """
 
 from __future__ import annotations
@@ -18,42 +20,12 @@ import numpy as np
 from rattle_lab.exceptions import RattleLabError
 from rattle_lab.fit import FitSummary
 from rattle_lab.records._errors import StoreError
-
-
-@dataclass(frozen=True)
-class ChannelInfo:
-    """Rig/calibration facts of one stored channel (first run in which it appears)."""
-
-    input_key: str
-    name: str
-    quantity: str
-    units: str
-    source_units: str
-    scale_to_si: float
-    sensitivity: str
-    sample_rate_hz: float
-    sensor_model: str
-    sensor_serial: str
-    calibration_date: str
-    range_si: str
-    position_m: str
-
-
-@dataclass(frozen=True)
-class RecordInfo:
-    """Rig facts of one ingested input."""
-
-    input_key: str
-    campaign_id: str
-    source: str
-    rig: dict[str, Any]
-    channels: tuple[ChannelInfo, ...]
-    runs: dict[str, dict[str, Any]]  # run_id -> protocol, freq_hz, level, level_end, units
+from rattle_lab.report._content_types import ChannelInfo, RecordInfo
 
 
 @dataclass(frozen=True)
 class ReportData:
-    """Everything a report shows; ``results`` is None when ``/results`` is unusable.
+    """Everything a report is computed from; ``results`` is None when ``/results`` is unusable.
 
     Attributes
     ----------

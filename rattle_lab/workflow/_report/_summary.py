@@ -2,7 +2,8 @@
 
 Content, not drawing: the lines are built here from the gathered data (every fitted
 number from ``/results``; a missing interval is the Student t interval of
-:func:`rattle_lab.fit.student_t_ci`) and drawn by :func:`._common.text_pages`.
+:func:`rattle_lab.fit.student_t_ci`), wrapped to the report's text width, and drawn by
+the report as given.
 """
 
 from __future__ import annotations
@@ -15,8 +16,8 @@ import numpy as np
 
 from rattle_lab.fit import Estimate, Fits, GrazingSummary, RatioRestitution, negative_hysteresis
 from rattle_lab.fit import student_t_ci
-from ._common import TEXT_WIDTH, fmt, wrapped
-from ._data import ReportData
+from rattle_lab.report._common import TEXT_WIDTH, fmt, wrapped
+from ._gather import ReportData
 
 _COLS = (("quantity", 34), ("value", 11), ("std. error", 11), ("95 % CI", 25), ("unit", 0))
 
@@ -156,6 +157,8 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
     for item in skipped[:6]:
         lines.append(f"  run skipped by the fit: {item.input_key}/{item.run_id}: "
                      f"{item.reason}")
+    # the name as the report has always printed it (now rattle_lab.workflow.write_report); kept
+    # so that the same store gives the same report bytes as before the move (issue 12)
     lines += ["", "Provenance", f"  report: rattle_lab {version} (rattle_lab.report.write_report)"]
     if data.results is not None:
         prov = data.results.provenance

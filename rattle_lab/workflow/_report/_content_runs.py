@@ -2,64 +2,25 @@
 
 Like :mod:`._content`, this only reads and calls: the stored channels (windows
 around the detected impacts), :func:`rattle_lab.acoustics.energy_mean_db` and the
-guide lines of :mod:`rattle_lab.plot`; the pages draw what it returns.
+guide lines of :mod:`rattle_lab.plot`; the report's pages draw what it returns.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from rattle_lab.acoustics import energy_mean_db
 from rattle_lab.plot import db_slope_guide, power_law_guide
-from ._common import Missing
-from ._content import require_results
-from ._data import ReportData
-
-WAVEFORM_QUANTITIES = (("plate_acceleration", "plate acceleration (m/s^2)"),
-                       ("plate_velocity", "plate velocity (m/s)"),
-                       ("sound_pressure", "sound pressure (Pa)"))
-
+from rattle_lab.report._content_types import (WAVEFORM_QUANTITIES, AcousticsContent, Trace,
+                                              WaveformColumn, WaveformContent)
+from ._content import Missing, require_results
+from ._gather import ReportData
 
 # --- waveforms -------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Trace:
-    """A window of one stored channel with the detected events inside it.
-
-    ``impact_t_s``: impacts in the window; ``impact_y``: the trace at those times;
-    ``peaks``: for the sound pressure, ``(which, t_s, y)`` of the first and maximum
-    peaks (empty where the run has no sound peaks).
-    """
-
-    t_s: np.ndarray
-    y: np.ndarray
-    impact_t_s: np.ndarray
-    impact_y: np.ndarray
-    peaks: tuple[tuple[str, np.ndarray, np.ndarray], ...] = ()
-
-
-@dataclass(frozen=True)
-class WaveformColumn:
-    """One example run: its facts and one trace per quantity (None: no such channel)."""
-
-    run_id: str
-    protocol: str
-    freq_hz: float
-    pattern: str
-    traces: tuple[Trace | None, ...]  # in WAVEFORM_QUANTITIES order
-
-
-@dataclass(frozen=True)
-class WaveformContent:
-    """The example runs, steady (dwell) runs first."""
-
-    columns: tuple[WaveformColumn, ...]
-
 
 def _window(ch: Any, t_mid: float, f: float, n_cycles: int) -> tuple[np.ndarray, np.ndarray]:
     fs = float(ch.sample_rate_hz)
@@ -125,29 +86,6 @@ def waveform_content(data: ReportData, *, n_examples: int = 2, n_cycles: int = 5
 
 # --- acoustics -------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class AcousticsContent:
-    """Per-run acoustic results against the run's RMS impact velocity.
-
-    ``rows``: the summary rows of the runs with acoustics (``RunRow.to_dict()``) with
-    ``v_rms_m_s`` added.  ``band_traces``: ``("rattle" | "background", f_hz, level_db)``
-    per run; ``band_means``: the energy mean over runs of each (None: no bands).
-    ``level_guide`` / ``loudness_guide``: 20 dB per decade and ``N ~ v^0.602`` through
-    the points (None: no finite point).
-    """
-
-    rows: tuple[dict[str, Any], ...]
-    band_traces: tuple[tuple[str, np.ndarray, np.ndarray], ...]
-    band_means: Mapping[str, tuple[np.ndarray, np.ndarray] | None]
-    v_rms_m_s: np.ndarray
-    laeq_db: np.ndarray
-    lafmax_db: np.ndarray
-    n5_sone: np.ndarray
-    nmax_sone: np.ndarray
-    level_guide: tuple[np.ndarray, np.ndarray] | None
-    loudness_guide: tuple[np.ndarray, np.ndarray] | None
-
-
 def _num(x: Any) -> float:
     return float("nan") if x is None else float(x)
 
@@ -174,6 +112,24 @@ def acoustic_rows(data: ReportData) -> list[dict[str, Any]]:
         v = v[np.isfinite(v)]
         out.append({**row, "v_rms_m_s": float(np.sqrt(np.mean(v**2))) if v.size else np.nan})
     return out
+
+
+def calibration_note(rows: list[dict[str, Any]]) -> str:
+    """One line saying how the microphones were calibrated (calibrator or declared)."""
+    sources = sorted({str((r.get("calibration") or {}).get("source", "declared")) for r in rows})
+    flags = sorted({f for r in rows for f in (r.get("calibration") or {}).get("flags", [])})
+    if sources == ["calibrator"]:
+        text = "microphone sensitivity from the campaign's calibrator records"
+    elif "calibrator" in sources:
+        text = "microphone sensitivity from calibrator records for some runs, declared for others"
+    elif sources == ["none"]:
+        text = "microphone UNCALIBRATED (full-scale units): levels are not in dB re 20 uPa"
+    else:
+        text = "no calibrator record: the declared microphone sensitivity is used"
+    if flags:
+        text += "; FLAGGED: " + ", ".join(flags) + " (pre/post calibration differ by > 0.5 dB)"
+    return text
+
 
 
 def acoustics_content(data: ReportData) -> AcousticsContent:
@@ -209,5 +165,6 @@ def acoustics_content(data: ReportData) -> AcousticsContent:
                    if ok.sum() >= 1 and np.isfinite(laeq[ok]).any() else None)
     sel = ok & np.isfinite(n5) & (n5 > 0)
     loudness_guide = power_law_guide(v[sel], n5[sel], 0.602) if sel.any() else None
+    fields = tuple(sorted({str(r["acoustics"].get("sound_field") or "free") for r in rows}))
     return AcousticsContent(tuple(rows), tuple(traces), means, v, laeq, lafmax, n5, nmax,
-                            level_guide, loudness_guide)
+                            level_guide, loudness_guide, calibration_note(rows), fields)

@@ -4,13 +4,12 @@ The measured thresholds are converted to ``(omega, F)`` by
 :mod:`rattle_lab.model.scaling` (eq. 2.28, 2.31), the regions are computed by
 :func:`rattle_lab.model.analysis.bifurcation_sets` (and smoothed for drawing by
 :func:`rattle_lab.plot.smooth_region`), the model thresholds by
-:func:`rattle_lab.model.analysis.sweep_thresholds`; the page only draws.
+:func:`rattle_lab.model.analysis.sweep_thresholds`; the report's page only draws.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -20,49 +19,10 @@ from rattle_lab.model import analysis
 from rattle_lab.model.scaling import (F_from_accel, accel_ms2_from_F, angular_rad_s_from_freq,
                                       omega_from_freq)
 from rattle_lab.plot import smooth_region
-from ._common import Missing
-from ._content import fits_of, not_fitted, pval, require_results
-from ._data import ReportData
-from ._summary_text import threshold_arrays
-
-Field = tuple[np.ndarray, np.ndarray, np.ndarray]  # omega, F, smoothed 0/1 field
-
-
-@dataclass(frozen=True)
-class SweepComparison:
-    """The model's onset and disappearance from F sweeps at the measured frequencies, m/s^2."""
-
-    freq_hz: np.ndarray          # the swept frequencies
-    onset_ms2: np.ndarray        # NaN: no impacts on the grid
-    disappearance_ms2: np.ndarray
-    half_step_ms2: float         # the resolution (half the sweep step)
-    F_max_ms2: float             # the highest amplitude swept
-    n_sweep: int
-    measured_freq_hz: np.ndarray
-    measured_up_ms2: np.ndarray
-    measured_down_ms2: np.ndarray
-
-
-@dataclass(frozen=True)
-class ModelContent:
-    """The bifurcation sets at the fitted zeta and e with the measured thresholds in (omega, F).
-
-    ``exists_fields`` / ``stable_fields``: per ``n`` of ``sets.ns`` the smoothed region
-    (None: empty); ``both_field``: where the first two orbits coexist (None: nowhere).
-    """
-
-    sets: Any                    # rattle_lab.model.analysis.BifurcationSets
-    exists_fields: tuple[Field | None, ...]
-    stable_fields: tuple[Field | None, ...]
-    both_field: Field | None
-    omega_up: np.ndarray
-    F_up: np.ndarray
-    omega_down: np.ndarray
-    F_down: np.ndarray
-    zeta: float
-    zeta_source: str
-    e: float
-    sweeps: SweepComparison | None
+from rattle_lab.report._content_types import Field, ModelContent, SweepComparison
+from ._content import Missing, fits_of, not_fitted, pval, require_results
+from ._gather import ReportData
+from ._summary import threshold_arrays
 
 
 def _F_of(accel_ms2: np.ndarray, q: float, w_s: float, gap_m: float) -> np.ndarray:
