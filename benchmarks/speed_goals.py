@@ -448,8 +448,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"load average {load:.1f} on {os.cpu_count()} cores at the start; 'CPU' is this "
           "process's CPU time (time.process_time), which does not include waiting for a core; "
           "PASS/FAIL is judged on wall time, the sweep and ramp-fit goals against the code "
-          f"the goals were set against ({why or args.baseline_commit}); INFO rows are "
-          "today's references, not verdicts")
+          f"of {why or args.baseline_commit} (the goals were set against {GOAL_COMMIT}); "
+          "INFO rows are today's references, not verdicts")
     w = max(len(r[1]) for r in rows)
     for status, name, value, goal in rows:
         print(f"{status}  {name:<{w}}  {value}  (goal {goal})")
