@@ -476,7 +476,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
     the 2-sigma cut and every residual has one sign and moves away from the data.  Since the
     model threshold is monotone in ``e``, the points left out lie above the cut, and the
     estimate, its standard error and interval are those of the whole grid, bit for bit
-    (tested), at about half of the model runs or fewer (16 -> 8 coarse points on the
+    (tested), at about half of the coarse grid or fewer (16 -> 8 coarse points on the
     thesis scene's ramps with ``e_step = 0.05``; ``benchmarks/speed_goals.py``).
 
     Raises
