@@ -340,7 +340,11 @@ def _search_coarse(size: int, rows: Callable[[int], np.ndarray], data: np.ndarra
     ``|dA/dt| / (f n_phases)``, far finer than its change over a grid step), so beyond such
     an end each ``|r_i|`` only grows and ``chi2`` stays above the cut, which only falls as
     the block finds lower points.  A residual that is not finite (no threshold seen) or a
-    flat one never lets an end stop there: at worst the whole grid is evaluated.
+    flat one never lets an end stop there: at worst the whole grid is evaluated.  The
+    monotonicity is an assumption about the model, not checked beyond the ends: a model
+    threshold that turned back there by more than its staircase steps could hide a second
+    basin.  The whole-grid profile stays available (``_FULL_GRID``) and the tests compare
+    the two.
     """
     c2 = np.full(size, np.nan)
 
