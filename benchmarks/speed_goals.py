@@ -445,8 +445,9 @@ def main(argv: list[str] | None = None) -> int:
                      f"{t_cold:.2f} s", "<= 5 s"))
 
     print("Speed goals of issue 13 (one run; machine shared with other jobs, so absolute times vary)")
-    print(f"load average {load:.1f} on {os.cpu_count()} cores at the start; 'CPU' is this "
-          "process's CPU time (time.process_time), which does not include waiting for a core; "
+    print(f"load average {load:.1f} on {os.cpu_count()} cores at the start; 'CPU' is the CPU "
+          "time (time.process_time) of the process that ran the code, which does not include "
+          "waiting for a core; "
           "PASS/FAIL is judged on wall time, the sweep and ramp-fit goals against the code "
           f"of {why or args.baseline_commit} (the goals were set against {GOAL_COMMIT}); "
           "INFO rows are today's references, not verdicts")
