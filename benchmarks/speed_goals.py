@@ -53,7 +53,9 @@ Goals (issue 13):
    impacts differently in the last bits; the stderr is ~0.007).  Goal >= 5x.
    Informational: against today's fit with one ``simulate()`` call per forcing
    period of each replay (``_ramp_model._replay_per_piece``, the bit-for-bit
-   test reference, which profits from today's cheaper ``simulate()``); e equal.
+   test reference, which profits from today's cheaper ``simulate()``); e equal.  And
+   against today's fit evaluating the whole coarse grid of e (``_FULL_GRID``, the
+   profile as before the coarse search); e and stderr equal.
 
 ``--baseline-src DIR`` times the code of a source tree ``DIR`` instead of the
 commit (e.g. ``git archive main | tar -x -C DIR``); the same child process is used.
@@ -352,6 +354,17 @@ def ramp_rows(quick: bool, repeat: int, tree: Path | None, why: str) -> list[Row
         t_old, c_old, fit_old = _time_fit(ths, plate, zeta, e_step, repeat)
     finally:
         _ramp_model._replay = one_call
+    from rattle_lab.fit import _restitution
+    _restitution._FULL_GRID = True
+    try:
+        t_grid, c_grid, fit_grid = _time_fit(ths, plate, zeta, e_step, repeat)
+    finally:
+        _restitution._FULL_GRID = False
+    same = (fit_grid.e.value, fit_grid.e.stderr) == (e_new, se_new)
+    rows.append(("INFO", f"{name} vs today's fit on the whole e grid",
+                 f"{t_new:.3f} s vs {t_grid:.3f} s = {t_grid / t_new:.1f}x wall, "
+                 f"{c_grid / c_new:.1f}x CPU ({fit.e_grid.size} vs {fit_grid.e_grid.size} "
+                 f"values of e; e and stderr equal: {same})", "informational"))
     rows.append(("INFO", f"{name} vs today's per-piece calls",
                  f"{t_new:.3f} s vs {t_old:.3f} s = {t_old / t_new:.1f}x wall, "
                  f"{c_old / c_new:.1f}x CPU (e equal: {fit_old.e.value == e_new})",
