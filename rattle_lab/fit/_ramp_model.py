@@ -10,9 +10,9 @@ the measured ramp (frequency, start and end level, duration) at candidate model
 parameters, with the exact event-driven simulator (:func:`rattle_lab.model.sdf._simulate.simulate_pieces`:
 one compiled call per replay, carrying the state and forcing phase from one forcing
 period to the next; the same motion, bit for bit, as one ``simulate`` call per period,
-5-7x faster over a fit of ``e``: ``benchmarks/speed_goals.py``), and reads
-the threshold off the simulated impacts exactly as :mod:`rattle_lab.detect.thresholds` reads
-it off detected ones: the impact that starts (up) or ends (down) the first/last
+without its fixed cost per call: timed over a fit of ``e`` by ``benchmarks/speed_goals.py``),
+and reads the threshold off the simulated impacts exactly as
+:mod:`rattle_lab.detect.thresholds` reads it off detected ones: the impact that starts (up) or ends (down) the first/last
 sustained group (:func:`~rattle_lab.detect.thresholds.sustained_impact_time`), censored
 within ``edge_cycles`` of the record's ends, and the ramp level at that instant.
 
