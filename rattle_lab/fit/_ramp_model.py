@@ -12,8 +12,8 @@ one compiled call per replay, carrying the state and forcing phase from one forc
 period to the next; the same motion, bit for bit, as one ``simulate`` call per period,
 without its fixed cost per call: timed over a fit of ``e`` by ``benchmarks/speed_goals.py``),
 and reads the threshold off the simulated impacts exactly as
-:mod:`rattle_lab.detect.thresholds` reads it off detected ones: the impact that starts (up) or ends (down) the first/last
-sustained group (:func:`~rattle_lab.detect.thresholds.sustained_impact_time`), censored
+:mod:`rattle_lab.detect.thresholds` reads it off detected ones: the impact that starts (up)
+or ends (down) the first/last sustained group (:func:`~rattle_lab.detect.thresholds.sustained_impact_time`), censored
 within ``edge_cycles`` of the record's ends, and the ramp level at that instant.
 
 Nondimensional form (thesis eq. 2.27-2.32): ``tau = omega_s t``, ``F = q A / (omega_s^2 h)``,
