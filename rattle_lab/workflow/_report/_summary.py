@@ -157,9 +157,7 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
     for item in skipped[:6]:
         lines.append(f"  run skipped by the fit: {item.input_key}/{item.run_id}: "
                      f"{item.reason}")
-    # the name as the report has always printed it (now rattle_lab.workflow.write_report); kept
-    # so that the same store gives the same report bytes as before the move (issue 12)
-    lines += ["", "Provenance", f"  report: rattle_lab {version} (rattle_lab.report.write_report)"]
+    lines += ["", "Provenance", f"  report: rattle_lab {version} (rattle_lab.workflow.write_report)"]
     if data.results is not None:
         prov = data.results.provenance
         via = f" via {prov['via']} ({prov.get('pipeline', '')})" if prov.get("via") else ""
