@@ -30,9 +30,11 @@ True
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import Any
 
-__all__ = ["RESOURCE_KINDS", "find_resource", "resource_dirs", "resource_names"]
+__all__ = ["RESOURCE_KINDS", "find_resource", "read_pipeline_toml", "resource_dirs", "resource_names"]
 
 #: kind -> (folder of the source checkout, relative to its root; file suffix)
 RESOURCE_KINDS: dict[str, tuple[str, str]] = {
@@ -87,3 +89,25 @@ def find_resource(kind: str, name: str) -> Path | None:
         if candidate.is_file():
             return candidate
     return None
+
+
+def read_pipeline_toml(path: str | os.PathLike[str]) -> tuple[dict[str, Any], str]:
+    """The parsed TOML of a pipeline file, or of a pipeline shipped with rattle_lab by name.
+
+    Returns ``(document, path)``, ``path`` as resolved (for messages).
+
+    Raises
+    ------
+    ParameterError
+        If the file cannot be read or is not TOML.
+    """
+    import tomllib
+
+    from rattle_lab.exceptions import ParameterError
+
+    if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
+        path = find_resource("pipelines", str(path)) or path
+    try:
+        return tomllib.loads(Path(path).read_text(encoding="utf-8")), str(path)
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise ParameterError(f"{path}: cannot read pipeline TOML: {exc}") from exc

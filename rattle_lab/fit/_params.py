@@ -9,14 +9,12 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import tomllib
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from rattle_lab._resources import find_resource
+from rattle_lab._resources import read_pipeline_toml
 from rattle_lab.detect import ImpactParams
 from rattle_lab.exceptions import ParameterError
 from ._restitution import METHODS
@@ -55,12 +53,7 @@ def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, An
     out: dict[str, dict[str, Any]] = {"detect": {}, "fit": {}}
     if path is None:
         return out
-    if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
-        path = find_resource("pipelines", str(path)) or path
-    try:
-        doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise ParameterError(f"{path}: cannot read pipeline TOML: {exc}") from exc
+    doc, path = read_pipeline_toml(path)
     allowed = {"detect": {f.name for f in dataclasses.fields(ImpactParams)} | set(SOUND_KEYS),
                "fit": set(FIT_KEYS)}
     for table in ("detect", "fit"):

@@ -10,13 +10,12 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from rattle_lab._resources import find_resource
+from rattle_lab._resources import read_pipeline_toml
 from rattle_lab.exceptions import ParameterError
 
 Stage = Literal["simulate", "ingest", "detect", "thresholds", "fit", "report"]
@@ -130,13 +129,8 @@ def load_pipeline_file(path: str | os.PathLike[str]) -> Pipeline:
     ParameterError
         If the file cannot be read or is invalid.
     """
-    if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
-        path = find_resource("pipelines", str(path)) or path
-    try:
-        doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise ParameterError(f"{path}: cannot read pipeline TOML: {exc}") from exc
-    return parse_pipeline(doc, str(path))
+    doc, where = read_pipeline_toml(path)
+    return parse_pipeline(doc, where)
 
 
 __all__ = ["Stage", "STAGES", "DEPENDS", "OUTPUTS", "Pipeline", "parse_pipeline",
