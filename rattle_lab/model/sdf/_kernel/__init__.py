@@ -104,9 +104,10 @@ bounded (``max_events``).
 """
 
 from ._constants import (CHUNKS_PER_WINDOW, EPS, GRAZE_TOL, I_AC, I_AS, I_E, I_F, I_LAM, I_NK,
-                         I_R, I_R1, I_R2, I_REG, I_RES, I_W, I_WD, I_Z, J_ONSTOP, J_TAY, J_TH,
-                         J_Y, J_YD, MAX_LEVEL, MAX_WORK, N_CHATTER_MAX, N_MICRO, N_P, N_S,
-                         N_TAYLOR, TAU_EXIT, TAU_MICRO, TAYLOR_REACH, TWO_PI)
+                         I_R, I_R1, I_R2, I_REG, I_RES, I_W, I_WD, I_WK, I_Z, J_MEMO,
+                         J_MEMO_NEXT, J_ONSTOP, J_TAY, J_TH, J_Y, J_YD, MAX_LEVEL, MAX_WORK,
+                         MEMO_WIDTH, N_CHATTER_MAX, N_MEMO, N_MICRO, N_P, N_S, N_TAYLOR,
+                         TAU_EXIT, TAU_MICRO, TAYLOR_REACH, TWO_PI)
 from ._drivers import N_HEAD, run_packed, run_pieces, run_sweep
 from ._flight import (deriv_bound, evaluate, level_values, make_params, particular,
                       reduce_phase, start_segment, transition)
@@ -117,8 +118,9 @@ from ._stop import (level_exit, micro_bounce, micro_flight, stop_clear, stop_exi
 
 __all__ = [
     "CHUNKS_PER_WINDOW", "EPS", "GRAZE_TOL", "I_AC", "I_AS", "I_E", "I_F", "I_LAM", "I_NK",
-    "I_R", "I_R1", "I_R2", "I_REG", "I_RES", "I_W", "I_WD", "I_Z", "J_ONSTOP", "J_TAY", "J_TH",
-    "J_Y", "J_YD", "MAX_LEVEL", "MAX_WORK", "N_CHATTER_MAX", "N_MICRO", "N_P", "N_S",
+    "I_R", "I_R1", "I_R2", "I_REG", "I_RES", "I_W", "I_WD", "I_WK", "I_Z", "J_MEMO",
+    "J_MEMO_NEXT", "J_ONSTOP", "J_TAY", "J_TH", "J_Y", "J_YD", "MAX_LEVEL", "MAX_WORK",
+    "MEMO_WIDTH", "N_CHATTER_MAX", "N_MEMO", "N_MICRO", "N_P", "N_S",
     "N_TAYLOR", "TAU_EXIT", "TAU_MICRO", "TAYLOR_REACH", "TWO_PI",
     "N_HEAD", "run_packed", "run_pieces", "run_sweep",
     "deriv_bound", "evaluate", "level_values", "make_params", "particular", "reduce_phase",

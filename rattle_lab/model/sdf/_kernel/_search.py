@@ -12,7 +12,7 @@ import numpy as np
 
 from ._constants import EPS, GRAZE_TOL, MAX_LEVEL, MAX_WORK
 from ._flight import deriv_bound, level_values
-from ._jit import jit
+from ._jit import jit, jit_inline
 
 
 @jit
@@ -180,7 +180,7 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi, dlo, dhi, d2lo, d2hi):
     return hi
 
 
-@jit
+@jit_inline
 def _push_chunk(stk, n, sa, sb, ga, gva, gaa, ya, yda, gb, gvb, gab, level):
     """Write the sub-interval [sa, sb] of a search chunk into row n of the stack.
 
@@ -212,7 +212,7 @@ def _push_chunk(stk, n, sa, sb, ga, gva, gaa, ya, yda, gb, gvb, gab, level):
     stk[n, 10] = level
 
 
-@jit
+@jit_inline
 def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
     """Earliest s in (sa, sb] with g(s) >= 0, or -1.  va = values at sa (g < 0).
 
