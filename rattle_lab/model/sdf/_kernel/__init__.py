@@ -112,7 +112,7 @@ from ._drivers import N_HEAD, run_packed, run_pieces, run_sweep
 from ._flight import (deriv_bound, evaluate, level_values, make_params, particular,
                       reduce_phase, start_segment, transition)
 from ._run import run
-from ._search import first_reach, new_work
+from ._search import below_stop_for_ever, first_reach, new_work
 from ._stop import (level_exit, micro_bounce, micro_flight, stop_clear, stop_exit, stop_sign,
                     taylor_velocity)
 
@@ -126,7 +126,7 @@ __all__ = [
     "deriv_bound", "evaluate", "level_values", "make_params", "particular", "reduce_phase",
     "start_segment", "transition",
     "run",
-    "first_reach", "new_work",
+    "below_stop_for_ever", "first_reach", "new_work",
     "level_exit", "micro_bounce", "micro_flight", "stop_clear", "stop_exit", "stop_sign",
     "taylor_velocity",
 ]
