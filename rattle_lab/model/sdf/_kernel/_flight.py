@@ -191,7 +191,7 @@ def _memo_put(S, s, x, v, a, y, yd, zstop):
 
 
 @jit_inline
-def evaluate(P, S, s):
+def _evaluate(P, S, s):
     """(x - 1 if on-stop Taylor else x, v, a, y, yd, x) at local time s.
 
     Returns a tuple (x, v, a, y, yd, zstop) where zstop = x - 1 computed without
@@ -245,6 +245,13 @@ def evaluate(P, S, s):
     return x, v, a, y, yd, zstop
 
 
+@jit
+def evaluate(P, S, s):
+    """:func:`_evaluate`, called (not inlined): for the event loop's few evaluations,
+    which would otherwise each inline the whole evaluation (compile time)."""
+    return _evaluate(P, S, s)
+
+
 @jit_inline
 def deriv_bound(P, k, y, yd, s_end, x, v, L):
     """Bound of |x^(k)| (k = 2..5) over an interval [s_a, s_a + L], s_a + L = s_end.
@@ -292,10 +299,16 @@ def deriv_bound(P, k, y, yd, s_end, x, v, L):
 @jit_inline
 def level_values(P, S, s, c, sig):
     """g = sig (x - c), g' and g'' at s, plus the homogeneous state (y, yd)."""
-    x, v, a, y, yd, zstop = evaluate(P, S, s)
+    x, v, a, y, yd, zstop = _evaluate(P, S, s)
     if c == 1.0:
         g = sig * zstop
     else:
         g = sig * (x - c)
     return g, sig * v, sig * a, y, yd
 
+
+@jit
+def level_values_called(P, S, s, c, sig):
+    """:func:`level_values`, called (not inlined): for the searches' rare evaluations
+    (at a critical point, on leaving a level), to keep compile time down."""
+    return level_values(P, S, s, c, sig)

@@ -12,7 +12,7 @@ import numpy as np
 
 from ._constants import (EPS, GRAZE_TOL, I_R, I_RES, I_Z, J_ONSTOP, J_Y, J_YD, MAX_LEVEL,
                          MAX_WORK, TWO_PI)
-from ._flight import deriv_bound, level_values
+from ._flight import deriv_bound, level_values, level_values_called
 from ._jit import jit, jit_inline
 
 
@@ -270,7 +270,7 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
                 if gvbb >= 0.0 or gva <= 0.0:
                     return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
                 sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb, -gaa, -gabb, 0.0, 0.0)
-                gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
+                gc, gvc, gac, yc, ydc = level_values_called(P, S, sc, c, sig)
                 if gc >= 0.0:
                     return _root(P, S, c, sig, 0, a0, sc, ga, gc, gva, gvc, gaa, gac)
                 return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
@@ -288,7 +288,7 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
                 if gva <= 0.0 or gvbb >= 0.0:
                     continue  # monotone: the maximum is at an end
                 sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb, -gaa, -gabb, 0.0, 0.0)
-                gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
+                gc, gvc, gac, yc, ydc = level_values_called(P, S, sc, c, sig)
                 if gc >= 0.0:
                     return _root(P, S, c, sig, 0, a0, sc, ga, gc, gva, gvc, gaa, gac)
                 if gc >= -gtol:
