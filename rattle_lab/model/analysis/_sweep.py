@@ -41,9 +41,12 @@ The gap
 One compiled call
     A whole sweep direction (all values, discarded and kept periods) is one call
     of the compiled kernel (:func:`rattle_lab.model.sdf._kernel.run_sweep`), the same
-    motion bit for bit as one ``simulate`` call per window; the
-    classification, Lyapunov exponents and settle runs follow from the recorded
-    end states.
+    motion bit for bit as one ``simulate`` call per window; the first
+    classification of every window is a second compiled call
+    (:func:`rattle_lab.model.analysis._periods._classify_windows`, what
+    :func:`classify_settled` computes first), and only a match that has not
+    settled goes through :func:`classify_settled` (run longer); Lyapunov
+    exponents follow from the recorded end states.
 
 All quantities are nondimensional.
 """

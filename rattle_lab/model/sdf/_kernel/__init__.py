@@ -65,6 +65,20 @@ Why no impact can be missed
     sub-intervals (a guard that has not been reached in any test); if it is,
     the caller is warned.
 
+Flights that stay below the stop
+    ``x = x_p + y`` with ``|x_p| <= R`` and ``|(y, y')|`` never growing, so where
+    ``R + |(y, y')| < 1`` (less a margin of 64 ulp of the evaluations' scale for
+    their rounding) the flight cannot reach the stop, not even within
+    ``GRAZE_TOL``: the search for the stop returns at once
+    (:func:`._search.below_stop_for_ever`; the steady motion without impact of a
+    sweep's values spent most of its time proving this chunk by chunk).
+
+Evaluations
+    Each flight keeps its last ``N_MEMO`` evaluations in ``S``
+    (:func:`._flight.evaluate`): the searches come back to points they have just
+    evaluated (a root's end, the window's end, a crossing and its exit), and a
+    memoised point returns the same numbers.
+
 Impacts on and from the stop
     A flight that starts on the stop (after an impact, or on release from
     sticking) is evaluated near its start by its Taylor series about the start,
