@@ -25,8 +25,9 @@ from rattle_lab.model.sdf._compiled import jit_kernel, python_kernel
 from rattle_lab.model.sdf._kernel import _jit
 
 MODULES = ["_constants", "_flight", "_search", "_stop", "_run", "_drivers"]
-#: the kernel's functions: one ``@jit`` line each
-N_FUNCTIONS = sum(p.read_text().count("\n@jit\n") for p in Path(_jit.FOLDER).glob("*.py"))
+#: the kernel's functions: one ``@jit`` (or ``@jit_inline``) line each
+N_FUNCTIONS = sum(p.read_text().count("\n@jit\n") + p.read_text().count("\n@jit_inline\n")
+                  for p in Path(_jit.FOLDER).glob("*.py"))
 
 
 def _functions(module: ModuleType) -> dict[str, object]:

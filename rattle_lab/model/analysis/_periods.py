@@ -195,21 +195,38 @@ def classify_impacts(t: ArrayLike, v_in: ArrayLike, *, t_start: float, t_stop: f
     return Regime(kind=KIND_NAMES[kind], m=int(m), n=int(n))
 
 
+@numba.njit(cache=True, nogil=True)
 def _repeat_residuals(t: np.ndarray, v: np.ndarray, m: int, n: int, period: float,
                       vscale: float) -> np.ndarray:
     """Largest relative mismatch of the ``m``-impact, ``n``-period repeat, per repeat.
 
     Entry ``j`` is the maximum over impacts ``i`` of the ``j``-th group of ``m``
-    of ``max(|t_{i+m} - t_i - n T| / T, |v_{i+m} - v_i| / vscale)``.
+    of ``max(|t_{i+m} - t_i - n T| / T, |v_{i+m} - v_i| / vscale)`` (NaN if any
+    term is NaN, as numpy's ``maximum`` and ``max``).
     """
-    if t.size <= m:
+    N = t.shape[0]
+    if N <= m:
         return np.empty(0)
-    d = np.maximum(np.abs(t[m:] - t[:-m] - n * period) / period,
-                   np.abs(v[m:] - v[:-m]) / vscale)
-    groups = d.size // m
-    return d[:groups * m].reshape(groups, m).max(axis=1)
+    groups = (N - m) // m
+    out = np.empty(groups)
+    nT = n * period
+    for j in range(groups):
+        best = -math.inf
+        for i in range(j * m, (j + 1) * m):
+            a = abs(t[i + m] - t[i] - nT) / period
+            b = abs(v[i + m] - v[i]) / vscale
+            d = a if a >= b else b
+            if a != a or b != b:
+                d = math.nan
+            if d > best or d != d:
+                best = d
+            if best != best:
+                break
+        out[j] = best
+    return out
 
 
+@numba.njit(cache=True, nogil=True)
 def _decays_to_zero(d: np.ndarray) -> bool:
     """``d`` (a residual per repeat) decreases geometrically towards zero.
 
@@ -217,16 +234,70 @@ def _decays_to_zero(d: np.ndarray) -> bool:
     limit exactly (Aitken): ``q = (d1 d3 - d2^2) / (d1 + d3 - 2 d2)``.  The
     sequence is decaying to zero when that limit is below half the last value.
     """
-    if d.size < 3:
+    if d.shape[0] < 3:
         return False
-    h = (d.size - 1) // 2
-    d1, d2, d3 = float(d[-1 - 2 * h]), float(d[-1 - h]), float(d[-1])
-    if not d1 > d2 > d3:
+    h = (d.shape[0] - 1) // 2
+    d1 = d[d.shape[0] - 1 - 2 * h]
+    d2 = d[d.shape[0] - 1 - h]
+    d3 = d[d.shape[0] - 1]
+    if not (d1 > d2 and d2 > d3):
         return False
     den = d1 + d3 - 2.0 * d2
     if den <= 0.0:  # decreasing but not convex: not a geometric decay
         return False
     return (d1 * d3 - d2 * d2) / den < 0.5 * d3
+
+
+@numba.njit(cache=True, nogil=True)
+def _settled(t: np.ndarray, v: np.ndarray, m: int, n: int, period: float, rtol: float) -> bool:
+    """:func:`periodic_label_settled` on contiguous float arrays, ``m, n >= 1``."""
+    vmax = 0.0
+    for i in range(v.shape[0]):
+        a = abs(v[i])
+        if a > vmax or a != a:
+            vmax = a
+        if vmax != vmax:
+            break
+    vscale = 1e-300 if 1e-300 > vmax else vmax  # max(vmax, 1e-300), NaN kept
+    own = _repeat_residuals(t, v, m, n, period, vscale)
+    if own.shape[0] >= 2 and own[-1] > 4.0 * own[0] and own[-1] > 1e-3 * rtol:
+        return False
+    a = m
+    b = n
+    while b:  # g = gcd(m, n)
+        a, b = b, a % b
+    g = a
+    for k in range(2, g + 1):
+        if g % k == 0 and _decays_to_zero(
+                _repeat_residuals(t, v, m // k, n // k, period, vscale)):
+            return False
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def _classify_windows(t: np.ndarray, v: np.ndarray, off: np.ndarray, t_start: np.ndarray,
+                      t_stop: np.ndarray, period: np.ndarray, n_max: int,
+                      rtol: float) -> np.ndarray:
+    """:func:`_classify` and, for an ``m/n`` match, :func:`_settled`, of many windows.
+
+    Window ``i`` holds the impacts ``t[off[i]:off[i + 1]]`` (``v`` likewise) of
+    ``[t_start[i], t_stop[i]]`` at forcing period ``period[i]``.  Returns rows
+    (kind code, m, n, settled), settled 1 unless an ``m/n`` match has not settled:
+    exactly what :func:`classify_settled` computes first for each window.
+    """
+    n_win = t_start.shape[0]
+    out = np.zeros((n_win, 4), dtype=np.int64)
+    for i in range(n_win):
+        tt = t[off[i]:off[i + 1]]
+        vv = v[off[i]:off[i + 1]]
+        kind, m, n = _classify(tt, vv, t_start[i], t_stop[i], period[i], n_max, rtol)
+        out[i, 0] = kind
+        out[i, 1] = m
+        out[i, 2] = n
+        out[i, 3] = 1
+        if kind == 1 and not _settled(tt, vv, m, n, period[i], rtol):
+            out[i, 3] = 0
+    return out
 
 
 def periodic_label_settled(t: ArrayLike, v_in: ArrayLike, *, m: int, n: int, omega: float,
@@ -272,17 +343,11 @@ def periodic_label_settled(t: ArrayLike, v_in: ArrayLike, *, m: int, n: int, ome
     """
     tt = np.ascontiguousarray(t, dtype=float).ravel()
     vv = np.ascontiguousarray(v_in, dtype=float).ravel()
-    period = 2.0 * math.pi / float(omega)
-    vscale = max(float(np.max(np.abs(vv))) if vv.size else 0.0, 1e-300)
-    own = _repeat_residuals(tt, vv, m, n, period, vscale)
-    if own.size >= 2 and own[-1] > 4.0 * own[0] and own[-1] > 1e-3 * rtol:
-        return False
-    g = math.gcd(int(m), int(n))
-    for k in range(2, g + 1):
-        if g % k == 0 and _decays_to_zero(
-                _repeat_residuals(tt, vv, m // k, n // k, period, vscale)):
-            return False
-    return True
+    if tt.shape != vv.shape:
+        raise ParameterError(f"`t` and `v_in` must have the same length, were {tt.size} and {vv.size}")
+    m_i = _check_int("m", m, 1)
+    n_i = _check_int("n", n, 1)
+    return bool(_settled(tt, vv, m_i, n_i, 2.0 * math.pi / float(omega), float(rtol)))
 
 
 def classify_settled(params: SDFParams, t: np.ndarray, v_in: np.ndarray, *, t_start: float,
@@ -328,7 +393,9 @@ def classify_settled(params: SDFParams, t: np.ndarray, v_in: np.ndarray, *, t_st
                            float(end_state.t), period, int(n_max), float(rtol))
     def final(kind: int, m: int, n: int, t: np.ndarray, v_in: np.ndarray) -> bool:
         if kind == 1:
-            return periodic_label_settled(t, v_in, m=m, n=n, omega=params.omega, rtol=rtol)
+            return bool(_settled(np.ascontiguousarray(t, dtype=float),
+                                 np.ascontiguousarray(v_in, dtype=float), int(m), int(n),
+                                 2.0 * math.pi / params.omega, float(rtol)))
         return not (converging and KIND_NAMES[kind] == "aperiodic")
 
     if final(kind, m, n, t, v_in):

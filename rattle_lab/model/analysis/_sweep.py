@@ -41,9 +41,12 @@ The gap
 One compiled call
     A whole sweep direction (all values, discarded and kept periods) is one call
     of the compiled kernel (:func:`rattle_lab.model.sdf._kernel.run_sweep`), the same
-    motion bit for bit as one ``simulate`` call per window; the
-    classification, Lyapunov exponents and settle runs follow from the recorded
-    end states.
+    motion bit for bit as one ``simulate`` call per window; the first
+    classification of every window is a second compiled call
+    (:func:`rattle_lab.model.analysis._periods._classify_windows`, what
+    :func:`classify_settled` computes first), and only a match that has not
+    settled goes through :func:`classify_settled` (run longer); Lyapunov
+    exponents follow from the recorded end states.
 
 All quantities are nondimensional.
 """
@@ -66,13 +69,14 @@ from rattle_lab.model.sdf._types import SDFParams, SDFState
 
 from ._periods import (  # re-exported: the period detection lived here before the split
     KIND_CODES,  # noqa: F401
-    KIND_NAMES,  # noqa: F401
+    KIND_NAMES,
     PERIOD_RTOL,
     SETTLE_CYCLES,
     Regime,
     RegimeKind,  # noqa: F401
     _check_int,
     _classify,  # noqa: F401
+    _classify_windows,
     classify_impacts,
     classify_settled,
     periodic_label_settled,
@@ -337,17 +341,32 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
     # value `discard` periods without crossings (a second call from the same state and
     # forcing phase is the same motion, and the cheaper one), then the kept periods.
     imp_all, crs_all, off, ends, info = _run_sweep(all_params, state, discard_i, kept)
+    # The classification every window needs first (classify_settled's), in one compiled
+    # call; a match that has not settled goes through classify_settled, run longer.
+    first = _classify_windows(np.ascontiguousarray(imp_all[:, 0]),
+                              np.ascontiguousarray(imp_all[:, 2]), off[:, 0], ends[:, 0],
+                              ends[:, 1], np.array([q.period for q in all_params]), n_max_i,
+                              float(rtol)).tolist()
+    # Python numbers once (indexing numpy arrays one number at a time costs more)
+    off_imp = off[:, 0].tolist()
+    off_crs = off[:, 1].tolist()
+    end_rows = ends.tolist()
+    sticking = info[:, 0].tolist()
+    crs_v = crs_all[:, 1]
     points: list[SweepPoint] = []
     for i, (value, p, v_lin) in enumerate(progress(
-            zip(order, all_params, linear), total=len(all_params),
+            zip(order.tolist(), all_params, linear.tolist()), total=len(all_params),
             desc=f"{direction}-sweep of {param}", quiet=quiet, unit="value")):
-        imp = imp_all[off[i, 0]:off[i + 1, 0]]
-        t0 = float(ends[i, 0])
-        state = SDFState(t=float(ends[i, 1]), x=float(ends[i, 2]), v=float(ends[i, 3]),
-                         theta=float(ends[i, 4]), stuck=bool(ends[i, 5]))
-        regime, extra = classify_settled(p, imp[:, 0], imp[:, 2], t_start=t0, end_state=state,
-                                         n_max=n_max_i, rtol=float(rtol),
-                                         settle_cycles=settle_cycles)
+        imp = imp_all[off_imp[i]:off_imp[i + 1]]
+        t0, t_end, x_end, v_end, th_end, stuck_end = end_rows[i]
+        state = SDFState._from_kernel(t_end, x_end, v_end, th_end, bool(stuck_end))
+        kind, m, n, settled = first[i]
+        if settled:  # as classify_settled returns it
+            regime, extra = Regime(kind=KIND_NAMES[kind], m=m, n=n), 0.0
+        else:
+            regime, extra = classify_settled(p, imp[:, 0], imp[:, 2], t_start=t0,
+                                             end_state=state, n_max=n_max_i, rtol=float(rtol),
+                                             settle_cycles=settle_cycles)
         lyap = None
         if lyapunov == "all" or (lyapunov == "aperiodic" and regime.kind == "aperiodic"):
             lyap = lyapunov_exponent(p, cycles=lyapunov_cycles, warmup_cycles=lyapunov_warmup,
@@ -359,14 +378,15 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
                                                 end_state=state, n_max=n_max_i, rtol=float(rtol),
                                                 settle_cycles=settle_cycles, converging=True)
                 extra += more
+        v_in = imp[:, 2]
         points.append(SweepPoint(
-            value=float(value), params=p,
-            impact_velocities=np.array(imp[:, 2]), impact_phases=np.array(imp[:, 1]),
-            crossing_velocities=np.array(crs_all[off[i, 1]:off[i + 1, 1], 1]),
-            mean_impact_velocity=float(np.sum(imp[:, 2]) / kept),
-            regime=regime, sticking=bool(info[i, 0]),
+            value=value, params=p,
+            impact_velocities=v_in.copy(), impact_phases=imp[:, 1].copy(),
+            crossing_velocities=crs_v[off_crs[i]:off_crs[i + 1]].copy(),
+            mean_impact_velocity=float(v_in.sum() / kept),
+            regime=regime, sticking=bool(sticking[i]),
             lyapunov=lyap,
-            linear_impact_velocity=float(v_lin), settle_cycles=extra))
+            linear_impact_velocity=v_lin, settle_cycles=extra))
     provenance: dict[str, object] = {
         "package": "rattle_lab", "version": __version__,
         "function": "rattle_lab.model.analysis.sweep",

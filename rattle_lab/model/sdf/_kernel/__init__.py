@@ -65,6 +65,20 @@ Why no impact can be missed
     sub-intervals (a guard that has not been reached in any test); if it is,
     the caller is warned.
 
+Flights that stay below the stop
+    ``x = x_p + y`` with ``|x_p| <= R`` and ``|(y, y')|`` never growing, so where
+    ``R + |(y, y')| < 1`` (less a margin of 64 ulp of the evaluations' scale for
+    their rounding) the flight cannot reach the stop, not even within
+    ``GRAZE_TOL``: the search for the stop returns at once
+    (:func:`._search.below_stop_for_ever`; the steady motion without impact of a
+    sweep's values spent most of its time proving this chunk by chunk).
+
+Evaluations
+    Each flight keeps its last ``N_MEMO`` evaluations in ``S``
+    (:func:`._flight.evaluate`): the searches come back to points they have just
+    evaluated (a root's end, the window's end, a crossing and its exit), and a
+    memoised point returns the same numbers.
+
 Impacts on and from the stop
     A flight that starts on the stop (after an impact, or on release from
     sticking) is evaluated near its start by its Taylor series about the start,
@@ -104,27 +118,29 @@ bounded (``max_events``).
 """
 
 from ._constants import (CHUNKS_PER_WINDOW, EPS, GRAZE_TOL, I_AC, I_AS, I_E, I_F, I_LAM, I_NK,
-                         I_R, I_R1, I_R2, I_REG, I_RES, I_W, I_WD, I_Z, J_ONSTOP, J_TAY, J_TH,
-                         J_Y, J_YD, MAX_LEVEL, MAX_WORK, N_CHATTER_MAX, N_MICRO, N_P, N_S,
-                         N_TAYLOR, TAU_EXIT, TAU_MICRO, TAYLOR_REACH, TWO_PI)
+                         I_R, I_R1, I_R2, I_REG, I_RES, I_W, I_WD, I_WK, I_Z, J_MEMO,
+                         J_MEMO_NEXT, J_ONSTOP, J_TAY, J_TH, J_Y, J_YD, MAX_LEVEL, MAX_WORK,
+                         MEMO_WIDTH, N_CHATTER_MAX, N_MEMO, N_MICRO, N_P, N_S, N_TAYLOR,
+                         TAU_EXIT, TAU_MICRO, TAYLOR_REACH, TWO_PI)
 from ._drivers import N_HEAD, run_packed, run_pieces, run_sweep
 from ._flight import (deriv_bound, evaluate, level_values, make_params, particular,
                       reduce_phase, start_segment, transition)
 from ._run import run
-from ._search import first_reach, new_work
+from ._search import below_stop_for_ever, first_reach, new_work
 from ._stop import (level_exit, micro_bounce, micro_flight, stop_clear, stop_exit, stop_sign,
                     taylor_velocity)
 
 __all__ = [
     "CHUNKS_PER_WINDOW", "EPS", "GRAZE_TOL", "I_AC", "I_AS", "I_E", "I_F", "I_LAM", "I_NK",
-    "I_R", "I_R1", "I_R2", "I_REG", "I_RES", "I_W", "I_WD", "I_Z", "J_ONSTOP", "J_TAY", "J_TH",
-    "J_Y", "J_YD", "MAX_LEVEL", "MAX_WORK", "N_CHATTER_MAX", "N_MICRO", "N_P", "N_S",
+    "I_R", "I_R1", "I_R2", "I_REG", "I_RES", "I_W", "I_WD", "I_WK", "I_Z", "J_MEMO",
+    "J_MEMO_NEXT", "J_ONSTOP", "J_TAY", "J_TH", "J_Y", "J_YD", "MAX_LEVEL", "MAX_WORK",
+    "MEMO_WIDTH", "N_CHATTER_MAX", "N_MEMO", "N_MICRO", "N_P", "N_S",
     "N_TAYLOR", "TAU_EXIT", "TAU_MICRO", "TAYLOR_REACH", "TWO_PI",
     "N_HEAD", "run_packed", "run_pieces", "run_sweep",
     "deriv_bound", "evaluate", "level_values", "make_params", "particular", "reduce_phase",
     "start_segment", "transition",
     "run",
-    "first_reach", "new_work",
+    "below_stop_for_ever", "first_reach", "new_work",
     "level_exit", "micro_bounce", "micro_flight", "stop_clear", "stop_exit", "stop_sign",
     "taylor_velocity",
 ]

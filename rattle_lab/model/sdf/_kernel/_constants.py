@@ -40,9 +40,19 @@ CHUNKS_PER_WINDOW = 2.0
 # Layout of the parameter vector P.
 I_F, I_W, I_Z, I_E, I_AC, I_AS, I_R, I_RES, I_REG, I_WD, I_R1, I_R2, I_LAM = range(13)
 I_NK = 13  # n_0 .. n_7 follow
-N_P = I_NK + 8
+I_WK = I_NK + 8  # omega^0 .. omega^7 follow (the particular part's derivative bounds)
+N_P = I_WK + 8
 
 # Layout of the segment vector S.
 J_TH, J_Y, J_YD, J_ONSTOP = range(4)
 J_TAY = 4  # Taylor coefficients t_0 .. t_N_TAYLOR (t_k = d_k / k!)
-N_S = J_TAY + N_TAYLOR + 1
+#: The flight's memo of its last evaluations (:func:`._flight.evaluate`): N_MEMO rows of
+#: (s, x, v, a, y, yd, zstop) from J_MEMO on, then the row written next.  The searches
+#: come back to points just evaluated (a root's end, the window's end, the crossing
+#: found, its exit; 22 % of the evaluations of the Fig. 4-3 sweep were of one of the
+#: last four points of the flight), and an evaluation is 5 transcendental functions.
+J_MEMO = J_TAY + N_TAYLOR + 1
+N_MEMO = 4
+MEMO_WIDTH = 7
+J_MEMO_NEXT = J_MEMO + MEMO_WIDTH * N_MEMO
+N_S = J_MEMO_NEXT + 1

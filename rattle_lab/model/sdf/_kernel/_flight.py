@@ -11,9 +11,10 @@ import math
 import numpy as np
 
 from ._constants import (EPS, I_AC, I_AS, I_E, I_F, I_LAM, I_NK, I_R, I_R1, I_R2, I_REG,
-                         I_RES, I_W, I_WD, I_Z, J_ONSTOP, J_TAY, J_TH, J_Y, J_YD, N_P,
-                         N_TAYLOR, TAYLOR_REACH, TWO_PI)
-from ._jit import jit
+                         I_RES, I_W, I_WD, I_WK, I_Z, J_MEMO, J_MEMO_NEXT, J_ONSTOP, J_TAY,
+                         J_TH, J_Y, J_YD, MEMO_WIDTH, N_MEMO, N_P, N_TAYLOR, TAYLOR_REACH,
+                         TWO_PI)
+from ._jit import jit, jit_inline
 
 
 @jit
@@ -59,10 +60,12 @@ def make_params(F, omega, zeta, e):
         n10 = -a00 - 2.0 * zeta * a10
         n11 = -a01 - 2.0 * zeta * a11
         a00, a01, a10, a11 = n00, n01, n10, n11
+    for k in range(8):
+        P[I_WK + k] = omega ** k  # as deriv_bound computed it (k an integer), once
     return P
 
 
-@jit
+@jit_inline
 def transition(P, s):
     """(Ec, Es) of the homogeneous flow over time s."""
     z = P[I_Z]
@@ -80,7 +83,7 @@ def transition(P, s):
     return 0.5 * (e1 + e2), e1 * (-math.expm1(-2.0 * mu * s)) / (2.0 * mu)
 
 
-@jit
+@jit_inline
 def particular(P, th, s):
     """(x_p, v_p) at phase th, s after the flight started (s matters at resonance only)."""
     c = math.cos(th)
@@ -120,6 +123,25 @@ def start_segment(P, S, th, x, v, on_stop):
     S[J_Y] = x - xp
     S[J_YD] = v - vp
     S[J_ONSTOP] = 1.0 if on_stop else 0.0
+    for i in range(N_MEMO):  # a new flight: forget the last one's evaluations
+        S[J_MEMO + MEMO_WIDTH * i] = math.nan
+    S[J_MEMO_NEXT] = 0.0
+    if not on_stop:
+        # evaluate(P, S, 0.0), from the cos and sin above: at s = 0 the transition is
+        # (Ec, Es) = (1, 0) exactly (exp, cos of +-0 are 1, sin and expm1 of +-0 are
+        # +-0, C99 Annex F), and th + omega * 0 = th (th >= +0, reduced), so this is
+        # the same arithmetic on the same numbers as evaluate's
+        Ec = 1.0
+        Es = 0.0
+        z = P[I_Z]
+        y0 = S[J_Y]
+        yd0 = S[J_YD]
+        y = (Ec + z * Es) * y0 + Es * yd0
+        yd = -Es * y0 + (Ec - z * Es) * yd0
+        x0 = xp + y
+        v0 = vp + yd
+        a0 = P[I_F] * cth - 2.0 * z * v0 - x0
+        _memo_put(S, 0.0, x0, v0, a0, y, yd, x0 - 1.0)
     if on_stop:
         F = P[I_F]
         w = P[I_W]
@@ -153,8 +175,23 @@ def start_segment(P, S, th, x, v, on_stop):
             dk = dnew
 
 
-@jit
-def evaluate(P, S, s):
+@jit_inline
+def _memo_put(S, s, x, v, a, y, yd, zstop):
+    """Write an evaluation at s into the flight's memo (over its oldest row)."""
+    i = int(S[J_MEMO_NEXT])
+    j = J_MEMO + MEMO_WIDTH * i
+    S[j] = s
+    S[j + 1] = x
+    S[j + 2] = v
+    S[j + 3] = a
+    S[j + 4] = y
+    S[j + 5] = yd
+    S[j + 6] = zstop
+    S[J_MEMO_NEXT] = float((i + 1) % N_MEMO)
+
+
+@jit_inline
+def _evaluate(P, S, s):
     """(x - 1 if on-stop Taylor else x, v, a, y, yd, x) at local time s.
 
     Returns a tuple (x, v, a, y, yd, zstop) where zstop = x - 1 computed without
@@ -163,7 +200,15 @@ def evaluate(P, S, s):
     state from them, ``(y, yd) = (x - x_p, v - v_p)`` (equal to the closed form's to
     rounding; it only enters the derivative bounds), so the closed-form transition
     (an exp, a cos and a sin) is not evaluated there.
+
+    The last ``N_MEMO`` evaluations of the flight are kept in ``S`` (reset by
+    :func:`start_segment`, which also puts s = 0 there for a flight off the stop): a
+    point evaluated again is returned from there, the same numbers.
     """
+    for i in range(N_MEMO):
+        j = J_MEMO + MEMO_WIDTH * i
+        if S[j] == s:
+            return S[j + 1], S[j + 2], S[j + 3], S[j + 4], S[j + 5], S[j + 6]
     th = S[J_TH] + P[I_W] * s
     z = P[I_Z]
     c = math.cos(th)  # shared by the particular part and the force
@@ -196,10 +241,18 @@ def evaluate(P, S, s):
         v = vp + yd
         zstop = x - 1.0
     a = P[I_F] * c - 2.0 * z * v - x
+    _memo_put(S, s, x, v, a, y, yd, zstop)
     return x, v, a, y, yd, zstop
 
 
 @jit
+def evaluate(P, S, s):
+    """:func:`_evaluate`, called (not inlined): for the event loop's few evaluations,
+    which would otherwise each inline the whole evaluation (compile time)."""
+    return _evaluate(P, S, s)
+
+
+@jit_inline
 def deriv_bound(P, k, y, yd, s_end, x, v, L):
     """Bound of |x^(k)| (k = 2..5) over an interval [s_a, s_a + L], s_a + L = s_end.
 
@@ -218,7 +271,7 @@ def deriv_bound(P, k, y, yd, s_end, x, v, L):
     if P[I_RES] != 0.0:
         bp = 0.5 * P[I_F] * (s_end + k)
     else:
-        bp = P[I_R] * P[I_W] ** k
+        bp = P[I_R] * P[I_WK + k]
     if P[I_REG] == 2.0:
         r1 = P[I_R1]
         r2 = P[I_R2]
@@ -243,13 +296,19 @@ def deriv_bound(P, k, y, yd, s_end, x, v, L):
     return min(modal, m1) * (1.0 + 1e-12) + 1e-300
 
 
-@jit
+@jit_inline
 def level_values(P, S, s, c, sig):
     """g = sig (x - c), g' and g'' at s, plus the homogeneous state (y, yd)."""
-    x, v, a, y, yd, zstop = evaluate(P, S, s)
+    x, v, a, y, yd, zstop = _evaluate(P, S, s)
     if c == 1.0:
         g = sig * zstop
     else:
         g = sig * (x - c)
     return g, sig * v, sig * a, y, yd
 
+
+@jit
+def level_values_called(P, S, s, c, sig):
+    """:func:`level_values`, called (not inlined): for the searches' rare evaluations
+    (at a critical point, on leaving a level), to keep compile time down."""
+    return level_values(P, S, s, c, sig)

@@ -10,9 +10,10 @@ import math
 
 import numpy as np
 
-from ._constants import EPS, GRAZE_TOL, MAX_LEVEL, MAX_WORK
-from ._flight import deriv_bound, level_values
-from ._jit import jit
+from ._constants import (EPS, GRAZE_TOL, I_R, I_RES, I_Z, J_ONSTOP, J_Y, J_YD, MAX_LEVEL,
+                         MAX_WORK, TWO_PI)
+from ._flight import deriv_bound, level_values, level_values_called
+from ._jit import jit, jit_inline
 
 
 @jit
@@ -180,7 +181,7 @@ def _root(P, S, c, sig, which, lo, hi, flo, fhi, dlo, dhi, d2lo, d2hi):
     return hi
 
 
-@jit
+@jit_inline
 def _push_chunk(stk, n, sa, sb, ga, gva, gaa, ya, yda, gb, gvb, gab, level):
     """Write the sub-interval [sa, sb] of a search chunk into row n of the stack.
 
@@ -212,7 +213,7 @@ def _push_chunk(stk, n, sa, sb, ga, gva, gaa, ya, yda, gb, gvb, gab, level):
     stk[n, 10] = level
 
 
-@jit
+@jit_inline
 def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
     """Earliest s in (sa, sb] with g(s) >= 0, or -1.  va = values at sa (g < 0).
 
@@ -269,7 +270,7 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
                 if gvbb >= 0.0 or gva <= 0.0:
                     return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
                 sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb, -gaa, -gabb, 0.0, 0.0)
-                gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
+                gc, gvc, gac, yc, ydc = level_values_called(P, S, sc, c, sig)
                 if gc >= 0.0:
                     return _root(P, S, c, sig, 0, a0, sc, ga, gc, gva, gvc, gaa, gac)
                 return _root(P, S, c, sig, 0, a0, b0, ga, gbb, gva, gvbb, gaa, gabb)
@@ -287,7 +288,7 @@ def _search_chunk(P, S, c, sig, sa, sb, va, out_b, diag, stk):
                 if gva <= 0.0 or gvbb >= 0.0:
                     continue  # monotone: the maximum is at an end
                 sc = _root(P, S, c, sig, 1, a0, b0, -gva, -gvbb, -gaa, -gabb, 0.0, 0.0)
-                gc, gvc, gac, yc, ydc = level_values(P, S, sc, c, sig)
+                gc, gvc, gac, yc, ydc = level_values_called(P, S, sc, c, sig)
                 if gc >= 0.0:
                     return _root(P, S, c, sig, 0, a0, sc, ga, gc, gva, gvc, gaa, gac)
                 if gc >= -gtol:
@@ -314,17 +315,44 @@ def new_work():
     return np.empty((MAX_LEVEL + 6, 12))
 
 
+@jit_inline
+def below_stop_for_ever(P, S, y, yd):
+    """Whether the flight of ``S`` provably stays below the stop from a point where its
+    homogeneous state is ``(y, yd)``, by more than the grazing tolerance.
+
+    ``x = x_p + y`` with ``|x_p| <= R`` (the particular part's amplitude) and
+    ``d/ds (y^2 + y'^2) = -4 zeta y'^2 <= 0``: ``x <= R + |(y, yd)|`` from there on.
+    The evaluations the search would make are the exact flight to rounding: with
+    ``|Ec| <= 1`` and ``|Es| <= s <= 2 pi`` (a window), their error is a few ulp of
+    ``1 + 2 R + (2 + 2 pi (1 + 2 zeta)) (|y0| + |yd0| + |(y, yd)|)``; 64 ulp of it are
+    kept as margin.  So where this holds the search finds nothing, not even a grazing
+    contact (``g >= -GRAZE_TOL``), and need not look.  Not for the undamped resonance
+    (secular particular part) or a flight from the stop (``x`` starts at 1).
+    """
+    if P[I_RES] != 0.0 or S[J_ONSTOP] != 0.0:
+        return False
+    R = P[I_R]
+    rho = math.sqrt(y * y + yd * yd)
+    scale = 1.0 + 2.0 * R + (2.0 + TWO_PI * (1.0 + 2.0 * P[I_Z])) * (
+        abs(S[J_Y]) + abs(S[J_YD]) + rho)
+    return R + rho + 64.0 * EPS * scale < 1.0 - GRAZE_TOL
+
+
 @jit
 def first_reach(P, S, c, sig, s_lo, s_hi, hmax, diag, work):
     """Earliest s in (s_lo, s_hi] where sig (x(s) - c) >= 0, or -1.
 
-    Requires sig (x(s_lo) - c) < 0.  ``work`` is scratch of shape
-    ``(MAX_LEVEL + 6, 12)`` (see :func:`new_work`), allocated once per run: no
-    allocation per search.
+    Requires sig (x(s_lo) - c) < 0, and ``s_hi - s_lo <= 2 pi`` (a window).  ``work``
+    is scratch of shape ``(MAX_LEVEL + 6, 12)`` (see :func:`new_work`), allocated once
+    per run: no allocation per search.  The stop (``c = 1, sig = 1``) is not searched
+    for where the flight provably stays below it (:func:`below_stop_for_ever`; the
+    steady motion of a sweep's values without impact): the search would find nothing.
     """
     va = work[MAX_LEVEL + 4]
     vb = work[MAX_LEVEL + 5]
     g, gv, ga, y, yd = level_values(P, S, s_lo, c, sig)
+    if c == 1.0 and sig == 1.0 and below_stop_for_ever(P, S, y, yd):
+        return -1.0
     va[0] = g
     va[1] = gv
     va[2] = ga

@@ -7,7 +7,7 @@ docstring.
 import math
 
 from ._constants import EPS, I_F, I_LAM, J_TAY, J_Y, J_YD, N_TAYLOR, TAU_EXIT, TAYLOR_REACH, TWO_PI
-from ._flight import deriv_bound, level_values
+from ._flight import deriv_bound, level_values_called
 from ._jit import jit
 from ._search import _safeguard_newton, _shrink_bracket
 
@@ -140,7 +140,7 @@ def taylor_velocity(S, s):
 def level_exit(P, S, s0, c, sig, hmax):
     """Smallest advance u with sig (x - c) < 0 proven on (s0, s0 + u], starting at a
     point exactly on the level with sig v < 0 (first order)."""
-    g, gv, ga, y, yd = level_values(P, S, s0, c, sig)
+    g, gv, ga, y, yd = level_values_called(P, S, s0, c, sig)
     if gv >= 0.0:
         # degenerate: on the level without a velocity away from it (a tangency,
         # or at rest on the level when F = 0); step on by a fraction of a chunk
