@@ -1,0 +1,417 @@
+"""Impact velocities from whole flights: the plate's higher modes ringing after each impact.
+
+A vibrometer on the panel sees, besides the fundamental mode, the panel's higher modes
+that each impact excites; their velocity jumps at the impact with the fundamental's and
+rings down in a few milliseconds.  Fits of the velocity either side of an impact over a
+few milliseconds (:func:`~rattle_lab.detect._impacts.jump_velocities`) read both jumps:
+on the realistic lab scene ``e`` from their ratio came out 16 % high.  This module models
+a whole run instead, all of it linear least squares around two small searches:
+
+* **Forced response**, one for the run: ``c + sum_i h_i(t) (a_i cos wt + b_i sin wt)``
+  with ``h_i`` linear hat functions in time (knots about a second apart: a ramp's
+  amplitude follows its level); ``c``, the sensor's offset, is no motion.
+* **Free response of the fundamental**, one per flight (between consecutive impacts):
+  ``exp(-sigma tau) (p cos w_s tau + q sin w_s tau)``, ``tau`` from the flight's first
+  impact.  Between impacts the linear mode obeys exactly forced + free; ``f_s`` and
+  ``sigma`` are found by variable projection (the per-flight and run-wide amplitudes
+  eliminated exactly, a Nelder-Mead search over the two).
+* **Ringing**, the higher modes: each impact ``i`` excites mode ``j`` by its impulse, in
+  proportion to its velocity change ``dv_i``, with the same phase every time (the mode
+  shapes at the contact and at the beam do not change): run-wide columns
+  ``sum_i dv_i exp(-s_j (t - t_i)) [cos, sin](w_j (t - t_i))`` for ``t > t_i``.  The poles
+  ``(w_j, s_j)`` come from the record: a matrix pencil with poles shared by the windows
+  after every impact, on the residual of the model without ringing, the order from the
+  gap between the singular values and the noise's; poles kept are those that decay at
+  least :data:`RING_DECAY_FACTOR` times faster than the fundamental.
+
+``v_in`` and ``v_out`` are the forced plus the fundamental's free response at each impact
+time, the ringing left out (it is not the mode whose restitution is measured).  Where the
+model cannot be set up (too few impacts or flights long enough to hold it) or gives an
+impact a value that is not an impact (``v_out`` not reversing ``v_in``), the detector's
+local fits are kept for it, and :attr:`FlightFit.note` says why.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.optimize import minimize
+
+#: A ringing pole decays at least this many times faster than the fundamental's free response.
+RING_DECAY_FACTOR = 5.0
+#: Fewest impacts, and fewest flights long enough to fit, for a flight model.
+MIN_IMPACTS = 8
+#: Fewest samples of a flight's window (after the contacts are left out).
+MIN_FLIGHT_SAMPLES = 12
+#: Knot spacing of the run-wide forced amplitude, s.
+KNOT_S = 1.0
+#: Most ringing modes modelled.
+MAX_RING_MODES = 4
+#: Most flights the searches for f_s, the damping and the ringing use.
+SEARCH_SEGMENTS = 120
+#: A ringing mode is kept if it lowers the stacked residual by this many noise variances.
+RING_GAIN = 25.0
+
+
+@dataclass(frozen=True)
+class FlightFit:
+    """Result of :func:`flight_velocities`.
+
+    Attributes
+    ----------
+    v_in_m_s, v_out_m_s : ndarray
+        Per impact, from the flight model; the local fits' values where it has none.
+    from_flights : ndarray of bool
+        Impacts whose velocities come from the flight model.
+    f_s_hz, sigma_1_s : float
+        The fundamental's frequency and decay rate found (NaN without a model).
+    ring_hz, ring_sigma_1_s : tuple of float
+        Ringing modes found in the record (frequency, decay rate).
+    note : str
+        Empty when every impact has flight-model velocities, else why not.
+    """
+
+    v_in_m_s: np.ndarray
+    v_out_m_s: np.ndarray
+    from_flights: np.ndarray
+    f_s_hz: float = float("nan")
+    sigma_1_s: float = float("nan")
+    ring_hz: tuple[float, ...] = ()
+    ring_sigma_1_s: tuple[float, ...] = ()
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class _Segments:
+    """The samples the model is fitted to: flights between impacts, contacts left out."""
+
+    k: np.ndarray          # sample index of every used sample (concatenated segments)
+    seg: np.ndarray        # segment of each sample
+    starts: np.ndarray     # first position of each segment in ``k``
+    ref: np.ndarray        # reference time of each segment's free response (sample units)
+    left: np.ndarray       # impact at each segment's start (v_out), -1 if none
+    right: np.ndarray      # impact at its end (v_in), -1 if none
+
+
+def _segments(n: int, k_imp: np.ndarray, pad: np.ndarray, max_len: int) -> _Segments:
+    """Flights between consecutive impacts, ``pad`` samples clear of each, at most ``max_len``
+    samples from each impact (a long flight is split into its two ends)."""
+    pieces: list[tuple[int, int, float, int, int]] = []
+    n_imp = k_imp.size
+    for m in range(-1, n_imp):
+        lo = int(np.ceil(k_imp[m] + pad[m])) if m >= 0 else 0
+        hi = int(np.floor(k_imp[m + 1] - pad[m + 1])) if m + 1 < n_imp else n - 1
+        lo, hi = max(lo, 0), min(hi, n - 1)
+        left, right = (m if m >= 0 else -1), (m + 1 if m + 1 < n_imp else -1)
+        if left < 0:
+            lo = max(lo, hi - max_len + 1)
+        if right < 0:
+            hi = min(hi, lo + max_len - 1)
+        if hi - lo + 1 < MIN_FLIGHT_SAMPLES:
+            continue
+        if hi - lo + 1 > 2 * max_len and left >= 0 and right >= 0:
+            pieces.append((lo, lo + max_len - 1, float(k_imp[left]), left, -1))
+            pieces.append((hi - max_len + 1, hi, float(k_imp[right]), -1, right))
+        else:
+            ref = float(k_imp[left] if left >= 0 else k_imp[right])
+            pieces.append((lo, hi, ref, left, right))
+    if not pieces:
+        z = np.zeros(0, dtype=int)
+        return _Segments(z, z, z, np.zeros(0), z, z)
+    lens = np.array([p[1] - p[0] + 1 for p in pieces])
+    k = np.concatenate([np.arange(p[0], p[1] + 1) for p in pieces])
+    seg = np.repeat(np.arange(len(pieces)), lens)
+    starts = np.concatenate([[0], np.cumsum(lens)[:-1]])
+    return _Segments(k, seg, starts, np.array([p[2] for p in pieces]),
+                     np.array([p[3] for p in pieces]), np.array([p[4] for p in pieces]))
+
+
+def _forced_columns(t_s: np.ndarray, omega: float, t_total_s: float) -> np.ndarray:
+    """``1`` and ``h_i(t) cos wt``, ``h_i(t) sin wt`` (linear hat functions ``h_i``)."""
+    n_knots = max(2, int(np.ceil(t_total_s / KNOT_S)) + 1)
+    knots = np.linspace(0.0, t_total_s, n_knots)
+    c, s = np.cos(omega * t_s), np.sin(omega * t_s)
+    cols = [np.ones_like(t_s)]
+    for i in range(n_knots):
+        h = np.interp(t_s, knots, np.eye(n_knots)[i])
+        cols += [h * c, h * s]
+    return np.column_stack(cols)
+
+
+def _ring_columns(t_s: np.ndarray, t_imp_s: np.ndarray, dv: np.ndarray,
+                  modes: list[tuple[float, float]]) -> np.ndarray:
+    """``sum_i dv_i exp(-s (t - t_i)) [cos, sin](w (t - t_i))`` per mode (columns)."""
+    cols = np.zeros((t_s.size, 2 * len(modes)))
+    for j, (f_hz, s) in enumerate(modes):
+        reach = 12.0 / s
+        lo = np.searchsorted(t_s, t_imp_s, side="right")
+        hi = np.searchsorted(t_s, t_imp_s + reach, side="right")
+        w = 2.0 * np.pi * f_hz
+        for i in np.flatnonzero((hi > lo) & np.isfinite(dv)):
+            tau = t_s[lo[i]:hi[i]] - t_imp_s[i]
+            env = dv[i] * np.exp(-s * tau)
+            cols[lo[i]:hi[i], 2 * j] += env * np.cos(w * tau)
+            cols[lo[i]:hi[i], 2 * j + 1] += env * np.sin(w * tau)
+    return cols
+
+
+class _Model:
+    """The run model on fixed segments; ``solve`` eliminates each flight's free response."""
+
+    def __init__(self, y: np.ndarray, sg: _Segments, fs_hz: float, x: np.ndarray):
+        self.y, self.sg, self.fs = y, sg, fs_hz
+        self.x = x
+        self.tau = (sg.k - sg.ref[sg.seg]) / fs_hz
+        self.n_seg = sg.starts.size
+
+    def free(self, f_hz: float, sigma: float) -> np.ndarray:
+        env = np.exp(-sigma * self.tau)
+        return np.column_stack([env * np.cos(2 * np.pi * f_hz * self.tau),
+                                env * np.sin(2 * np.pi * f_hz * self.tau)])
+
+    def solve(self, f_hz: float, sigma: float
+              ) -> tuple[float, np.ndarray, np.ndarray]:
+        """``(rss, beta, gamma)``: run-wide coefficients and each segment's free amplitudes."""
+        z, x, y, st = self.free(f_hz, sigma), self.x, self.y, self.sg.starts
+        zz = np.add.reduceat(z[:, :, None] * z[:, None, :], st, axis=0)
+        zx = np.add.reduceat(z[:, :, None] * x[:, None, :], st, axis=0)
+        zy = np.add.reduceat(z * y[:, None], st, axis=0)
+        zz = zz + 1e-12 * np.trace(zz, axis1=1, axis2=2)[:, None, None] * np.eye(2)
+        g_zx = np.linalg.solve(zz, zx)
+        g_zy = np.linalg.solve(zz, zy[:, :, None])[:, :, 0]
+        scale = np.sqrt(np.sum(x * x, axis=0))
+        scale[~(scale > 0)] = 1.0
+        a = (x.T @ x - np.einsum("sip,siq->pq", zx, g_zx)) / np.outer(scale, scale)
+        b = (x.T @ y - np.einsum("sip,si->p", zx, g_zy)) / scale
+        beta = np.linalg.lstsq(a, b, rcond=1e-12)[0] / scale
+        gamma = g_zy - np.einsum("sip,p->si", g_zx, beta)
+        r = y - x @ beta - np.sum(z * gamma[self.sg.seg], axis=1)
+        return float(r @ r), beta, gamma
+
+    def search(self, f0_hz: float, sigma0: float, *, grid: bool) -> tuple[float, float]:
+        """``(f_s, sigma)`` minimising the residual (Nelder-Mead, from a coarse scan if ``grid``)."""
+        f1 = f0_hz
+        if grid:
+            fs_grid = f0_hz * np.linspace(0.75, 1.3, 23)
+            rss = [self.solve(f, sigma0)[0] for f in fs_grid]
+            f1 = float(fs_grid[int(np.argmin(rss))])
+        res = minimize(lambda p: self.solve(p[0], abs(p[1]))[0], np.array([f1, sigma0]),
+                       method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 0.0,
+                                                      "initial_simplex": [[f1, sigma0],
+                                                                          [f1 * 1.01, sigma0],
+                                                                          [f1, sigma0 * 1.5]],
+                                                      "maxfev": 80})
+        return float(res.x[0]), abs(float(res.x[1]))
+
+
+def _stack_after_impacts(r: np.ndarray, sg: _Segments, dv: np.ndarray, n_max: int
+                         ) -> tuple[np.ndarray, float]:
+    """The residual after an impact per unit velocity change, and its noise (rms).
+
+    The windows after each impact (their first ``N`` samples, ``N`` the 25th percentile of
+    their lengths, at most ``n_max``), weighted by each impact's ``dv``: least squares
+    for a ringing of the same shape in every window.  The noise is from the two halves
+    of the windows (even and odd)."""
+    ends = np.r_[sg.starts[1:], sg.k.size]
+    after = np.flatnonzero((sg.left >= 0) & np.isfinite(dv[np.maximum(sg.left, 0)]))
+    lens = ends[after] - sg.starts[after]
+    if after.size < MIN_IMPACTS:
+        return np.zeros(0), float("nan")
+    n = int(min(np.percentile(lens, 25), n_max))
+    use = after[lens >= n]
+    w = np.array([r[sg.starts[i]:sg.starts[i] + n] for i in use])
+    d = dv[sg.left[use]]
+    h = d @ w / (d @ d)
+    ha = d[0::2] @ w[0::2] / (d[0::2] @ d[0::2])
+    hb = d[1::2] @ w[1::2] / (d[1::2] @ d[1::2])
+    return h, float(np.sqrt(np.mean((ha - hb) ** 2) / 4.0))
+
+
+def _exp_cols(t: np.ndarray, modes: list[tuple[float, float]]) -> np.ndarray:
+    cols = []
+    for f_hz, s in modes:
+        env = np.exp(-s * t)
+        cols += [env * np.cos(2 * np.pi * f_hz * t), env * np.sin(2 * np.pi * f_hz * t)]
+    return np.column_stack(cols) if cols else np.zeros((t.size, 0))
+
+
+def ring_modes(h: np.ndarray, noise: float, fs_hz: float, known: list[tuple[float, float]],
+               f_lo_hz: float, f_hi_hz: float, s_min: float) -> list[tuple[float, float]]:
+    """Damped modes in the stacked residual ``h`` beside the ``known`` poles (variable projection).
+
+    Modes are added one at a time: a scan over frequency (``f_lo_hz`` to ``f_hi_hz``) and
+    decay per cycle, then a Nelder-Mead refinement of all modes together.  A mode is kept
+    while it lowers the residual by more than 25 noise variances (``noise`` is ``h``'s
+    rms noise) and decays faster than ``s_min``; the modes found so far are returned.
+    """
+    t = np.arange(h.size) / fs_hz
+    base = np.column_stack([np.ones_like(t), _exp_cols(t, known)])
+
+    def rss(modes: list[tuple[float, float]]) -> float:
+        a = np.hstack([base, _exp_cols(t, modes)])
+        coef = np.linalg.lstsq(a, h, rcond=None)[0]
+        r = h - a @ coef
+        return float(r @ r)
+
+    modes: list[tuple[float, float]] = []
+    best = rss(modes)
+    f_grid = np.geomspace(f_lo_hz, f_hi_hz, 48)
+    q_grid = (0.03, 0.08, 0.2, 0.5)      # decay per radian
+    for _ in range(MAX_RING_MODES):
+        cand = min(((rss(modes + [(f, q * 2 * np.pi * f)]), f, q * 2 * np.pi * f)
+                    for f in f_grid for q in q_grid), key=lambda c: c[0])
+        p0 = np.array([x for m in modes + [(cand[1], cand[2])] for x in (m[0], np.log(m[1]))])
+
+        def obj(p: np.ndarray) -> float:
+            ms = [(p[2 * j], np.exp(p[2 * j + 1])) for j in range(p.size // 2)]
+            if any(not (f_lo_hz <= f <= f_hi_hz) for f, _ in ms):
+                return best * 10 + 1.0
+            return rss(ms)
+
+        sol = minimize(obj, p0, method="Nelder-Mead",
+                       options={"maxfev": 200 * p0.size, "xatol": 1e-3, "fatol": 0.0})
+        trial = [(float(sol.x[2 * j]), float(np.exp(sol.x[2 * j + 1])))
+                 for j in range(sol.x.size // 2)]
+        new = rss(trial)
+        if not (best - new > RING_GAIN * noise ** 2) or min(s for _, s in trial) < s_min \
+                or max(s for _, s in trial) > 0.05 * fs_hz:    # a pole, not a sample's spike
+            break
+        modes, best = trial, new
+    return modes
+
+
+def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
+                      pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray,
+                      modes_given: list[tuple[float, float]] | None = None) -> FlightFit:
+    """Each impact's ``v_in``, ``v_out`` from a whole-run flight model (see the module docstring).
+
+    Parameters
+    ----------
+    v : ndarray
+        The velocity channel, m/s.
+    fs_hz, f_hz : float
+        Sample rate and the (constant) excitation frequency, Hz.
+    k_imp : ndarray
+        Impact times, sample units (sorted).
+    pad : ndarray
+        Samples left out on each side of each impact (its contact and the band limit).
+    v_in_local, v_out_local : ndarray
+        The local fits' velocities: the fallback, and the impacts' velocity changes that
+        weight the ringing at first.
+    modes_given : list of (f_hz, s_1_s), optional
+        Ringing modes to use instead of those found in the record (diagnostics).
+
+    Returns
+    -------
+    FlightFit
+        With :attr:`FlightFit.note` empty when every impact's velocities come from the model.
+    """
+    n_imp = k_imp.size
+    v_in_local = np.asarray(v_in_local, float)
+    v_out_local = np.asarray(v_out_local, float)
+    fallback = FlightFit(v_in_local.copy(), v_out_local.copy(), np.zeros(n_imp, dtype=bool))
+    if n_imp < MIN_IMPACTS:
+        return replace(fallback, note=f"local fits kept: {n_imp} impacts, a flight model needs "
+                       f">= {MIN_IMPACTS}")
+    period = fs_hz / f_hz
+    sg = _segments(v.size, k_imp, np.asarray(pad, float), int(round(1.5 * period)))
+    n_flights = int(np.sum((sg.left >= 0) & (sg.right >= 0)))
+    if n_flights < MIN_IMPACTS:
+        return replace(fallback, note=f"local fits kept: {n_flights} flights of >= "
+                       f"{MIN_FLIGHT_SAMPLES} samples between impacts (chatter or short "
+                       f"flights), a flight model needs >= {MIN_IMPACTS}")
+    omega = 2.0 * np.pi * f_hz
+    t_total = v.size / fs_hz
+    y_all = np.asarray(v, float)
+    # the searches use at most SEARCH_SEGMENTS flights, spread over the run
+    pick = np.unique(np.linspace(0, sg.starts.size - 1,
+                                 min(sg.starts.size, SEARCH_SEGMENTS)).round().astype(int))
+    sub = _subset(sg, pick)
+    xf_sub, keep = _forced(sub.k / fs_hz, omega, t_total, None)
+    model = _Model(y_all[sub.k], sub, fs_hz, xf_sub)
+    f_s, sigma = model.search(f_hz, 0.02 * omega, grid=True)
+    # identifiable?  steady motion repeats the same flight: forced and free then trade off
+    rss0 = model.solve(f_s, sigma)[0]
+    bump = 0.5 * (model.solve(1.02 * f_s, sigma)[0] + model.solve(0.98 * f_s, sigma)[0])
+    if not bump > 1.05 * rss0:
+        return replace(fallback, note="local fits kept: the flights do not determine the "
+                       "free response (steady motion: forced and free response trade off)")
+    dv = v_out_local - v_in_local
+    if modes_given is None:
+        _, beta, gamma = model.solve(f_s, sigma)
+        r = model.y - xf_sub @ beta - np.sum(model.free(f_s, sigma) * gamma[sub.seg], axis=1)
+        h, noise = _stack_after_impacts(r, sub, dv, int(period))
+        modes = ring_modes(h, noise, fs_hz, [(f_s, sigma), (f_hz, 0.0)], 1.1 * f_s,
+                           min(6.0 * f_s, 0.2 * fs_hz), RING_DECAY_FACTOR * sigma) \
+            if h.size > 8 and np.isfinite(noise) else []
+    else:
+        modes = list(modes_given)
+    if not modes:
+        return replace(fallback, f_s_hz=f_s, sigma_1_s=sigma,
+                       note="local fits kept: no ringing found after the impacts")
+    t_imp = k_imp / fs_hz
+    ring = _ring_columns(sub.k / fs_hz, t_imp, np.nan_to_num(dv), modes)
+    model = _Model(y_all[sub.k], sub, fs_hz, np.hstack([xf_sub, ring]))
+    f_s, sigma = model.search(f_s, sigma, grid=False)
+    xf, _ = _forced(sg.k / fs_hz, omega, t_total, keep)
+    vin, vout = v_in_local, v_out_local
+    for _ in range(2):   # then with the impacts' own velocity changes weighting the ringing
+        dv = np.where(np.isfinite(vout - vin), vout - vin, np.nan_to_num(dv))
+        model = _Model(y_all[sg.k], sg, fs_hz,
+                       np.hstack([xf, _ring_columns(sg.k / fs_hz, t_imp, dv, modes)]))
+        vin, vout = _evaluate(model, f_s, sigma, keep, omega, t_total, k_imp)
+    # (the channel may be an absolute vibrometer: judge the jump, not the velocities' signs)
+    jump_local = v_out_local - v_in_local
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = (vout - vin) / jump_local
+        sane = np.isfinite(vin) & np.isfinite(vout) & (ratio > 0.5) & (ratio < 2.0)
+    n_bad = int(n_imp - sane.sum())
+    note = "" if n_bad == 0 else (f"local fits kept for {n_bad} of {n_imp} impacts (no flight "
+                                  "long enough on a side, or a flight-model jump not within "
+                                  "a factor 2 of the local fits')")
+    return FlightFit(np.where(sane, vin, v_in_local), np.where(sane, vout, v_out_local), sane,
+                     f_s, sigma, tuple(m[0] for m in modes), tuple(m[1] for m in modes), note)
+
+
+def _subset(sg: _Segments, pick: np.ndarray) -> _Segments:
+    ends = np.r_[sg.starts[1:], sg.k.size]
+    lens = ends[pick] - sg.starts[pick]
+    k = np.concatenate([sg.k[sg.starts[i]:ends[i]] for i in pick])
+    return _Segments(k, np.repeat(np.arange(pick.size), lens),
+                     np.concatenate([[0], np.cumsum(lens)[:-1]]), sg.ref[pick], sg.left[pick],
+                     sg.right[pick])
+
+
+def _forced(t_s: np.ndarray, omega: float, t_total_s: float, keep: np.ndarray | None
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Forced-response columns; without ``keep``, those of knots with samples near them."""
+    xf = _forced_columns(t_s, omega, t_total_s)
+    if keep is None:
+        norm = np.sqrt(np.sum(xf * xf, axis=0))
+        keep = norm > 1e-3 * norm.max()
+    return xf[:, keep], keep
+
+
+def _evaluate(model: _Model, f_s: float, sigma: float, keep: np.ndarray, omega: float,
+              t_total_s: float, k_imp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Forced + free response (no offset, no ringing) at each impact from its two flights."""
+    _, beta, gamma = model.solve(f_s, sigma)
+    sg, fs = model.sg, model.fs
+    n_imp = k_imp.size
+    forced_beta = beta[:int(keep.sum())].copy()
+    forced_beta[0] = 0.0
+    forced = _forced_columns(k_imp / fs, omega, t_total_s)[:, keep] @ forced_beta
+    vin, vout = np.full(n_imp, np.nan), np.full(n_imp, np.nan)
+    wf = 2.0 * np.pi * f_s
+    for side, imp, out in (("left", sg.left, vout), ("right", sg.right, vin)):
+        ok = imp >= 0
+        i = imp[ok]
+        tau = (k_imp[i] - sg.ref[ok]) / fs
+        env = np.exp(-sigma * tau)
+        out[i] = forced[i] + gamma[ok, 0] * env * np.cos(wf * tau) \
+            + gamma[ok, 1] * env * np.sin(wf * tau)
+    return vin, vout
+
+
+__all__ = ["FlightFit", "flight_velocities", "ring_modes"]

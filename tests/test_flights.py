@@ -1,0 +1,175 @@
+"""The whole-flight velocity model (rattle_lab.detect._flights) on records it did not make.
+
+The generator here is written for this test in plain numpy and shares no code with
+rattle_lab: the exact flow of a linear, damped, harmonically forced oscillator between
+impacts (closed form: particular solution plus free response), impacts at the gap found by
+bisection on that closed form, ``v -> -e v``; an absolute vibrometer (the base's velocity
+added), an offset, white noise, and two higher modes ringing after each impact at 1.4 and
+2.3 times f_s, decaying in 3 ms, with amplitudes proportional to the velocity change and
+phases that are not zero (unlike the synthetic rig's realistic_lab: 1.15, 1.77, 2.76 f_s,
+4 ms, cosine).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rattle_lab.detect import detect_impacts
+from rattle_lab.detect._flights import flight_velocities
+
+F_S_HZ, ZETA, GAP_M, E_TRUE = 80.0, 0.01, 1.0e-3, 0.7
+F_HZ, LEVEL_M_S2 = 82.0, 25.0
+FS_HZ = 20000.0
+RING = ((1.4 * F_S_HZ, 3e-3, 0.06, 0.3), (2.3 * F_S_HZ, 3e-3, 0.04, -0.5))  # f, decay, per m/s, phase
+
+
+def _flow(duration_s: float) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float]]]:
+    """Impact times, v_in, and each flight's (t0, x0, v0) of the exact piecewise solution."""
+    w, big_w = 2 * np.pi * F_S_HZ, 2 * np.pi * F_HZ
+    sig = ZETA * w
+    wd = w * np.sqrt(1 - ZETA ** 2)
+    amp = LEVEL_M_S2 / (w ** 2 - big_w ** 2 + 2j * ZETA * w * big_w)
+
+    def xp(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        z = amp * np.exp(1j * big_w * t)
+        return z.real, (1j * big_w * z).real
+
+    def state(t: np.ndarray, t0: float, x0: float, v0: float) -> tuple[np.ndarray, np.ndarray]:
+        p0, pv0 = xp(np.array([t0]))
+        h0, hv0 = x0 - p0[0], v0 - pv0[0]
+        c1, c2 = h0, (hv0 + sig * h0) / wd
+        tau = t - t0
+        env = np.exp(-sig * tau)
+        x = env * (c1 * np.cos(wd * tau) + c2 * np.sin(wd * tau))
+        v = env * ((-sig * c1 + wd * c2) * np.cos(wd * tau) + (-sig * c2 - wd * c1) * np.sin(wd * tau))
+        p, pv = xp(t)
+        return x + p, v + pv
+
+    flights = [(0.0, 0.0, 0.0)]
+    t_imp, v_in = [], []
+    t0, x0, v0 = 0.0, 0.0, 0.0
+    dt = 2e-6
+    while t0 < duration_s:
+        grid = t0 + dt + np.arange(int(0.05 / dt)) * dt
+        x, _ = state(grid, t0, x0, v0)
+        hit = np.flatnonzero(x >= GAP_M)
+        if hit.size == 0:
+            t0 = float(grid[-1])
+            xx, vv = state(np.array([t0]), *flights[-1])
+            x0, v0 = float(xx[0]), float(vv[0])
+            flights.append((t0, x0, v0))
+            continue
+        lo, hi = (float(grid[hit[0] - 1]) if hit[0] else t0), float(grid[hit[0]])
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if state(np.array([mid]), t0, x0, v0)[0][0] >= GAP_M:
+                hi = mid
+            else:
+                lo = mid
+        t_hit = 0.5 * (lo + hi)
+        _, vv = state(np.array([t_hit]), t0, x0, v0)
+        t_imp.append(t_hit)
+        v_in.append(float(vv[0]))
+        t0, x0, v0 = t_hit, GAP_M, -E_TRUE * float(vv[0])
+        flights.append((t0, x0, v0))
+    state_fn = state
+    _flow.state = state_fn  # type: ignore[attr-defined]
+    return np.array(t_imp), np.array(v_in), flights
+
+
+def _record(duration_s: float, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(velocity_m_s, impact_t_s, v_in_m_s)``: an absolute vibrometer with ringing."""
+    t_imp, v_in, flights = _flow(duration_s)
+    t = np.arange(int(duration_s * FS_HZ)) / FS_HZ
+    v = np.zeros(t.size)
+    starts = np.array([f[0] for f in flights])
+    which = np.searchsorted(starts, t, side="right") - 1
+    for i, (t0, x0, v0) in enumerate(flights):
+        sel = which == i
+        if sel.any():
+            v[sel] = _flow.state(t[sel], t0, x0, v0)[1]  # type: ignore[attr-defined]
+    dv = (-E_TRUE - 1.0) * v_in
+    for f_hz, decay_s, per, phase in RING:
+        for ti, d in zip(t_imp, dv):
+            k0 = int(np.ceil(ti * FS_HZ))
+            tau = t[k0:k0 + int(8 * decay_s * FS_HZ)] - ti
+            v[k0:k0 + tau.size] += per * d * np.exp(-tau / decay_s) * np.cos(2 * np.pi * f_hz * tau + phase)
+    v_base = -LEVEL_M_S2 / (2 * np.pi * F_HZ) * np.sin(2 * np.pi * F_HZ * t)
+    rng = np.random.default_rng(seed)
+    return v + v_base + 0.002 + 2e-4 * rng.standard_normal(t.size), t_imp, v_in
+
+
+def _base_velocity(t_s: np.ndarray) -> np.ndarray:
+    return -LEVEL_M_S2 / (2 * np.pi * F_HZ) * np.sin(2 * np.pi * F_HZ * t_s)
+
+
+@pytest.fixture(scope="module")
+def record() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return _record(1.5, seed=3)
+
+
+def _local_and_flight(v: np.ndarray, modes=None):
+    log = detect_impacts(FS_HZ, velocity_m_s=v, excitation_freq_hz=F_HZ)
+    k = log.t_s * FS_HZ
+    fit = flight_velocities(v, FS_HZ, F_HZ, k, np.full(k.size, 10.0), log.v_in_m_s,
+                            log.v_out_m_s, modes_given=modes)
+    vb = _base_velocity(log.t_s)
+    e_local = -(log.v_out_m_s - vb) / (log.v_in_m_s - vb)
+    e_flight = -(fit.v_out_m_s - vb) / (fit.v_in_m_s - vb)
+    return log, fit, e_local, e_flight
+
+
+def test_generator_is_what_it_says(record):
+    # the flow's own check: every impact approaches the gap and rebounds at e
+    _, t_imp, v_in = record
+    assert t_imp.size > 60
+    assert np.all(v_in > 0)
+
+
+def test_flight_model_with_the_modes_recovers_e_and_local_fits_do_not(record):
+    """With the ringing modes (as a declared plate would give them), e within 1.5 %.
+
+    1.5 %: the impacts' e scatter by the vibrometer noise (0.2 mm/s on v_in of 0.05-0.3
+    m/s over ~100 impacts) and the flights' first 0.5 ms are left out; the local fits read
+    the ringing's jump (6 % and 4 % of the velocity change) and are off by more than 3 %.
+    """
+    v, t_imp, _ = record
+    modes = [(f, 1.0 / d) for f, d, _, _ in RING]
+    log, fit, e_local, e_flight = _local_and_flight(v, modes)
+    assert log.n_impacts == pytest.approx(t_imp.size, abs=2)
+    assert fit.from_flights.mean() > 0.9
+    m_flight = float(np.mean(e_flight[fit.from_flights]))
+    m_local = float(np.mean(e_local[fit.from_flights]))
+    assert abs(m_flight / E_TRUE - 1) < 0.015, (m_flight, m_local)
+    assert abs(m_local / E_TRUE - 1) > 0.03, (m_flight, m_local)
+    assert fit.f_s_hz == pytest.approx(F_S_HZ, rel=2e-3)
+
+
+def test_too_few_impacts_keeps_the_local_fits_and_says_so(record):
+    v, _, _ = record
+    log = detect_impacts(FS_HZ, velocity_m_s=v, excitation_freq_hz=F_HZ)
+    n = 5
+    k = log.t_s[:n] * FS_HZ
+    fit = flight_velocities(v, FS_HZ, F_HZ, k, np.full(n, 10.0), log.v_in_m_s[:n],
+                            log.v_out_m_s[:n])
+    assert not fit.from_flights.any()
+    np.testing.assert_array_equal(fit.v_in_m_s, log.v_in_m_s[:n])
+    assert "local fits kept" in fit.note and "impacts" in fit.note
+
+
+def test_modes_from_the_record_alone_remove_most_of_the_ringing_bias(record):
+    """Without given modes: the stacked post-impact residual resolves one damped mode here.
+
+    Measured on seeds 3-5: e +2.4 to +2.7 % (one mode found near 172 Hz, decay ~330/s,
+    between the two true modes), the local fits +18.5 %.  Asserted: within 4 %, and at
+    least four times closer to the truth than the local fits.
+    """
+    v, _, _ = record
+    _, fit, e_local, e_flight = _local_and_flight(v)
+    assert fit.ring_hz, fit.note
+    err_flight = abs(float(np.mean(e_flight)) / E_TRUE - 1)
+    err_local = abs(float(np.mean(e_local)) / E_TRUE - 1)
+    assert err_flight < 0.04
+    assert err_flight < err_local / 4
+    assert all(s > 5 * fit.sigma_1_s for s in fit.ring_sigma_1_s)
