@@ -46,10 +46,12 @@ MIN_IMPACTS = 8
 MIN_FLIGHT_SAMPLES = 12
 #: Knot spacing of the run-wide forced amplitude, s.
 KNOT_S = 1.0
+#: Largest change of the median velocity jump from the local fits' that ringing explains.
+MAX_JUMP_CHANGE = 0.25
 #: Most ringing modes modelled.
-MAX_RING_MODES = 4
+MAX_RING_MODES = 3
 #: Most flights the searches for f_s, the damping and the ringing use.
-SEARCH_SEGMENTS = 120
+SEARCH_SEGMENTS = 60
 #: A ringing mode is kept if it lowers the stacked residual by this many noise variances.
 RING_GAIN = 25.0
 
@@ -139,20 +141,38 @@ def _forced_columns(t_s: np.ndarray, omega: float, t_total_s: float) -> np.ndarr
     return np.column_stack(cols)
 
 
-def _ring_columns(t_s: np.ndarray, t_imp_s: np.ndarray, dv: np.ndarray,
-                  modes: list[tuple[float, float]]) -> np.ndarray:
+@dataclass(frozen=True)
+class _Pairs:
+    """Every (sample, earlier impact) pair within ``reach``: where each impact's ringing lies."""
+
+    row: np.ndarray       # position of the sample in the model's samples
+    tau: np.ndarray       # time since the impact, s
+    imp: np.ndarray       # the impact
+    n_rows: int
+
+
+def _pairs(t_s: np.ndarray, t_imp_s: np.ndarray, reach_s: float) -> _Pairs:
+    lo = np.searchsorted(t_s, t_imp_s, side="right")
+    # each impact's ringing is modelled in its own flight (a tail that ran on into the next
+    # flights would sum, in periodic motion, to a tone at the forcing frequency)
+    nxt = np.r_[t_imp_s[1:], np.inf]
+    hi = np.searchsorted(t_s, np.minimum(t_imp_s + reach_s, nxt), side="right")
+    counts = hi - lo
+    imp = np.repeat(np.arange(t_imp_s.size), counts)
+    first = np.repeat(lo - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
+    row = first + np.arange(imp.size)
+    return _Pairs(row, t_s[row] - t_imp_s[imp], imp, t_s.size)
+
+
+def _ring_columns(pairs: _Pairs, dv: np.ndarray, modes: list[tuple[float, float]]) -> np.ndarray:
     """``sum_i dv_i exp(-s (t - t_i)) [cos, sin](w (t - t_i))`` per mode (columns)."""
-    cols = np.zeros((t_s.size, 2 * len(modes)))
+    cols = np.zeros((pairs.n_rows, 2 * len(modes)))
+    d = np.nan_to_num(dv)[pairs.imp]
     for j, (f_hz, s) in enumerate(modes):
-        reach = 12.0 / s
-        lo = np.searchsorted(t_s, t_imp_s, side="right")
-        hi = np.searchsorted(t_s, t_imp_s + reach, side="right")
-        w = 2.0 * np.pi * f_hz
-        for i in np.flatnonzero((hi > lo) & np.isfinite(dv)):
-            tau = t_s[lo[i]:hi[i]] - t_imp_s[i]
-            env = dv[i] * np.exp(-s * tau)
-            cols[lo[i]:hi[i], 2 * j] += env * np.cos(w * tau)
-            cols[lo[i]:hi[i], 2 * j + 1] += env * np.sin(w * tau)
+        env = d * np.exp(-s * pairs.tau)
+        w = 2.0 * np.pi * f_hz * pairs.tau
+        cols[:, 2 * j] = np.bincount(pairs.row, env * np.cos(w), pairs.n_rows)
+        cols[:, 2 * j + 1] = np.bincount(pairs.row, env * np.sin(w), pairs.n_rows)
     return cols
 
 
@@ -281,6 +301,63 @@ def ring_modes(h: np.ndarray, noise: float, fs_hz: float, known: list[tuple[floa
     return modes
 
 
+def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
+                  pairs: _Pairs, dv: np.ndarray, f_s: float, sigma: float,
+                  f_lo_hz: float, f_hi_hz: float, s_min: float
+                  ) -> tuple[list[tuple[float, float]], float, float]:
+    """Ringing modes by variable projection on the run model; ``(modes, f_s, sigma)``.
+
+    Modes are added one at a time: a scan over frequency and decay per radian, a
+    Nelder-Mead refinement of the new mode's ``(f, log s)``, the fundamental's
+    ``(f_s, sigma)`` searched again, and every mode refined together.  A mode is kept
+    while it lowers the Bayesian information criterion (``n ln rss + p ln n``, four
+    parameters per mode) and every mode decays faster than ``s_min``.
+    """
+    n = y.size
+    s_max = 0.05 * fs_hz
+
+    def model(modes: list[tuple[float, float]]) -> _Model:
+        x = np.hstack([xf, _ring_columns(pairs, dv, modes)]) if modes else xf
+        return _Model(y, sub, fs_hz, x)
+
+    def refine(modes: list[tuple[float, float]], fixed: list[tuple[float, float]],
+               fs_: float, sig_: float, maxfev: int) -> tuple[list[tuple[float, float]], float]:
+        def obj(p: np.ndarray) -> float:
+            ms = [(float(p[2 * j]), float(np.exp(p[2 * j + 1]))) for j in range(p.size // 2)]
+            if any(not (f_lo_hz <= f <= f_hi_hz and s_min <= s <= s_max) for f, s in ms):
+                return np.inf
+            return model(fixed + ms).solve(fs_, sig_)[0]
+        p0 = np.array([x for f, s in modes for x in (f, np.log(s))])
+        simplex = [p0] + [p0 + np.eye(p0.size)[i] * (0.05 * p0[i] if i % 2 == 0 else 0.3)
+                          for i in range(p0.size)]
+        sol = minimize(obj, p0, method="Nelder-Mead",
+                       options={"maxfev": maxfev, "xatol": 1e-3, "fatol": 0.0,
+                                "initial_simplex": simplex})
+        return ([(float(sol.x[2 * j]), float(np.exp(sol.x[2 * j + 1])))
+                 for j in range(sol.x.size // 2)], float(sol.fun))
+
+    modes: list[tuple[float, float]] = []
+    bic = n * np.log(model(modes).solve(f_s, sigma)[0])
+    f_grid = np.geomspace(f_lo_hz, f_hi_hz, 16)
+    for _ in range(MAX_RING_MODES):
+        scan = [(model(modes + [(f, q * 2 * np.pi * f)]).solve(f_s, sigma)[0], f,
+                 q * 2 * np.pi * f) for f in f_grid for q in (0.05, 0.15, 0.4)
+                if q * 2 * np.pi * f >= s_min]
+        _, f0, s0 = min(scan, key=lambda c: c[0])
+        new, _ = refine([(f0, s0)], modes, f_s, sigma, 60)
+        trial = modes + new
+        fs_t, sig_t = model(trial).search(f_s, sigma, grid=False)
+        if len(trial) > 1:
+            trial, _ = refine(trial, [], fs_t, sig_t, 40 * len(trial))
+        rss = model(trial).solve(fs_t, sig_t)[0]
+        bic_new = n * np.log(rss) + 4 * len(trial) * np.log(n)
+        if not bic_new < bic or any(s < 1.02 * s_min for _, s in trial) or any(
+                abs(a[0] / b[0] - 1) < 0.05 for i, a in enumerate(trial) for b in trial[:i]):
+            break   # no gain, a decay on its bound, or two modes at one frequency: unresolved
+        modes, bic, f_s, sigma = trial, bic_new, fs_t, sig_t
+    return modes, f_s, sigma
+
+
 def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
                       pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray,
                       modes_given: list[tuple[float, float]] | None = None) -> FlightFit:
@@ -334,38 +411,46 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     # identifiable?  steady motion repeats the same flight: forced and free then trade off
     rss0 = model.solve(f_s, sigma)[0]
     bump = 0.5 * (model.solve(1.02 * f_s, sigma)[0] + model.solve(0.98 * f_s, sigma)[0])
-    if not bump > 1.05 * rss0:
+    if not (bump > 1.05 * rss0 and 0.77 * f_hz < f_s < 1.27 * f_hz):
         return replace(fallback, note="local fits kept: the flights do not determine the "
                        "free response (steady motion: forced and free response trade off)")
     dv = v_out_local - v_in_local
+    t_imp = k_imp / fs_hz
+    reach = 4.0 * period / fs_hz
+    pairs_sub = _pairs(sub.k / fs_hz, t_imp, reach)
     if modes_given is None:
-        _, beta, gamma = model.solve(f_s, sigma)
-        r = model.y - xf_sub @ beta - np.sum(model.free(f_s, sigma) * gamma[sub.seg], axis=1)
-        h, noise = _stack_after_impacts(r, sub, dv, int(period))
-        modes = ring_modes(h, noise, fs_hz, [(f_s, sigma), (f_hz, 0.0)], 1.1 * f_s,
-                           min(6.0 * f_s, 0.2 * fs_hz), RING_DECAY_FACTOR * sigma) \
-            if h.size > 8 and np.isfinite(noise) else []
+        # a ringing mode decays within a forcing period, else it is the free response's
+        modes, f_s, sigma = _search_modes(
+            model.y, sub, fs_hz, xf_sub, pairs_sub, np.nan_to_num(dv), f_s, sigma, 1.1 * f_s,
+            min(6.0 * f_s, 0.2 * fs_hz), max(RING_DECAY_FACTOR * sigma, f_hz))
     else:
         modes = list(modes_given)
     if not modes:
         return replace(fallback, f_s_hz=f_s, sigma_1_s=sigma,
                        note="local fits kept: no ringing found after the impacts")
-    t_imp = k_imp / fs_hz
-    ring = _ring_columns(sub.k / fs_hz, t_imp, np.nan_to_num(dv), modes)
+    ring = _ring_columns(pairs_sub, dv, modes)
     model = _Model(y_all[sub.k], sub, fs_hz, np.hstack([xf_sub, ring]))
     f_s, sigma = model.search(f_s, sigma, grid=False)
+    pairs = _pairs(sg.k / fs_hz, t_imp, reach)
     xf, _ = _forced(sg.k / fs_hz, omega, t_total, keep)
     vin, vout = v_in_local, v_out_local
     for _ in range(2):   # then with the impacts' own velocity changes weighting the ringing
         dv = np.where(np.isfinite(vout - vin), vout - vin, np.nan_to_num(dv))
         model = _Model(y_all[sg.k], sg, fs_hz,
-                       np.hstack([xf, _ring_columns(sg.k / fs_hz, t_imp, dv, modes)]))
+                       np.hstack([xf, _ring_columns(pairs, dv, modes)]))
         vin, vout = _evaluate(model, f_s, sigma, keep, omega, t_total, k_imp)
     # (the channel may be an absolute vibrometer: judge the jump, not the velocities' signs)
     jump_local = v_out_local - v_in_local
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = (vout - vin) / jump_local
         sane = np.isfinite(vin) & np.isfinite(vout) & (ratio > 0.5) & (ratio < 2.0)
+    med = float(np.median(ratio[sane])) if sane.any() else float("nan")
+    if not abs(med - 1.0) < MAX_JUMP_CHANGE:
+        return replace(fallback, f_s_hz=f_s, sigma_1_s=sigma, note=(
+            f"local fits kept: the flight model's velocity jumps differ from the local fits' "
+            f"by {100 * (med - 1):+.0f} % (median), more than the ringing can explain "
+            f"({100 * MAX_JUMP_CHANGE:.0f} %): modes {', '.join(f'{m[0]:.0f}' for m in modes)} Hz "
+            "not resolved"))
     n_bad = int(n_imp - sane.sum())
     note = "" if n_bad == 0 else (f"local fits kept for {n_bad} of {n_imp} impacts (no flight "
                                   "long enough on a side, or a flight-model jump not within "
