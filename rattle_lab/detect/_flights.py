@@ -422,7 +422,7 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
         # a ringing mode decays within a forcing period, else it is the free response's
         modes, f_s, sigma = _search_modes(
             model.y, sub, fs_hz, xf_sub, pairs_sub, np.nan_to_num(dv), f_s, sigma, 1.1 * f_s,
-            min(6.0 * f_s, 0.2 * fs_hz), max(RING_DECAY_FACTOR * sigma, f_hz))
+            min(6.0 * f_s, 0.2 * fs_hz), max(RING_DECAY_FACTOR * sigma, 2.0 * f_hz))
     else:
         modes = list(modes_given)
     if not modes:
