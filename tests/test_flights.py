@@ -216,3 +216,40 @@ def test_velocity_model_is_checked():
 
     with pytest.raises(ParameterError, match="velocity_model"):
         ImpactParams(velocity_model="global")  # type: ignore[arg-type]
+
+
+def test_fallback_is_named_in_the_run_flags(tmp_path, record):
+    """A run too short for a flight model keeps the local fits and its flags say so."""
+    from rattle_lab.fit import analyse_run
+    from rattle_lab.records import Channel, Record, Run, read, write_record
+    from record_factory import plate_rig
+
+    v, t_imp, _ = record
+    n = int((t_imp[4] + 0.002) * FS_HZ)      # five impacts
+    chans = (Channel("velocity", "plate_velocity", "m/s", v[:n], sample_rate_hz=FS_HZ,
+                     start_time_s=0.0),)
+    rec = Record("short", "measured", plate_rig(),
+                 [Run("dwell_082", "sine_dwell", chans, excitation_freq_hz=F_HZ,
+                      nominal_level=LEVEL_M_S2, nominal_level_units="m/s^2",
+                      start_time_iso="2026-01-01T00:00:00Z")])
+    run = read(write_record(tmp_path / "short.h5", rec)).runs[0]
+    res = analyse_run("x", run, detect={"velocity_model": "flights"}, fit={})
+    local = analyse_run("x", run, detect={}, fit={})
+    np.testing.assert_array_equal(res.impacts.e, local.impacts.e)
+    assert any(f.startswith("velocity_model_local: local fits kept") for f in res.chain_flags)
+    assert not any(f.startswith("velocity_model_local") for f in local.chain_flags)
+
+
+def test_steady_dwell_keeps_the_local_fits_with_a_note():
+    """Steady period-1 motion (the last 1.5 s of 3 s: every flight alike) cannot separate
+    the ringing from the free response: the local fits are kept, and the note says so."""
+    from rattle_lab.detect import ImpactParams
+
+    v, t_imp, v_in = _record(3.0, seed=7)
+    assert np.std(v_in[t_imp > 1.5]) < 1e-6 * np.mean(v_in[t_imp > 1.5])   # steady
+    v = v[int(1.5 * FS_HZ):]
+    local = detect_impacts(FS_HZ, velocity_m_s=v, excitation_freq_hz=F_HZ)
+    flights = detect_impacts(FS_HZ, velocity_m_s=v, excitation_freq_hz=F_HZ,
+                             params=ImpactParams(velocity_model="flights"))
+    assert flights.velocity_note.startswith("local fits kept")
+    np.testing.assert_array_equal(flights.e, local.e)
