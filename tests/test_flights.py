@@ -21,7 +21,8 @@ from rattle_lab.detect._flights import flight_velocities
 F_S_HZ, ZETA, GAP_M, E_TRUE = 80.0, 0.01, 1.0e-3, 0.7
 F_HZ, LEVEL_M_S2 = 82.0, 25.0
 FS_HZ = 20000.0
-RING = ((1.4 * F_S_HZ, 3e-3, 0.06, 0.3), (2.3 * F_S_HZ, 3e-3, 0.04, -0.5))  # f, decay, per m/s, phase
+# ringing modes: frequency, decay time, velocity per m/s of velocity change, phase
+RING = ((1.4 * F_S_HZ, 3e-3, 0.06, 0.3), (2.3 * F_S_HZ, 3e-3, 0.04, -0.5))
 
 
 def _flow(duration_s: float) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float]]]:
@@ -42,7 +43,8 @@ def _flow(duration_s: float) -> tuple[np.ndarray, np.ndarray, list[tuple[float, 
         tau = t - t0
         env = np.exp(-sig * tau)
         x = env * (c1 * np.cos(wd * tau) + c2 * np.sin(wd * tau))
-        v = env * ((-sig * c1 + wd * c2) * np.cos(wd * tau) + (-sig * c2 - wd * c1) * np.sin(wd * tau))
+        v = env * ((-sig * c1 + wd * c2) * np.cos(wd * tau)
+                   + (-sig * c2 - wd * c1) * np.sin(wd * tau))
         p, pv = xp(t)
         return x + p, v + pv
 
@@ -94,7 +96,8 @@ def _record(duration_s: float, seed: int) -> tuple[np.ndarray, np.ndarray, np.nd
         for ti, d in zip(t_imp, dv):
             k0 = int(np.ceil(ti * FS_HZ))
             tau = t[k0:k0 + int(8 * decay_s * FS_HZ)] - ti
-            v[k0:k0 + tau.size] += per * d * np.exp(-tau / decay_s) * np.cos(2 * np.pi * f_hz * tau + phase)
+            v[k0:k0 + tau.size] += per * d * np.exp(-tau / decay_s) * np.cos(
+                2 * np.pi * f_hz * tau + phase)
     v_base = -LEVEL_M_S2 / (2 * np.pi * F_HZ) * np.sin(2 * np.pi * F_HZ * t)
     rng = np.random.default_rng(seed)
     return v + v_base + 0.002 + 2e-4 * rng.standard_normal(t.size), t_imp, v_in
