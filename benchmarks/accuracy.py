@@ -49,6 +49,8 @@ from rattle_lab.rig import load_scene, synthesize
 from rattle_lab.detect.thresholds import tabulate_thresholds
 
 ROOT = Path(__file__).resolve().parents[1]
+#: ``[detect]`` of the rig scenes (``--velocity-model``).
+DETECT: dict[str, str] = {}
 REALDATA = (ROOT / ".." / "shared" / "realdata").resolve()
 REALISTIC = 0.01
 TARGETS = {"f1": (">=", 0.99), "v_err_rel": ("<=", 0.02), "gap_err_rel": ("<=", 0.02),
@@ -94,7 +96,8 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
     times["synthesize_s"] = time.perf_counter() - t0
     truth = record.truth
     t0 = time.perf_counter()
-    runs = [analyse_run("rig", run, detect={}, fit={}, mic_distance_m=record.rig.mic_distance_m)
+    runs = [analyse_run("rig", run, detect=DETECT, fit={},
+                        mic_distance_m=record.rig.mic_distance_m)
             for run in record.runs]
     times["detect_s"] = time.perf_counter() - t0
     contact_s = float(truth.extra["contact_s"])
@@ -355,7 +358,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer noise levels (< 60 s)")
     ap.add_argument("--json", metavar="FILE", help="also write the results as JSON")
+    ap.add_argument("--velocity-model", choices=("local", "flights"), default="local",
+                    help="the detector's v_in/v_out on rig scenes: local fits (default) or the "
+                    "opt-in whole-flight model with the ringing searched in the record")
     args = ap.parse_args()
+    DETECT["velocity_model"] = args.velocity_model
     rig_cases = ([("default", 1.0), ("realistic_lab.toml", 1.0)]
                  if args.quick else
                  [("default", 0.0), ("default", 1.0), ("default", 3.0), ("default", 10.0),

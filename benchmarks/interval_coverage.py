@@ -46,6 +46,8 @@ from rattle_lab.rig import load_scene, synthesize
 from rattle_lab.rig._handbuilt import synthetic_campaign
 
 ROOT = Path(__file__).resolve().parents[1]
+#: ``[detect]`` of the rig scenes (``--velocity-model``).
+DETECT: dict[str, str] = {}
 
 
 def one_rig(seed: int, scene_name: str) -> dict[str, tuple[float, float, float]]:
@@ -54,7 +56,8 @@ def one_rig(seed: int, scene_name: str) -> dict[str, tuple[float, float, float]]
     scene = dataclasses.replace(scene, seed=int(scene.seed) + 1000 * (seed + 1))
     record = synthesize(scene).record
     truth = record.truth
-    runs = [analyse_run("rig", run, detect={}, fit={}, mic_distance_m=record.rig.mic_distance_m)
+    runs = [analyse_run("rig", run, detect=DETECT, fit={},
+                        mic_distance_m=record.rig.mic_distance_m)
             for run in record.runs]
     ths = [r.threshold for r in runs if r.threshold is not None]
     q = truth.participation
@@ -113,7 +116,11 @@ def main() -> None:
     ap.add_argument("--noise", type=float, default=0.01, help="relative noise (default 0.01)")
     ap.add_argument("--rig", metavar="SCENE", help="rig campaigns of this scene ('default' or a "
                     "file in synthetic/) instead of the detector's generator")
+    ap.add_argument("--velocity-model", choices=("local", "flights"), default="local",
+                    help="the detector's v_in/v_out on rig scenes: local fits (default) or the "
+                    "opt-in whole-flight model with the ringing searched in the record")
     args = ap.parse_args()
+    DETECT["velocity_model"] = args.velocity_model
     t0 = time.perf_counter()
     hits: dict[str, list[bool]] = {}
     width: dict[str, list[float]] = {}
