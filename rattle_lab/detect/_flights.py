@@ -426,7 +426,7 @@ def _evaluate(model: _Model, f_s: float, sigma: float, keep: np.ndarray, omega: 
     forced = _forced_columns(k_imp / fs, omega, t_total_s)[:, keep] @ forced_beta
     vin, vout = np.full(n_imp, np.nan), np.full(n_imp, np.nan)
     wf = 2.0 * np.pi * f_s
-    for side, imp, out in (("left", sg.left, vout), ("right", sg.right, vin)):
+    for imp, out in ((sg.left, vout), (sg.right, vin)):
         ok = imp >= 0
         i = imp[ok]
         tau = (k_imp[i] - sg.ref[ok]) / fs
