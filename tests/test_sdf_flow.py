@@ -128,3 +128,21 @@ def test_particular_and_transition_limits():
     # no overflow or NaN for heavy damping over long times
     Ec, Es = homogeneous_transition(20.0, 1e4)
     assert np.isfinite(Ec) and np.isfinite(Es) and Ec >= 0
+
+
+def test_particular_coeffs_with_a_damping_whose_square_underflows() -> None:
+    """At resonance with zeta ~ 1e-193, (2 zeta omega)^2 underflows to 0: no 0/0.
+
+    Found by Hypothesis (test_sdf_properties drew F = 0, omega = 1, zeta = 1.6e-193 and
+    the flow came out NaN).  Reference: the closed form A_c = 0, A_s = F / (2 zeta omega)
+    at omega = 1, exact in binary here (a power-of-two damping).
+    """
+    zeta = 2.0 ** -640                       # 2 zeta squared is far below the smallest double
+    A_c, A_s = particular_coeffs(0.0, 1.0, zeta)
+    assert float(A_c) == 0.0 and float(A_s) == 0.0
+    A_c, A_s = particular_coeffs(2.0 ** -600, 1.0, zeta)
+    assert float(A_c) == 0.0 and float(A_s) == 2.0 ** -600 / (2.0 * zeta)
+    # unforced: the flow is the free oscillation cos/sin (damping below rounding)
+    x, v = flow(0.0, 1.0, 1.6e-193, 0.3, 0.1, 0.0, 2.0)
+    assert x == pytest.approx(0.3 * np.cos(2.0) + 0.1 * np.sin(2.0), rel=1e-15, abs=1e-16)
+    assert v == pytest.approx(-0.3 * np.sin(2.0) + 0.1 * np.cos(2.0), rel=1e-15, abs=1e-16)

@@ -55,9 +55,19 @@ def particular_coeffs(F: ArrayLike, omega: ArrayLike, zeta: ArrayLike) -> tuple[
     z = np.asarray(zeta, dtype=float)
     one_m_w2 = (1.0 - w) * (1.0 + w)  # exact near w = 1
     two_zw = 2.0 * z * w
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         D = one_m_w2 * one_m_w2 + two_zw * two_zw
-        return F * one_m_w2 / D, F * two_zw / D
+        A_c, A_s = F * one_m_w2 / D, F * two_zw / D
+        # the squares underflow to D = 0 for a tiny (e.g. subnormal-scale) damping at
+        # resonance: scale by the larger term instead (the same values, no 0/0)
+        tiny = (D == 0.0) & ((one_m_w2 != 0.0) | (two_zw != 0.0))
+        if np.any(tiny):
+            big = np.maximum(np.abs(one_m_w2), np.abs(two_zw))
+            a, b = one_m_w2 / big, two_zw / big
+            den = big * (a * a + b * b)
+            A_c = np.where(tiny, F * a / den, A_c)
+            A_s = np.where(tiny, F * b / den, A_s)
+        return A_c, A_s
 
 
 def homogeneous_transition(zeta: ArrayLike, s: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
