@@ -24,6 +24,9 @@
    and a band-limited vibrometer spread a jump over several samples), each evaluated at
    the impact time; ``e = -v_out / v_in``.  With the excitation frequency the fits are
    the local forced-mode solution (:class:`_LocalFit`), else polynomials.
+7. With an excitation frequency (a shaker run), the vibrometer's DC offset is taken off
+   both velocities: the plate is at the gap at every impact, so its velocity integrates
+   to zero from the first impact to the last (:func:`velocity_offset`).
 """
 
 from __future__ import annotations
@@ -81,12 +84,16 @@ class ImpactParams:
         and opposite to it, that an impact makes (``1 + e``: 1 for a plastic impact, 2 for
         an elastic one; 0 without an impact).  The default 0.5 lies halfway between no
         impact and the most plastic one.  0 keeps every trigger.
-    velocity_model : {"local", "flights"}
-        ``"local"``: ``v_in``/``v_out`` from the fits either side of each impact.
-        ``"flights"`` (opt-in, needs the velocity and the excitation frequency): from a
-        model of the whole run that also fits the plate's higher modes ringing after each
-        impact (:func:`rattle_lab.detect._flights.flight_velocities`); the local fits are
-        kept where it cannot be set up, and :attr:`ImpactLog.velocity_note` says why.
+    velocity_model : {"auto", "local", "flights"}
+        What estimates the plate's higher modes' share of each measured velocity jump
+        (:attr:`ImpactLog.ringing_share`; ``v_in``/``v_out`` are always the local fits
+        either side of each impact).  ``"flights"`` (needs the velocity and a constant
+        excitation frequency): a model of the whole run that also fits the modes ringing
+        after each impact (:func:`rattle_lab.detect._flights.flight_velocities`);
+        ``"auto"`` (default): the same where the local fits' residual after the impacts is
+        at least :data:`RINGING_RESIDUAL_RATIO` times that before them (ringing is there),
+        none otherwise; ``"local"``: none.  The fit pools the runs' shares and takes it off
+        the ratios (:func:`rattle_lab.fit.ringing_corrected_ratios`).
     """
 
     on: float = 12.0
@@ -102,7 +109,7 @@ class ImpactParams:
     sine_degree: int = 1
     sine_guard_s: float = 3e-4
     min_reversal: float = 0.5
-    velocity_model: Literal["local", "flights"] = "local"
+    velocity_model: Literal["auto", "local", "flights"] = "auto"
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.off) and self.off > 0):
@@ -116,8 +123,8 @@ class ImpactParams:
                 raise ParameterError(f"`{name}` must be >= 0, was {value}")
         if self.fit_basis not in ("sine", "poly"):
             raise ParameterError(f"`fit_basis` must be 'sine' or 'poly', was {self.fit_basis!r}")
-        if self.velocity_model not in ("local", "flights"):
-            raise ParameterError("`velocity_model` must be 'local' or 'flights', was "
+        if self.velocity_model not in ("auto", "local", "flights"):
+            raise ParameterError("`velocity_model` must be 'auto', 'local' or 'flights', was "
                                  f"{self.velocity_model!r}")
         if self.sine_degree not in (0, 1, 2):
             raise ParameterError(f"`sine_degree` must be 0, 1 or 2, was {self.sine_degree}")
@@ -150,8 +157,16 @@ class ImpactLog:
     fs_hz : float
         Sample rate, Hz.
     velocity_note : str
-        With ``velocity_model = "flights"``: why some or all impacts kept the local fits'
-        velocities (empty when none did, and with the local fits).
+        Why the flight model gave no ringing share, or used only some impacts (empty
+        when it used all, or was not run).
+    velocity_offset_m_s : float
+        The velocity channel's DC offset taken off ``v_in`` and ``v_out``
+        (:func:`velocity_offset`; 0 without an excitation frequency or where it cannot be
+        measured), m/s.
+    ringing_share : float
+        The higher modes' share of each measured velocity jump ``v_out - v_in`` from the
+        flight model (the median over its impacts of ``1 - jump_flight / jump_local``);
+        NaN where it was not run or not determined (see ``velocity_model``).
     """
 
     t_s: np.ndarray
@@ -164,6 +179,8 @@ class ImpactLog:
     params: ImpactParams = field(default_factory=ImpactParams)
     fs_hz: float = float("nan")
     velocity_note: str = ""
+    velocity_offset_m_s: float = 0.0
+    ringing_share: float = float("nan")
 
     @property
     def n_impacts(self) -> int:
@@ -454,6 +471,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                     2 * degree + 3)
         n_guard = n_samples_of(params.sine_guard_s, fs_hz, name="sine_guard_s")
     t_idx, onsets, v_in, v_out, strength, pads = [], [], [], [], [], []
+    spans: list[tuple[int, int, int, int]] = []
     for j, (start, peak, end) in enumerate(trig):
         j_lo, j_hi = start, end
         if v is not None:
@@ -473,6 +491,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         pads.append(max((j_hi - j_lo + 1) * 1.5 + n_guard + 1, 5e-4 * fs_hz))
         lo_lim = trig[j - 1][2] + 1 if j > 0 else 0
         hi_lim = trig[j + 1][0] - 1 if j + 1 < len(trig) else v.size - 1
+        spans.append((j_lo, j_hi, lo_lim, hi_lim))
         t_jump, vi, vo = jump_velocities(v, j_lo, j_hi, lo_lim, hi_lim, n_fit=n_fit,
                                          n_guard=n_guard, degree=degree,
                                          omega_per_sample=omega, accel=a)
@@ -485,26 +504,139 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     with np.errstate(divide="ignore", invalid="ignore"):
         e = np.where(vin != 0, -vout / vin, np.nan)
     keep = _reverses(vin, vout, params.min_reversal) if v is not None else np.ones(vin.size, bool)
-    note = ""
-    if params.velocity_model == "flights" and v is not None:
+    offset = 0.0
+    if v is not None and excitation_freq_hz is not None:
+        # a shaker run: the plate meets the striker at the gap, cycle after cycle
+        speed = float(np.nanmedian(np.abs(vin[keep]))) if keep.any() else float("nan")
+        offset = velocity_offset(v, np.asarray(t_idx, dtype=float)[keep], fs_hz, speed)
+        vin, vout = vin - offset, vout - offset
+        with np.errstate(divide="ignore", invalid="ignore"):
+            e = np.where(vin != 0, -vout / vin, np.nan)
+    note, share = "", float("nan")
+    model = params.velocity_model
+    if model == "auto" and v is not None and excitation_freq_hz is not None:
+        model = "flights" if _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree,
+                                                     omega) >= RINGING_RESIDUAL_RATIO else "local"
+    if model == "flights" and v is not None:
         if excitation_freq_hz is None:
-            note = "local fits kept: the flight model needs a constant excitation frequency"
+            note = "no ringing share: the flight model needs a constant excitation frequency"
         else:
-            flights = flight_velocities(v, fs_hz, excitation_freq_hz,
-                                        np.asarray(t_idx, dtype=float)[keep],
+            k_keep = np.asarray(t_idx, dtype=float)[keep]
+            flights = flight_velocities(v, fs_hz, excitation_freq_hz, k_keep,
                                         np.asarray(pads, dtype=float)[keep], vin[keep],
                                         vout[keep])
-            vin, vout = vin.copy(), vout.copy()
-            vin[keep], vout[keep] = flights.v_in_m_s, flights.v_out_m_s
-            with np.errstate(divide="ignore", invalid="ignore"):
-                e = np.where(vin != 0, -vout / vin, np.nan)
             note = flights.note
+            m = flights.from_flights
+            if m.sum() >= MIN_SHARE_IMPACTS:
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    ratio = (flights.v_out_m_s[m] - flights.v_in_m_s[m]) / (vout[keep][m]
+                                                                             - vin[keep][m])
+                share = float(np.median(1.0 - ratio[np.isfinite(ratio)]))
+            elif not note:
+                note = (f"no ringing share: {int(m.sum())} impacts from the flight model, "
+                        f"needs >= {MIN_SHARE_IMPACTS}")
     return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,
                      onset_s=start_time_s + np.asarray(onsets, dtype=float)[keep] / fs_hz,
                      v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],
                      strength=np.asarray(strength, dtype=float)[keep],
                      channels=tuple(names), params=params, fs_hz=float(fs_hz),
-                     velocity_note=note)
+                     velocity_note=note, velocity_offset_m_s=offset, ringing_share=share)
+
+
+#: ``velocity_model = "auto"`` runs the flight model where the local fits' median residual
+#: after the impacts is at least this many times that before them (the plate's higher
+#: modes ring after each impact; noise, hum and the forced motion are alike on both sides).
+RINGING_RESIDUAL_RATIO = 1.2
+#: Fewest flight-model impacts for a run's ringing share.
+MIN_SHARE_IMPACTS = 8
+#: The residual ratio's windows are this many times the velocity fits' (a window as short
+#: as the fits' absorbs a few milliseconds of ringing into its envelope).
+RESIDUAL_WINDOW_FACTOR = 2
+#: Impacts sampled for the residual ratio.
+_RESIDUAL_SAMPLE = 40
+
+
+def _ringing_residual_ratio(v: np.ndarray, spans: list[tuple[int, int, int, int]],
+                            keep: np.ndarray, n_fit: int, n_guard: int, degree: int,
+                            omega: float | None) -> float:
+    """Median over (at most :data:`_RESIDUAL_SAMPLE`) impacts of the RMS residual of the
+    local fit after the impact over that before it (NaN with fewer than 8 impacts)."""
+    idx = np.flatnonzero(keep)
+    if idx.size < 8:
+        return float("nan")
+    idx = idx[np.unique(np.linspace(0, idx.size - 1, min(idx.size, _RESIDUAL_SAMPLE))
+                        .round().astype(int))]
+    ratios = []
+    n_fit = RESIDUAL_WINDOW_FACTOR * n_fit
+    for i in idx:
+        j_lo, j_hi, lo_lim, hi_lim = spans[i]
+        n_pad = (j_hi - j_lo + 1) + n_guard
+        pre_hi = j_lo - 1 - n_pad
+        pre_lo = max(lo_lim, pre_hi - n_fit + 1)
+        post_lo = j_hi + n_pad
+        post_hi = min(hi_lim, post_lo + n_fit - 1)
+        rms = []
+        for lo, hi in ((pre_lo, pre_hi), (post_lo, post_hi)):
+            if hi - lo + 1 < n_fit:
+                break
+            k = np.arange(lo, hi + 1.0)
+            fit = _LocalFit(k, v[lo:hi + 1], degree, omega)
+            rms.append(float(np.sqrt(np.mean((v[lo:hi + 1] - fit(k)) ** 2))))
+        if len(rms) == 2 and rms[0] > 0:
+            ratios.append(rms[1] / rms[0])
+    return float(np.median(ratios)) if len(ratios) >= 8 else float("nan")
+
+
+#: Least span from the first to the last impact over which :func:`velocity_offset` is measured, s.
+OFFSET_MIN_SPAN_S = 0.05
+
+
+def velocity_offset(v: np.ndarray, k_imp: np.ndarray, fs_hz: float,
+                    scale_m_s: float) -> float:
+    """The velocity channel's DC offset: its mean from the first impact to the last, m/s.
+
+    At every impact the plate is at the gap, so its velocity relative to the striker
+    integrates to zero between any two impacts; an absolute vibrometer adds the base's
+    velocity, whose integral (the base displacement, tens of micrometres) is as small.
+    What remains of the mean is the sensor's offset: on the realistic lab scene (3 mm/s
+    offset) it was 12 % of the slowest runs' impact velocity and moved their ``e`` by up
+    to 15 % (issue 15).  The higher modes' ringing integrates to a small part of each
+    velocity change (``sum a_j s_j / (s_j^2 + w_j^2)``) and is left in it.  0 with fewer
+    than 3 impacts or a span under :data:`OFFSET_MIN_SPAN_S` (a single shock has no
+    second contact to close the integral), and 0 where the flights' own mean velocities
+    scatter by more than :data:`OFFSET_CONSISTENCY` times ``scale_m_s`` (the impact
+    speed): then the contacts are not at one displacement and the premise fails.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(20000) / 10000.0
+    >>> v = 0.2 * np.cos(2 * np.pi * 10 * t) + 0.003          # gap reached every 0.1 s
+    >>> round(velocity_offset(v, np.array([0.0, 5000.0, 10000.0, 15000.0]), 1e4, 0.2), 6)
+    0.003
+    """
+    k = np.sort(np.asarray(k_imp, dtype=float)[np.isfinite(k_imp)])
+    if k.size < 3 or (k[-1] - k[0]) / fs_hz < OFFSET_MIN_SPAN_S:
+        return 0.0
+    # the integral of v from sample 0 to any fractional index, by the trapezoid rule
+    vv = np.asarray(v, dtype=float)
+    cum = np.concatenate([[0.0], np.cumsum(0.5 * (vv[1:] + vv[:-1]))])
+    i0 = np.clip(np.floor(k).astype(int), 0, vv.size - 2)
+    frac = k - i0
+    at = cum[i0] + frac * vv[i0] + 0.5 * frac**2 * (vv[i0 + 1] - vv[i0])
+    flights = np.diff(at) / np.diff(k)            # mean velocity of each flight
+    c = float((at[-1] - at[0]) / (k[-1] - k[0]))
+    # the premise: every flight's mean is the offset (a record whose flights disagree by
+    # more than OFFSET_CONSISTENCY of the impact speeds does not close at the gap)
+    spread = 1.4826 * float(np.median(np.abs(flights - np.median(flights))))
+    if not spread <= OFFSET_CONSISTENCY * scale_m_s:
+        return 0.0
+    return c
+
+
+#: Largest robust spread of the flights' mean velocities, relative to the median impact
+#: speed, for which :func:`velocity_offset` takes the records' flights to close at the gap.
+OFFSET_CONSISTENCY = 0.02
 
 
 def _reverses(vin: np.ndarray, vout: np.ndarray, min_reversal: float) -> np.ndarray:

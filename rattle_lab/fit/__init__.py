@@ -13,7 +13,8 @@ from ._grazing import GrazingFit, fit_grazing
 from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._ramp_model import ModelThreshold, RampSpec, model_threshold
 from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_down,
-                           restitution_from_ratios, saddle_node_threshold_ms2)
+                           pooled_ringing_share, restitution_from_ratios,
+                           ringing_corrected_ratios, saddle_node_threshold_ms2)
 from ._results import RunResult, StoreFit
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
 from ._params import check_fit_params, load_pipeline
@@ -29,7 +30,8 @@ __all__ = [
     "load_pipeline",
     "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
-    "restitution_from_ratios", "saddle_node_threshold_ms2",
+    "pooled_ringing_share", "restitution_from_ratios", "ringing_corrected_ratios",
+    "saddle_node_threshold_ms2",
     "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
     "RampGrazingFit", "fit_grazing_ramp",
     "RunResult", "StoreFit",

@@ -311,16 +311,30 @@ class RatioRestitution(Estimate):
         Impacts with a velocity on both sides.
     n_runs : int
         Runs they come from; ``stderr`` is clustered by run (0 in summaries that predate it).
+    ringing_share, ringing_share_stderr : float or None
+        The higher modes' share of each measured velocity jump, pooled over the runs whose
+        flight model gave one, and its standard error; the ratios are taken without it
+        (:func:`~rattle_lab.fit.ringing_corrected_ratios`) and ``stderr`` includes its
+        error.  None where no run gave one (no correction).
+    ringing_runs : int
+        Runs the share was pooled from.
     """
 
     std: float | None = None
     median: float | None = None
     n: int = 0
     n_runs: int = 0
+    ringing_share: float | None = None
+    ringing_share_stderr: float | None = None
+    ringing_runs: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         d = {**self._base(ci=self.ci_low is not None or self.ci_high is not None),
              "std": self.std, "median": self.median, "n": self.n, "n_runs": self.n_runs}
+        if self.ringing_runs:
+            d.update(ringing_share=self.ringing_share,
+                     ringing_share_stderr=self.ringing_share_stderr,
+                     ringing_runs=self.ringing_runs)
         if self.notes:
             d["notes"] = list(self.notes)
         return d
@@ -330,7 +344,10 @@ class RatioRestitution(Estimate):
                   ) -> RatioRestitution:
         r = _In(d, path)
         return r.build(cls, **cls._read(r, ci=False), std=r["std"],  # type: ignore[no-any-return]
-                       median=r["median"], n=r["n"], n_runs=r.get("n_runs", 0))
+                       median=r["median"], n=r["n"], n_runs=r.get("n_runs", 0),
+                       ringing_share=r.get("ringing_share"),
+                       ringing_share_stderr=r.get("ringing_share_stderr"),
+                       ringing_runs=r.get("ringing_runs", 0))
 
 
 @dataclass(frozen=True)
