@@ -43,7 +43,7 @@ import numpy as np
 from rattle_lab.detect import ImpactParams, cross_correlation_delay, detect_impacts, sound_peaks
 from rattle_lab.rig._handbuilt import synthetic_campaign
 from rattle_lab.fit import (analyse_run, fit_grazing, fit_linear_law, fit_restitution_down,
-                            fit_zeta_ramp, pooled_ringing_share, restitution_from_ratios,
+                            fit_zeta_ramp, ratios_of_runs, restitution_from_ratios,
                             ringing_corrected_ratios)
 from rattle_lab.fit._store import _crossing_curve, transient_shocks
 from rattle_lab.rig import load_scene, synthesize
@@ -103,7 +103,7 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
     times["detect_s"] = time.perf_counter() - t0
     contact_s = float(truth.extra["contact_s"])
     # as rattle-lab fit: the runs' ringing shares pooled and taken off every ratio
-    ring = pooled_ringing_share(r.impacts.ringing_share for r in runs if r.impacts is not None)
+    ring = ratios_of_runs([r.impacts for r in runs if r.impacts is not None]).ringing
     tp = fp = fn = 0
     dt, dv, dv_big, e_det, v_det, p_first = [], [], [], [], [], []
     for r in runs:

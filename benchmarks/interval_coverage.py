@@ -8,9 +8,10 @@ against the truth.  Target: each covers the truth in >= 90 % of the campaigns.
 
 Intervals: grazing fit (gap, f_s, zeta) of the crossing levels (half a forcing period
 before each first impact, as ``rattle-lab fit``): lmfit profile 95 % interval; e from velocity
-ratios: mean +- 1.96 standard errors, the run-clustered one (``e_ratio``,
-``restitution_from_ratios(groups=run)``) and the one that treats every impact as independent
-(``e_ratio_iid``, as before).  This generator's thresholds carry no ramp lag, so eq. (3.4)
+ratios: mean +- 1.96 standard errors, as ``rattle-lab fit`` reports it (``e_ratio``,
+:func:`rattle_lab.fit.ratios_of_runs`: run-clustered, the runs' pooled ringing share taken
+off with its error) and the one that treats every impact as independent (``e_ratio_iid``,
+as before).  This generator's thresholds carry no ramp lag, so eq. (3.4)
 is its exact model.
 
 ``--rig SCENE`` draws the campaigns from the synthetic rig instead (``default`` or a file in
@@ -40,7 +41,8 @@ import numpy as np
 
 from rattle_lab.detect.thresholds import tabulate_thresholds
 from rattle_lab.fit import (analyse_run, fit_grazing, fit_grazing_ramp, fit_restitution_down,
-                            fit_zeta_ramp, restitution_from_ratios)
+                            fit_zeta_ramp, ratios_of_runs, restitution_from_ratios,
+                            ringing_corrected_ratios)
 from rattle_lab.fit._store import _crossing_curve
 from rattle_lab.rig import load_scene, synthesize
 from rattle_lab.rig._handbuilt import synthetic_campaign
@@ -75,10 +77,13 @@ def one_rig(seed: int, scene_name: str) -> dict[str, tuple[float, float, float]]
                        zeta0=qs["zeta"].value, participation=q, level_hold_periods=hold).zeta
     out["zeta_ramp_qsgap"] = (truth.zeta, zf.ci_low, zf.ci_high)
     ok = [r for r in runs if r.impacts]
-    ratios = np.concatenate([r.impacts.e for r in ok])
-    run_of = np.concatenate([np.full(r.impacts.e.size, i) for i, r in enumerate(ok)])
-    st = restitution_from_ratios(ratios, groups=run_of)
-    out["e_ratio"] = (truth.e, st.mean - 1.96 * st.stderr, st.mean + 1.96 * st.stderr)
+    # as rattle-lab fit: the runs' ringing shares pooled and taken off every ratio
+    rs = ratios_of_runs([r.impacts for r in ok])
+    st = rs.stats
+    out["e_ratio"] = (truth.e, st.mean - 1.96 * rs.stderr, st.mean + 1.96 * rs.stderr)
+    ratios = (np.concatenate([ringing_corrected_ratios(r.impacts.v_in_m_s, r.impacts.v_out_m_s,
+                                                       rs.ringing.value) for r in ok])
+              if rs.ringing.n_runs else np.concatenate([r.impacts.e for r in ok]))
     st = restitution_from_ratios(ratios)
     out["e_ratio_iid"] = (truth.e, st.mean - 1.96 * st.stderr, st.mean + 1.96 * st.stderr)
     ed = fit_restitution_down(ths, gap_m=g["gap_m"].value, f_s_hz=g["f_s_hz"].value,
@@ -101,11 +106,10 @@ def one(seed: int, noise_rel: float) -> dict[str, tuple[float, float, float]]:
            for name, truth_v in (("gap_m", truth.gap_m), ("f_s_hz", truth.f_s_hz),
                                  ("zeta", truth.zeta))}
     ok = [r for r in runs if r.impacts]
-    ratios = np.concatenate([r.impacts.e for r in ok])
-    run_of = np.concatenate([np.full(r.impacts.e.size, i) for i, r in enumerate(ok)])
-    st = restitution_from_ratios(ratios, groups=run_of)
-    out["e_ratio"] = (truth.e, st.mean - 1.96 * st.stderr, st.mean + 1.96 * st.stderr)
-    st = restitution_from_ratios(ratios)
+    rs = ratios_of_runs([r.impacts for r in ok])     # (this generator rings in no run)
+    st = rs.stats
+    out["e_ratio"] = (truth.e, st.mean - 1.96 * rs.stderr, st.mean + 1.96 * rs.stderr)
+    st = restitution_from_ratios(np.concatenate([r.impacts.e for r in ok]))
     out["e_ratio_iid"] = (truth.e, st.mean - 1.96 * st.stderr, st.mean + 1.96 * st.stderr)
     return out
 
@@ -116,9 +120,10 @@ def main() -> None:
     ap.add_argument("--noise", type=float, default=0.01, help="relative noise (default 0.01)")
     ap.add_argument("--rig", metavar="SCENE", help="rig campaigns of this scene ('default' or a "
                     "file in synthetic/) instead of the detector's generator")
-    ap.add_argument("--velocity-model", choices=("local", "flights"), default="local",
-                    help="the detector's v_in/v_out on rig scenes: local fits (default) or the "
-                    "opt-in whole-flight model with the ringing searched in the record")
+    ap.add_argument("--velocity-model", choices=("auto", "local", "flights"), default="auto",
+                    help="the detector's ringing share on rig scenes (ImpactParams.velocity_model): "
+                    "auto (default: the flight model where ringing shows), local (none) or "
+                    "flights (every run)")
     args = ap.parse_args()
     DETECT["velocity_model"] = args.velocity_model
     t0 = time.perf_counter()

@@ -100,3 +100,24 @@ def test_crossing_level_is_half_a_period_before_the_first_impact():
                      ramp_duration_s=1.0)
     assert crossing_level_ms2(down) == pytest.approx(10.0 - 0.5 * rate / f, rel=1e-12)
     assert np.isnan(crossing_level_ms2(Threshold("r", f, "up", 10.0, 0.0)))
+
+
+def test_no_offset_is_taken_where_the_flights_do_not_close_at_the_gap():
+    """The hand-built record draws each impact's velocity at random at fixed times, so its
+    flights end at different displacements: their mean velocities disagree, the premise of
+    :func:`velocity_offset` fails, and nothing is taken off (the velocities stay exact)."""
+    from rattle_lab.detect._impacts import velocity_offset
+
+    v, a, ti, vin, _ = _record()
+    log = detect_impacts(FS, velocity_m_s=v, accel_ms2=a, excitation_freq_hz=F_HZ)
+    assert log.velocity_offset_m_s == 0.0
+    # the same record made to close at the gap: each flight's mean taken off its own samples
+    k = ti * FS
+    w = v.copy()
+    for lo, hi in zip(k[:-1], k[1:]):
+        s = slice(int(np.ceil(lo)), int(np.floor(hi)) + 1)
+        w[s] -= np.mean(v[s])
+    # (each flight's jump lies between samples: the trapezoid is within half a sample of it,
+    # |jump| / 2 / 267 samples ~ 0.9 mm/s at most; measured 0.21 mm/s)
+    assert velocity_offset(w + 0.004, k, FS, 0.3) == pytest.approx(0.004, abs=9e-4)
+    assert velocity_offset(w + 0.004, k[:2], FS, 0.3) == 0.0          # two impacts: no offset

@@ -39,9 +39,16 @@ flight alike, forced and free response trade off), when no ringing is found, or 
 the model's median velocity jump differs from the local fits' by more than
 :data:`MAX_JUMP_CHANGE` (more than ringing explains: the modes are not resolved).
 
-On the synthetic rig's ``realistic_lab`` scene this is not yet the default: e from the
-ratios comes out +4 % (local fits +16 %) with runs from -11 % to +22 %, at several
-seconds per run (``benchmarks/ringing_separability.py``).
+How the detector uses it (:class:`~rattle_lab.detect.ImpactParams` ``velocity_model``):
+not for the impacts' velocities, which stay the local fits', but for the ringing's share
+of each measured velocity jump, ``1 - jump_flight / jump_local`` (median over the run's
+impacts, :attr:`~rattle_lab.detect.ImpactLog.ringing_share`).  One run's model scatters
+(on the synthetic rig's ``realistic_lab`` scene runs gave e from -11 % to +22 %, shares
+from -0.01 to 0.12 around 0.09): the share is a property of the plate and the sensor
+positions, so the fit pools the runs' shares (median) and takes it off every ratio
+(:func:`rattle_lab.fit.ringing_corrected_ratios`): e from the ratios then comes out
+within 0.1 % there (local fits alone +27 %).  A run takes several seconds
+(``benchmarks/ringing_separability.py``).
 """
 
 from __future__ import annotations

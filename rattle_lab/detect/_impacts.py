@@ -39,6 +39,7 @@ import numpy as np
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, detrended_abs, n_samples_of, robust_sigma
 from ._flights import flight_velocities
+from ._ringing import find_ringing
 
 
 @dataclass(frozen=True)
@@ -94,6 +95,11 @@ class ImpactParams:
         at least :data:`RINGING_RESIDUAL_RATIO` times that before them (ringing is there),
         none otherwise; ``"local"``: none.  The fit pools the runs' shares and takes it off
         the ratios (:func:`rattle_lab.fit.ringing_corrected_ratios`).
+    remove_ringing : bool
+        With the velocity and a constant excitation frequency: find the plate's higher
+        modes ringing between the impacts (above 1.3 times the excitation frequency, any
+        damping), take them off the velocity and fit ``v_in``/``v_out`` on what is left
+        (:func:`rattle_lab.detect._ringing.find_ringing`; :attr:`ImpactLog.ringing_hz`).
     """
 
     on: float = 12.0
@@ -110,6 +116,7 @@ class ImpactParams:
     sine_guard_s: float = 3e-4
     min_reversal: float = 0.5
     velocity_model: Literal["auto", "local", "flights"] = "auto"
+    remove_ringing: bool = False
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.off) and self.off > 0):
@@ -167,6 +174,9 @@ class ImpactLog:
         The higher modes' share of each measured velocity jump ``v_out - v_in`` from the
         flight model (the median over its impacts of ``1 - jump_flight / jump_local``);
         NaN where it was not run or not determined (see ``velocity_model``).
+    ringing_hz : tuple of float
+        Higher modes found ringing between the impacts and taken off the velocity before
+        ``v_in``/``v_out`` were fitted (``remove_ringing``), Hz.
     """
 
     t_s: np.ndarray
@@ -181,6 +191,7 @@ class ImpactLog:
     velocity_note: str = ""
     velocity_offset_m_s: float = 0.0
     ringing_share: float = float("nan")
+    ringing_hz: tuple[float, ...] = ()
 
     @property
     def n_impacts(self) -> int:
@@ -504,6 +515,24 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     with np.errstate(divide="ignore", invalid="ignore"):
         e = np.where(vin != 0, -vout / vin, np.nan)
     keep = _reverses(vin, vout, params.min_reversal) if v is not None else np.ones(vin.size, bool)
+    ring_hz: tuple[float, ...] = ()
+    if v is not None and excitation_freq_hz is not None and params.remove_ringing:
+        # the higher modes ringing between impacts, found flight by flight, are taken off
+        # and the impacts' velocities fitted again on what is left (see _ringing)
+        idx = np.flatnonzero(keep)
+        ring = find_ringing(v, fs_hz, excitation_freq_hz, np.asarray(t_idx, dtype=float)[idx],
+                            np.asarray(pads, dtype=float)[idx])
+        if ring.poles:
+            v = v - ring.signal
+            ring_hz = tuple(f for f, _ in ring.poles)
+            for i in idx:
+                t_jump, vin[i], vout[i] = jump_velocities(
+                    v, *spans[i], n_fit=n_fit, n_guard=n_guard, degree=degree,
+                    omega_per_sample=omega, accel=a)
+                if np.isfinite(t_jump):
+                    t_idx[i] = t_jump
+            with np.errstate(divide="ignore", invalid="ignore"):
+                e = np.where(vin != 0, -vout / vin, np.nan)
     offset = 0.0
     if v is not None and excitation_freq_hz is not None:
         # a shaker run: the plate meets the striker at the gap, cycle after cycle
@@ -540,7 +569,8 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                      v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],
                      strength=np.asarray(strength, dtype=float)[keep],
                      channels=tuple(names), params=params, fs_hz=float(fs_hz),
-                     velocity_note=note, velocity_offset_m_s=offset, ringing_share=share)
+                     velocity_note=note, velocity_offset_m_s=offset, ringing_share=share,
+                     ringing_hz=ring_hz)
 
 
 #: ``velocity_model = "auto"`` runs the flight model where the local fits' median residual

@@ -13,7 +13,7 @@ from ._grazing import GrazingFit, fit_grazing
 from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._ramp_model import ModelThreshold, RampSpec, model_threshold
 from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_down,
-                           pooled_ringing_share, restitution_from_ratios,
+                           pooled_ringing_share, ratios_of_runs, restitution_from_ratios,
                            ringing_corrected_ratios, saddle_node_threshold_ms2)
 from ._results import RunResult, StoreFit
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
@@ -30,7 +30,7 @@ __all__ = [
     "load_pipeline",
     "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
-    "pooled_ringing_share", "restitution_from_ratios", "ringing_corrected_ratios",
+    "pooled_ringing_share", "ratios_of_runs", "restitution_from_ratios", "ringing_corrected_ratios",
     "saddle_node_threshold_ms2",
     "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
     "RampGrazingFit", "fit_grazing_ramp",

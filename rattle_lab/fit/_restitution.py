@@ -214,6 +214,65 @@ def ringing_corrected_ratios(v_in: object, v_out: object, share: float) -> np.nd
         return -(vi + (1.0 - share) * (vo - vi)) / vi
 
 
+@dataclass(frozen=True)
+class RatioStats:
+    """Result of :func:`ratios_of_runs`.
+
+    Attributes
+    ----------
+    stats : RestitutionStats
+        Of the per-impact ratios (the share taken off); ``stats.stderr`` is the
+        run-clustered one (:func:`restitution_from_ratios`).
+    stderr : float
+        ``stats.stderr`` combined in quadrature with the pooled share's error moving every
+        ratio alike (``|d e / d share| = |v_out - v_in| / |v_in|``, median over impacts).
+    ringing : RingingShare
+        The pooled share (``n_runs == 0``: none, nothing taken off).
+    """
+
+    stats: RestitutionStats
+    stderr: float
+    ringing: RingingShare
+
+
+def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
+    """e from the velocity ratios of several runs' impact logs, as ``rattle-lab fit`` reports it.
+
+    ``logs``: :class:`~rattle_lab.detect.ImpactLog` (or anything with ``v_in_m_s``,
+    ``v_out_m_s``, ``e`` and ``ringing_share``), one per run, velocities relative to the
+    striker.  The runs' ringing shares are pooled (:func:`pooled_ringing_share`) and taken
+    off every ratio (:func:`ringing_corrected_ratios`); without any, the logs' own ratios.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as Log
+    >>> vi = np.array([-0.1, -0.2])
+    >>> runs = [Log(v_in_m_s=vi, v_out_m_s=-0.76 * vi, e=np.array([0.76, 0.76]),
+    ...             ringing_share=s) for s in (1 / 11, float("nan"), 1 / 11)]
+    >>> r = ratios_of_runs(runs)
+    >>> round(r.stats.mean, 6), r.ringing.n_runs
+    (0.6, 2)
+    """
+    ring = pooled_ringing_share(log.ringing_share for log in logs)
+    if ring.n_runs:
+        e_logs = [ringing_corrected_ratios(log.v_in_m_s, log.v_out_m_s, ring.value)
+                  for log in logs]
+    else:
+        e_logs = [np.asarray(log.e, dtype=float) for log in logs]
+    e_all = np.concatenate(e_logs or [np.zeros(0)])
+    # a run's impacts share its frequency, level and ringing: the stderr is clustered by run
+    groups = np.concatenate([np.full(e.size, i) for i, e in enumerate(e_logs)] or [np.zeros(0)])
+    st = restitution_from_ratios(e_all, groups=groups)
+    se = st.stderr
+    if ring.n_runs and np.isfinite(ring.stderr) and st.n:
+        vi = np.concatenate([np.asarray(log.v_in_m_s, dtype=float) for log in logs])
+        vo = np.concatenate([np.asarray(log.v_out_m_s, dtype=float) for log in logs])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope = float(np.nanmedian(np.abs((vo - vi) / vi)))
+        se = float(np.hypot(se, slope * ring.stderr))
+    return RatioStats(st, se, ring)
+
+
 def saddle_node_threshold_ms2(freq_hz: np.ndarray, e: float, gap_m: float, f_s_hz: float,
                               zeta: float, participation: float) -> np.ndarray:
     """Quasi-static disappearance threshold: the 1/1 saddle-node (eq. 3.11), dimensional, m/s^2.

@@ -35,8 +35,7 @@ from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
 from ._grazing import GrazingFit, fit_grazing
 from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._damping import fit_zeta_ramp
-from ._restitution import (fit_restitution_down, pooled_ringing_share,
-                           restitution_from_ratios, ringing_corrected_ratios)
+from ._restitution import fit_restitution_down, ratios_of_runs
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
 from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
                          GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
@@ -106,6 +105,9 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
                          start_time_s=t0, excitation_freq_hz=f_fit)
     if vel is not None and getattr(vel, "measurand", None) == "panel_absolute":
         log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
+    if log.ringing_hz:      # the higher modes were found ringing and taken off the velocity
+        base["chain_flags"] = base["chain_flags"] + (
+            "velocity_ringing_removed: " + ", ".join(f"{f:.0f}" for f in log.ringing_hz) + " Hz",)
     if log.velocity_note:   # velocity_model = "flights" kept the local fits somewhere: say why
         base["chain_flags"] = base["chain_flags"] + (f"velocity_model_local: {log.velocity_note}",)
     names = tuple(c.name for c in used)
@@ -451,30 +453,14 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
             missing["grazing"] = str(exc)
     else:
         missing["grazing"] = f"needs >= 4 upward thresholds, had {n_up}"
-    logs = [r.impacts for r in ok if r.impacts is not None]
     # issue 15: the higher modes' share of each velocity jump, pooled over the runs whose
     # flight model gave one, is taken off every run's ratios
-    ring = pooled_ringing_share(log.ringing_share for log in logs)
-    if ring.n_runs:
-        e_logs = [ringing_corrected_ratios(log.v_in_m_s, log.v_out_m_s, ring.value)
-                  for log in logs]
-    else:
-        e_logs = [log.e for log in logs]
-    e_all = np.concatenate(e_logs or [np.zeros(0)])
-    # a run's impacts share its frequency, level and ringing: the stderr is clustered by run
-    e_run = np.concatenate([np.full(e.size, i) for i, e in enumerate(e_logs)] or [np.zeros(0)])
-    st = restitution_from_ratios(e_all, groups=e_run)
+    rs = ratios_of_runs([r.impacts for r in ok if r.impacts is not None])
+    st, ring = rs.stats, rs.ringing
     ratio = None
     if st.n:
-        se, notes, extra = st.stderr, tuple[str, ...](), dict[str, Any]()
+        se, notes, extra = rs.stderr, tuple[str, ...](), dict[str, Any]()
         if ring.n_runs:
-            # d e / d share = (v_out - v_in) / v_in: the share's error moves every ratio alike
-            vi = np.concatenate([log.v_in_m_s for log in logs])
-            vo = np.concatenate([log.v_out_m_s for log in logs])
-            with np.errstate(divide="ignore", invalid="ignore"):
-                slope = float(np.nanmedian(np.abs((vo - vi) / vi)))
-            se_ring = slope * ring.stderr if np.isfinite(ring.stderr) else 0.0
-            se = float(np.hypot(se, se_ring))
             extra = dict(ringing_share=ring.value, ringing_share_stderr=_f(ring.stderr),
                          ringing_runs=ring.n_runs)
             notes = (f"the plate's higher modes ring after each impact: {100 * ring.value:.1f} % "
