@@ -100,6 +100,22 @@ def test_clipping_at_the_channels_own_extreme_without_a_range():
     assert "own extreme" in detail
 
 
+def test_a_quantised_smooth_peak_is_not_clipping_a_quantised_clip_is():
+    """A 16-bit record of a smooth signal repeats its top sample where the curvature is below
+    one quantum (here a slow 5 Hz sine at 25.6 kHz: ~13 samples); it steps on and off that
+    run by one quantum.  Clipped at 95 % of its peak, the same signal runs into its rail by
+    many quanta per sample: that is clipping."""
+    lsb = 2.0 / 2**16
+    t = np.arange(25600) / 25600.0
+    x = np.round(0.8 * np.sin(2 * np.pi * 5.0 * t + 0.3) / lsb) * lsb
+    top = np.flatnonzero(x == x.max())
+    assert top.size >= 3            # the flat top the old rule called clipping
+    assert _check(x, chunk=4096, n_dropout=10_000) == []
+    clipped = np.minimum(x, np.round(0.76 / lsb) * lsb)
+    [(flag, *_)] = _check(clipped, chunk=4096, n_dropout=10_000)
+    assert flag == "clipping"
+
+
 def test_a_rest_level_at_one_extreme_is_not_clipping():
     # A gated pulse or a shaker command (the forced-shock record's commanded pulse: 0 from
     # sample 0 to 6350 and after 6850) rests at its minimum most of the time: not clipping.

@@ -39,7 +39,6 @@ import numpy as np
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, detrended_abs, n_samples_of, robust_sigma
 from ._flights import flight_velocities
-from ._ringing import find_ringing
 
 
 @dataclass(frozen=True)
@@ -86,20 +85,19 @@ class ImpactParams:
         an elastic one; 0 without an impact).  The default 0.5 lies halfway between no
         impact and the most plastic one.  0 keeps every trigger.
     velocity_model : {"auto", "local", "flights"}
-        What estimates the plate's higher modes' share of each measured velocity jump
-        (:attr:`ImpactLog.ringing_share`; ``v_in``/``v_out`` are always the local fits
-        either side of each impact).  ``"flights"`` (needs the velocity and a constant
-        excitation frequency): a model of the whole run that also fits the modes ringing
-        after each impact (:func:`rattle_lab.detect._flights.flight_velocities`);
-        ``"auto"`` (default): the same where the local fits' residual after the impacts is
-        at least :data:`RINGING_RESIDUAL_RATIO` times that before them (ringing is there),
-        none otherwise; ``"local"``: none.  The fit pools the runs' shares and takes it off
-        the ratios (:func:`rattle_lab.fit.ringing_corrected_ratios`).
-    remove_ringing : bool
-        With the velocity and a constant excitation frequency: find the plate's higher
-        modes ringing between the impacts (above 1.3 times the excitation frequency, any
-        damping), take them off the velocity and fit ``v_in``/``v_out`` on what is left
-        (:func:`rattle_lab.detect._ringing.find_ringing`; :attr:`ImpactLog.ringing_hz`).
+        How the plate's higher modes ringing in the vibrometer are dealt with.
+        ``"flights"`` (needs the velocity and a constant excitation frequency): a model of
+        the whole run that also fits the modes ringing after each impact
+        (:func:`rattle_lab.detect._flights.flight_velocities`).  Modes that die out within
+        a flight give the ringing's share of each measured velocity jump
+        (:attr:`ImpactLog.ringing_share`; ``v_in``/``v_out`` stay the local fits', and the
+        fit pools the runs' shares and takes it off the ratios,
+        :func:`rattle_lab.fit.ratios_of_runs`).  Where that model finds nothing, lightly
+        damped modes that ring on past the next impact are modelled over whole flights,
+        and ``v_in``/``v_out`` are that model's (:attr:`ImpactLog.velocity_source`).
+        ``"auto"`` (default): the same where the local fits' residual after the impacts
+        is at least :data:`RINGING_RESIDUAL_RATIO` times that before them (ringing is
+        there), the local fits otherwise; ``"local"``: the local fits.
     """
 
     on: float = 12.0
@@ -116,7 +114,6 @@ class ImpactParams:
     sine_guard_s: float = 3e-4
     min_reversal: float = 0.5
     velocity_model: Literal["auto", "local", "flights"] = "auto"
-    remove_ringing: bool = False
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.off) and self.off > 0):
@@ -174,9 +171,13 @@ class ImpactLog:
         The higher modes' share of each measured velocity jump ``v_out - v_in`` from the
         flight model (the median over its impacts of ``1 - jump_flight / jump_local``);
         NaN where it was not run or not determined (see ``velocity_model``).
-    ringing_hz : tuple of float
-        Higher modes found ringing between the impacts and taken off the velocity before
-        ``v_in``/``v_out`` were fitted (``remove_ringing``), Hz.
+    ringing_ratio : float
+        The local fits' median residual after the impacts over that before them, the
+        ``velocity_model = "auto"`` test for ringing (NaN where not computed).
+    velocity_source : {"local", "flights"}
+        Where ``v_in``/``v_out`` come from: the local fits, or (lightly damped higher modes
+        that ring on past the next impact) the flight model with those modes over whole
+        flights (:func:`~rattle_lab.detect._flights.flight_velocities` ``slow=True``).
     """
 
     t_s: np.ndarray
@@ -191,7 +192,8 @@ class ImpactLog:
     velocity_note: str = ""
     velocity_offset_m_s: float = 0.0
     ringing_share: float = float("nan")
-    ringing_hz: tuple[float, ...] = ()
+    ringing_ratio: float = float("nan")
+    velocity_source: str = "local"
 
     @property
     def n_impacts(self) -> int:
@@ -515,24 +517,6 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     with np.errstate(divide="ignore", invalid="ignore"):
         e = np.where(vin != 0, -vout / vin, np.nan)
     keep = _reverses(vin, vout, params.min_reversal) if v is not None else np.ones(vin.size, bool)
-    ring_hz: tuple[float, ...] = ()
-    if v is not None and excitation_freq_hz is not None and params.remove_ringing:
-        # the higher modes ringing between impacts, found flight by flight, are taken off
-        # and the impacts' velocities fitted again on what is left (see _ringing)
-        idx = np.flatnonzero(keep)
-        ring = find_ringing(v, fs_hz, excitation_freq_hz, np.asarray(t_idx, dtype=float)[idx],
-                            np.asarray(pads, dtype=float)[idx])
-        if ring.poles:
-            v = v - ring.signal
-            ring_hz = tuple(f for f, _ in ring.poles)
-            for i in idx:
-                t_jump, vin[i], vout[i] = jump_velocities(
-                    v, *spans[i], n_fit=n_fit, n_guard=n_guard, degree=degree,
-                    omega_per_sample=omega, accel=a)
-                if np.isfinite(t_jump):
-                    t_idx[i] = t_jump
-            with np.errstate(divide="ignore", invalid="ignore"):
-                e = np.where(vin != 0, -vout / vin, np.nan)
     offset = 0.0
     if v is not None and excitation_freq_hz is not None:
         # a shaker run: the plate meets the striker at the gap, cycle after cycle
@@ -541,11 +525,12 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         vin, vout = vin - offset, vout - offset
         with np.errstate(divide="ignore", invalid="ignore"):
             e = np.where(vin != 0, -vout / vin, np.nan)
-    note, share = "", float("nan")
+    note, share, ratio, source = "", float("nan"), float("nan"), "local"
     model = params.velocity_model
-    if model == "auto" and v is not None and excitation_freq_hz is not None:
-        model = "flights" if _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree,
-                                                     omega) >= RINGING_RESIDUAL_RATIO else "local"
+    if model != "local" and v is not None and excitation_freq_hz is not None:
+        ratio = _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree, omega)
+        if model == "auto":
+            model = "flights" if ratio >= RINGING_RESIDUAL_RATIO else "local"
     if model == "flights" and v is not None:
         if excitation_freq_hz is None:
             note = "no ringing share: the flight model needs a constant excitation frequency"
@@ -558,19 +543,34 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             m = flights.from_flights
             if m.sum() >= MIN_SHARE_IMPACTS:
                 with np.errstate(divide="ignore", invalid="ignore"):
-                    ratio = (flights.v_out_m_s[m] - flights.v_in_m_s[m]) / (vout[keep][m]
+                    jumps = (flights.v_out_m_s[m] - flights.v_in_m_s[m]) / (vout[keep][m]
                                                                              - vin[keep][m])
-                share = float(np.median(1.0 - ratio[np.isfinite(ratio)]))
-            elif not note:
-                note = (f"no ringing share: {int(m.sum())} impacts from the flight model, "
-                        f"needs >= {MIN_SHARE_IMPACTS}")
+                share = float(np.median(1.0 - jumps[np.isfinite(jumps)]))
+            else:
+                # lightly damped modes ring on past the next impact: their tails are in v_in
+                # as well, which no share of the jump undoes; modelled over whole flights,
+                # the impacts' velocities are the model's
+                slow = flight_velocities(v, fs_hz, excitation_freq_hz, k_keep,
+                                         np.asarray(pads, dtype=float)[keep], vin[keep],
+                                         vout[keep], slow=True)
+                ms = slow.from_flights
+                if ms.sum() >= MIN_SHARE_IMPACTS:
+                    vk_in, vk_out = vin[keep], vout[keep]
+                    vk_in[ms], vk_out[ms] = slow.v_in_m_s[ms], slow.v_out_m_s[ms]
+                    vin[keep], vout[keep] = vk_in, vk_out
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        e = np.where(vin != 0, -vout / vin, np.nan)
+                    source = "flights"
+                    note = slow.note
+                else:
+                    note = f"{note}; with lightly damped modes: {slow.note.removeprefix('local fits kept: ')}"
     return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,
                      onset_s=start_time_s + np.asarray(onsets, dtype=float)[keep] / fs_hz,
                      v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],
                      strength=np.asarray(strength, dtype=float)[keep],
                      channels=tuple(names), params=params, fs_hz=float(fs_hz),
                      velocity_note=note, velocity_offset_m_s=offset, ringing_share=share,
-                     ringing_hz=ring_hz)
+                     ringing_ratio=ratio, velocity_source=source)
 
 
 #: ``velocity_model = "auto"`` runs the flight model where the local fits' median residual

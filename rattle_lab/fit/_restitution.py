@@ -38,6 +38,7 @@ import lmfit
 import numpy as np
 from scipy import stats
 
+from rattle_lab.detect._impacts import RINGING_RESIDUAL_RATIO
 from rattle_lab.model.analysis import saddle_node_forcing
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.detect.thresholds import Threshold
@@ -214,6 +215,10 @@ def ringing_corrected_ratios(v_in: object, v_out: object, share: float) -> np.nd
         return -(vi + (1.0 - share) * (vo - vi)) / vi
 
 
+#: Data-quality flag: the vibrometer rings after the impacts and no run measured the share.
+FLAG_RINGING_UNCORRECTED = "e_ratio_ringing_uncorrected"
+
+
 @dataclass(frozen=True)
 class RatioStats:
     """Result of :func:`ratios_of_runs`.
@@ -228,20 +233,39 @@ class RatioStats:
         ratio alike (``|d e / d share| = |v_out - v_in| / |v_in|``, median over impacts).
     ringing : RingingShare
         The pooled share (``n_runs == 0``: none, nothing taken off).
+    ringing_runs_unmeasured : int
+        Runs whose local fits showed ringing after the impacts (``ringing_ratio`` at or
+        above the detector's threshold) when no run's ringing was measured or modelled:
+        their ratios are biased.
+    runs_modelled : int
+        Runs whose velocities came from the flight model with lightly damped modes.
+    runs_left_out : int
+        Runs left out: ringing seen, neither measured nor modelled, while others were.
     """
 
     stats: RestitutionStats
     stderr: float
     ringing: RingingShare
+    ringing_runs_unmeasured: int = 0
+    runs_modelled: int = 0
+    runs_left_out: int = 0
 
 
 def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
     """e from the velocity ratios of several runs' impact logs, as ``rattle-lab fit`` reports it.
 
     ``logs``: :class:`~rattle_lab.detect.ImpactLog` (or anything with ``v_in_m_s``,
-    ``v_out_m_s``, ``e`` and ``ringing_share``), one per run, velocities relative to the
-    striker.  The runs' ringing shares are pooled (:func:`pooled_ringing_share`) and taken
-    off every ratio (:func:`ringing_corrected_ratios`); without any, the logs' own ratios.
+    ``v_out_m_s``, ``e``, ``ringing_share`` and, optionally, ``ringing_ratio`` and
+    ``velocity_source``), one per run, velocities relative to the striker.
+
+    * A run whose velocities came from the flight model with lightly damped modes
+      (``velocity_source == "flights"``) keeps its own ratios: its ringing is already out.
+    * The other runs' ringing shares are pooled (:func:`pooled_ringing_share`) and taken
+      off each of their ratios (:func:`ringing_corrected_ratios`).
+    * Without a share, a run whose local fits showed ringing (``ringing_ratio`` at or
+      above the detector's threshold) is left out when some run's ringing was modelled
+      (its ratio reads the higher modes too), and counted in ``ringing_runs_unmeasured``
+      otherwise (every ratio is then biased, and the fit says so).
 
     Examples
     --------
@@ -253,24 +277,35 @@ def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
     >>> round(r.stats.mean, 6), r.ringing.n_runs
     (0.6, 2)
     """
-    ring = pooled_ringing_share(log.ringing_share for log in logs)
-    if ring.n_runs:
-        e_logs = [ringing_corrected_ratios(log.v_in_m_s, log.v_out_m_s, ring.value)
-                  for log in logs]
-    else:
-        e_logs = [np.asarray(log.e, dtype=float) for log in logs]
+    def rings(log: Any) -> bool:
+        return bool(getattr(log, "ringing_ratio", np.nan) >= RINGING_RESIDUAL_RATIO)
+
+    modelled = [getattr(log, "velocity_source", "local") == "flights" for log in logs]
+    local = [log for log, m in zip(logs, modelled) if not m]
+    ring = pooled_ringing_share(log.ringing_share for log in local)
+    e_logs, left_out = [], 0
+    for log, m in zip(logs, modelled):
+        if m:
+            e_logs.append(np.asarray(log.e, dtype=float))
+        elif ring.n_runs:
+            e_logs.append(ringing_corrected_ratios(log.v_in_m_s, log.v_out_m_s, ring.value))
+        elif any(modelled) and rings(log):
+            left_out += 1
+        else:
+            e_logs.append(np.asarray(log.e, dtype=float))
     e_all = np.concatenate(e_logs or [np.zeros(0)])
     # a run's impacts share its frequency, level and ringing: the stderr is clustered by run
     groups = np.concatenate([np.full(e.size, i) for i, e in enumerate(e_logs)] or [np.zeros(0)])
     st = restitution_from_ratios(e_all, groups=groups)
     se = st.stderr
     if ring.n_runs and np.isfinite(ring.stderr) and st.n:
-        vi = np.concatenate([np.asarray(log.v_in_m_s, dtype=float) for log in logs])
-        vo = np.concatenate([np.asarray(log.v_out_m_s, dtype=float) for log in logs])
+        vi = np.concatenate([np.asarray(log.v_in_m_s, dtype=float) for log in local])
+        vo = np.concatenate([np.asarray(log.v_out_m_s, dtype=float) for log in local])
         with np.errstate(divide="ignore", invalid="ignore"):
             slope = float(np.nanmedian(np.abs((vo - vi) / vi)))
         se = float(np.hypot(se, slope * ring.stderr))
-    return RatioStats(st, se, ring)
+    unmeasured = 0 if ring.n_runs or any(modelled) else sum(rings(log) for log in logs)
+    return RatioStats(st, se, ring, unmeasured, int(sum(modelled)), left_out)
 
 
 def saddle_node_threshold_ms2(freq_hz: np.ndarray, e: float, gap_m: float, f_s_hz: float,

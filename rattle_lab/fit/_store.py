@@ -35,7 +35,7 @@ from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
 from ._grazing import GrazingFit, fit_grazing
 from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._damping import fit_zeta_ramp
-from ._restitution import fit_restitution_down, ratios_of_runs
+from ._restitution import FLAG_RINGING_UNCORRECTED, fit_restitution_down, ratios_of_runs
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
 from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
                          GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
@@ -105,9 +105,6 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
                          start_time_s=t0, excitation_freq_hz=f_fit)
     if vel is not None and getattr(vel, "measurand", None) == "panel_absolute":
         log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
-    if log.ringing_hz:      # the higher modes were found ringing and taken off the velocity
-        base["chain_flags"] = base["chain_flags"] + (
-            "velocity_ringing_removed: " + ", ".join(f"{f:.0f}" for f in log.ringing_hz) + " Hz",)
     if log.velocity_note:   # velocity_model = "flights" kept the local fits somewhere: say why
         base["chain_flags"] = base["chain_flags"] + (f"velocity_model_local: {log.velocity_note}",)
     names = tuple(c.name for c in used)
@@ -457,19 +454,32 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     # flight model gave one, is taken off every run's ratios
     rs = ratios_of_runs([r.impacts for r in ok if r.impacts is not None])
     st, ring = rs.stats, rs.ringing
-    ratio = None
+    ratio, ringing_flag = None, None
     if st.n:
-        se, notes, extra = rs.stderr, tuple[str, ...](), dict[str, Any]()
+        se, notes, extra = rs.stderr, list[str](), dict[str, Any]()
         if ring.n_runs:
             extra = dict(ringing_share=ring.value, ringing_share_stderr=_f(ring.stderr),
                          ringing_runs=ring.n_runs)
-            notes = (f"the plate's higher modes ring after each impact: {100 * ring.value:.1f} % "
-                     f"of each measured velocity jump (median of {ring.n_runs} runs' flight "
-                     "models) is theirs and is taken off the ratios"
-                     + ("" if np.isfinite(ring.stderr) else "; one run: its error is not "
-                        "in the standard error"),)
+            notes.append(f"the plate's higher modes ring after each impact: {100 * ring.value:.1f} "
+                         f"% of each measured velocity jump (median of {ring.n_runs} runs' "
+                         "flight models) is theirs and is taken off the ratios"
+                         + ("" if np.isfinite(ring.stderr) else "; one run: its error is "
+                            "not in the standard error"))
+        if rs.runs_modelled:
+            notes.append(f"in {rs.runs_modelled} runs lightly damped higher modes ring on past the "
+                         "next impact: their velocities are the flight model's, with those "
+                         "modes over whole flights")
+        if rs.runs_left_out:
+            notes.append(f"{rs.runs_left_out} runs left out: the higher modes ring there, but "
+                         "neither their share nor the whole flights could be modelled")
+        if rs.ringing_runs_unmeasured:
+            notes.append(f"the plate's higher modes ring after the impacts in "
+                         f"{rs.ringing_runs_unmeasured} runs, but no run's flight model "
+                         "measured them: these ratios include them and read e high; e from "
+                         "the downward thresholds does not depend on it")
+            ringing_flag = FLAG_RINGING_UNCORRECTED
         ratio = RatioRestitution(st.mean, se, "1", std=st.std, median=st.median, n=st.n,
-                                 n_runs=st.n_groups, notes=notes, **extra)
+                                 n_runs=st.n_groups, notes=tuple(notes), **extra)
     else:
         missing["restitution_ratio"] = "no impact with a velocity on both sides"
     # issue 15: the ramp lag biases eq. (3.4)'s gap as well as its zeta; the ramp-corrected
@@ -532,7 +542,8 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         participation=ParticipationInfo(participation.value, participation.source),
         # (a store of single shocks fits no modal law: the participation does not enter)
         data_quality=(tuple(participation.flags) if any(r.protocol != "transient" for r in ok)
-                      else ()) + chain + tuple(flags or ()),
+                      else ()) + chain + ((ringing_flag,) if ringing_flag else ())
+        + tuple(flags or ()),
         transients=tuple(TransientRun(r.input_key, r.run_id, tuple(dict(c) for c in r.shocks))
                          for r in ok if r.protocol == "transient"))
 

@@ -12,7 +12,10 @@ flag                       fatal   what
                                    limits of an integer dtype, or else the channel's own
                                    minimum or maximum (not its rest level: flat runs at
                                    an extreme that hold most of the samples, as a gated
-                                   pulse or a command signal sits at 0)
+                                   pulse or a command signal sits at 0; and only where the
+                                   quantised signal steps onto or off it by more than
+                                   ``SHARP_QUANTA`` quanta: a smooth peak repeats its top
+                                   sample too)
 ``dropout``                yes     a flat run of >= ``max(n_dropout_min, dropout_min_s*fs)``
                                    identical samples not at a range limit (stuck or
                                    zero-filled acquisition), a constant channel, or a
@@ -156,6 +159,8 @@ class _Acc:
     first_start: int | None = None
     first_len: int = 0
     value: float = math.nan
+    n_sharp: int = 0                             # runs stepped onto or off sharply
+    first_sharp: tuple[int, int] | None = None
 
     def add(self, starts: np.ndarray, lens: np.ndarray, values: np.ndarray) -> None:
         if starts.size == 0:
@@ -165,6 +170,11 @@ class _Acc:
         i = int(np.argmin(starts))
         if self.first_start is None or starts[i] < self.first_start:
             self.first_start, self.first_len, self.value = int(starts[i]), int(lens[i]), float(values[i])
+
+
+#: Without a declared range, a flat run at a quantised channel's own extreme is clipping
+#: where the signal steps into or out of it by more than this many of its smallest steps.
+SHARP_QUANTA = 3.0
 
 
 class ChannelChecker:
@@ -215,6 +225,9 @@ class ChannelChecker:
         # Without a known range: flat runs at the highest / lowest value seen so far.
         self._hi = _Acc(value=-math.inf)
         self._lo = _Acc(value=math.inf)
+        # the smallest step between neighbouring samples seen: the ADC's quantum, if any
+        self._quantum = math.inf
+        self._quantised: bool | None = None
         # Without a known range, dropouts may turn out to be at an extreme: kept apart.
         self._dropouts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
@@ -237,6 +250,16 @@ class ChannelChecker:
             self._prev_nan = False
         self.vmin = min(self.vmin, lo)
         self.vmax = max(self.vmax, hi)
+        if self.range_min is None and n > 1 and self._quantised is not False:
+            d = np.abs(np.diff(x.astype(np.float64)))
+            d = d[(d > 0) & np.isfinite(d)]
+            if d.size:
+                q = min(self._quantum, float(d.min()))
+                # quantised: the steps are whole multiples of the smallest one
+                off = np.abs(d[:2000] / q - np.round(d[:2000] / q))
+                if d.size >= 50:
+                    self._quantised = bool(np.mean(off < 1e-3) > 0.9)
+                self._quantum = q
         self._flat_runs(x, start)
         self.pos += n
 
@@ -268,16 +291,24 @@ class ChannelChecker:
             x, self._tail, start, self._open_start, self._open_len, self._min_len,
             starts, lens, values)
         if k:
-            self._classify(starts[:k].copy(), lens[:k].copy(), values[:k].copy())
+            # each run's steps into and out of it (the sample before it may lie in an
+            # earlier chunk: unknown there); every run reported here ends inside the chunk
+            rel = starts[:k] - start
+            xf = x.astype(np.float64)
+            exit_ = np.abs(xf[np.minimum(rel + lens[:k], n - 1)] - values[:k])
+            entry = np.where(rel >= 1, np.abs(xf[np.maximum(rel - 1, 0)] - values[:k]), 0.0)
+            self._classify(starts[:k].copy(), lens[:k].copy(), values[:k].copy(),
+                           np.maximum(entry, exit_))
         self._tail = x[-1:].copy()
 
     def _close_open(self) -> None:
         if self._open_len >= self._min_len:
             self._classify(np.array([self._open_start]), np.array([self._open_len]),
-                           self._tail.astype(np.float64))
+                           self._tail.astype(np.float64), np.array([math.inf]))
         self._open_len = 0
 
-    def _classify(self, starts: np.ndarray, lens: np.ndarray, values: np.ndarray) -> None:
+    def _classify(self, starts: np.ndarray, lens: np.ndarray, values: np.ndarray,
+                  steps: np.ndarray) -> None:
         if starts.size == 0:
             return
         long_enough = lens >= self.n_clip_min
@@ -288,16 +319,29 @@ class ChannelChecker:
             drop = (lens >= self.n_dropout) & ~at_limit
             self.dropout.add(starts[drop], lens[drop], values[drop])
             return
+        # Without a declared range, a flat run at the channel's own extreme of a quantised
+        # signal is clipping only where the signal steps into (or out of) it by more than a
+        # few quanta: a smooth peak also repeats its top sample a few times, stepping on and
+        # off it by one quantum (16 bits at 25.6 kHz: 3 samples at a 0.8 m/s peak).
+        # (every run at the extreme still counts towards its rest level)
         cand = long_enough
         if cand.any():
             cs, cl, cv = starts[cand], lens[cand], values[cand]
+            sharp = (steps[cand] > SHARP_QUANTA * self._quantum if self._quantised
+                     else np.ones(int(cand.sum()), dtype=bool))
             for acc, best, better in ((self._hi, cv.max(), np.greater),
                                       (self._lo, cv.min(), np.less)):
                 if better(best, acc.value):
                     acc.n_runs, acc.n_samples, acc.first_start, acc.value = 0, 0, None, float(best)
+                    acc.n_sharp, acc.first_sharp = 0, None
                 if best == acc.value:
                     sel = cv == best
                     acc.add(cs[sel], cl[sel], cv[sel])
+                    if (sel & sharp).any():
+                        if acc.n_sharp == 0:
+                            i = int(np.flatnonzero(sel & sharp)[0])
+                            acc.first_sharp = (int(cs[i]), int(cl[i]))
+                        acc.n_sharp += int((sel & sharp).sum())
         drop = lens >= self.n_dropout
         if drop.any():
             self._dropouts.append((starts[drop], lens[drop], values[drop]))
@@ -327,7 +371,7 @@ class ChannelChecker:
                 # gated pulse, a command that is 0 between shots) is not clipped there: a
                 # clipped signal leaves its rail again and spends most of its time inside.
                 rest_level = flat[side] and 2 * acc.n_samples > n
-                if flat[side] and not rest_level and not constant:
+                if flat[side] and not rest_level and not constant and acc.n_sharp:
                     self.clip.add(np.array([acc.first_start]), np.array([acc.first_len]),
                                   np.array([acc.value]))
                     self.clip.n_runs += acc.n_runs - 1
