@@ -104,7 +104,6 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
     contact_s = float(truth.extra["contact_s"])
     # as rattle-lab fit: the runs' ringing shares pooled and taken off every ratio
     ring = ratios_of_runs([r.impacts for r in runs if r.impacts is not None]).ringing
-    n_modelled = sum(r.impacts.velocity_source == "flights" for r in runs if r.impacts is not None)
     tp = fp = fn = 0
     dt, dv, dv_big, e_det, v_det, p_first = [], [], [], [], [], []
     for r in runs:
@@ -119,9 +118,8 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
             rel = np.abs(r.impacts.v_in_m_s[di] / true.v_in_m_s[ti] - 1)
             dv.extend(rel)
             dv_big.extend(rel[true.v_in_m_s[ti] >= 0.03])
-            own = r.impacts.velocity_source == "flights" or not ring.n_runs
-            e_det.extend(r.impacts.e[di] if own else ringing_corrected_ratios(
-                r.impacts.v_in_m_s[di], r.impacts.v_out_m_s[di], ring.value))
+            e_det.extend(ringing_corrected_ratios(r.impacts.v_in_m_s[di], r.impacts.v_out_m_s[di],
+                                                  ring.value) if ring.n_runs else r.impacts.e[di])
         if r.peaks is not None:
             v_det.extend(np.abs(r.impacts.v_in_m_s))
             p_first.extend(r.peaks.p_first_pa)
@@ -155,7 +153,6 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
                e_ratio_err_rel=abs(float(restitution_from_ratios(np.asarray(e_det)).mean)
                                    / truth.e - 1) if e_det else float("nan"),
                ringing_share=ring.value, ringing_runs=ring.n_runs,
-               runs_whole_flight_model=n_modelled,
                thr_err_max_rel=float(np.max(thr_rel)) if thr_rel else float("nan"),
                thr_err_max_steps=float(np.max(thr_steps)) if thr_steps else float("nan"))
     t0 = time.perf_counter()

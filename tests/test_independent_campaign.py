@@ -134,3 +134,15 @@ def test_undeclared_or_uncorrectable_measurand_is_flagged(tmp_path):
                                            f"{key}/undeclared: velocity_measurand_undeclared"]
     table = run_cli("fit", str(store), "--quiet").stdout
     assert f"data-quality flag: {key}/no_base: velocity_panel_absolute" in table
+
+
+def test_unmeasured_ringing_in_the_vibrometer_is_named(tmp_path):
+    """With the higher modes in the vibrometer (this generator's lightly damped modes, 2 %
+    of critical, ringing on past the next impact) the ratios read them too (e ~1 for 0.55)
+    and no flight model measures their share on these steady dwells: the fit must say so,
+    with a data-quality flag and a note on e from the ratios, not report e silently."""
+    _, _, _, summary = _campaign(tmp_path, Chain(ring_in_velocity=True))
+    assert "e_ratio_ringing_uncorrected" in summary["data_quality"]
+    ratio = summary["fits"]["restitution_ratio"]
+    assert any("higher modes ring after the impacts" in n for n in ratio["notes"])
+    assert ratio["value"] > 1.3 * Plant().e       # the bias the note names is there

@@ -19,18 +19,14 @@ a whole run instead, all of it linear least squares around two small searches:
   proportion to its velocity change ``dv_i``, with the same phase every time (the mode
   shapes at the contact and at the beam do not change): run-wide columns
   ``sum_i dv_i exp(-s_j (t - t_i)) [cos, sin](w_j (t - t_i))`` over the flight after
-  ``t_i`` (``slow=False``) or, for lightly damped modes (``slow=True``), on into the
-  later flights for :data:`REACH_S`.  The poles
+  ``t_i`` (a tail carried on into later flights would add up, in periodic motion, to a
+  tone at the forcing frequency, which the forced response already is).  The poles
   ``(w_j, s_j)`` come from the record: variable projection on this model, one mode at a
   time (a scan over frequency and decay, Nelder-Mead on the new mode, ``f_s`` and
   ``sigma`` searched again, all modes refined), kept while the Bayesian information
   criterion falls.  A ringing mode lies above ``1.1 f_s`` and decays at least twice per
   forcing period and :data:`RING_DECAY_FACTOR` times faster than the fundamental: one
-  that lasts a flight is the free response's to the model.  With ``slow=True`` a mode
-  above :data:`SLOW_RING_RATIO` ``f_s`` may ring as long as :data:`SLOW_RING_ZETA` of
-  critical damping lets it (that far from ``f_s`` it cannot pass for the free response),
-  and whether the flights determine ``f_s`` is judged with the ringing modelled (strong
-  ringing left in the residual hides it).  Searches use at most
+  that lasts a flight is the free response's to the model.  Searches use at most
   :data:`SEARCH_SEGMENTS` flights; the last fit uses all of them.
 
 ``v_in`` and ``v_out`` are the forced plus the fundamental's free response at each impact
@@ -72,18 +68,10 @@ MIN_FLIGHT_SAMPLES = 12
 KNOT_S = 1.0
 #: Largest change of the median velocity jump from the local fits' that ringing explains.
 MAX_JUMP_CHANGE = 0.25
-#: The same for the slow-mode model, whose modes also carry the earlier impacts' tails.
-MAX_JUMP_CHANGE_SLOW = 0.5
 #: Most ringing modes modelled.
 MAX_RING_MODES = 3
 #: Most flights the searches for f_s, the damping and the ringing use.
 SEARCH_SEGMENTS = 60
-#: Ringing modes above this many times f_s may ring for as long as their damping says.
-SLOW_RING_RATIO = 1.5
-#: Least damping ratio of such a mode.
-SLOW_RING_ZETA = 0.002
-#: How long after its impact a mode's ringing is modelled, s.
-REACH_S = 0.25
 #: A ringing mode is kept if it lowers the stacked residual by this many noise variances.
 RING_GAIN = 25.0
 
@@ -183,12 +171,12 @@ class _Pairs:
     n_rows: int
 
 
-def _pairs(t_s: np.ndarray, t_imp_s: np.ndarray, reach_s: float, *, tails: bool) -> _Pairs:
+def _pairs(t_s: np.ndarray, t_imp_s: np.ndarray, reach_s: float) -> _Pairs:
     lo = np.searchsorted(t_s, t_imp_s, side="right")
-    # fast modes: each impact's ringing in its own flight (what runs on is negligible, and
-    # modelling it adds nothing but freedom); slow ones run on as far as ``reach_s``
-    end = t_imp_s + reach_s if tails else np.minimum(t_imp_s + reach_s, np.r_[t_imp_s[1:], np.inf])
-    hi = np.searchsorted(t_s, end, side="right")
+    # each impact's ringing is modelled in its own flight (a tail that ran on into the next
+    # flights would sum, in periodic motion, to a tone at the forcing frequency)
+    nxt = np.r_[t_imp_s[1:], np.inf]
+    hi = np.searchsorted(t_s, np.minimum(t_imp_s + reach_s, nxt), side="right")
     counts = hi - lo
     imp = np.repeat(np.arange(t_imp_s.size), counts)
     first = np.repeat(lo - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
@@ -259,7 +247,7 @@ class _Model:
 
 def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
                   pairs: _Pairs, dv: np.ndarray, f_s: float, sigma: float,
-                  f_lo_hz: float, f_hi_hz: float, s_min: float, slow_from_hz: float
+                  f_lo_hz: float, f_hi_hz: float, s_min: float
                   ) -> tuple[list[tuple[float, float]], float, float]:
     """Ringing modes by variable projection on the run model; ``(modes, f_s, sigma)``.
 
@@ -267,15 +255,10 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
     Nelder-Mead refinement of the new mode's ``(f, log s)``, the fundamental's
     ``(f_s, sigma)`` searched again, and every mode refined together.  A mode is kept
     while it lowers the Bayesian information criterion (``n ln rss + p ln n``, four
-    parameters per mode) and every mode below ``slow_from_hz`` decays faster than ``s_min``
-    (above it, :data:`SLOW_RING_ZETA` of critical at least: a mode that far above the
-    fundamental cannot pass for its free response, however long it rings).
+    parameters per mode) and every mode decays faster than ``s_min``.
     """
     n = y.size
     s_max = 0.05 * fs_hz
-
-    def floor(f_hz: float) -> float:
-        return s_min if f_hz < slow_from_hz else SLOW_RING_ZETA * 2 * np.pi * f_hz
 
     def model(modes: list[tuple[float, float]]) -> _Model:
         x = np.hstack([xf, _ring_columns(pairs, dv, modes)]) if modes else xf
@@ -285,7 +268,7 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
                fs_: float, sig_: float, maxfev: int) -> tuple[list[tuple[float, float]], float]:
         def obj(p: np.ndarray) -> float:
             ms = [(float(p[2 * j]), float(np.exp(p[2 * j + 1]))) for j in range(p.size // 2)]
-            if any(not (f_lo_hz <= f <= f_hi_hz and floor(f) <= s <= s_max) for f, s in ms):
+            if any(not (f_lo_hz <= f <= f_hi_hz and s_min <= s <= s_max) for f, s in ms):
                 return np.inf
             return model(fixed + ms).solve(fs_, sig_)[0]
         p0 = np.array([x for f, s in modes for x in (f, np.log(s))])
@@ -302,8 +285,8 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
     f_grid = np.geomspace(f_lo_hz, f_hi_hz, 16)
     for _ in range(MAX_RING_MODES):
         scan = [(model(modes + [(f, q * 2 * np.pi * f)]).solve(f_s, sigma)[0], f,
-                 q * 2 * np.pi * f) for f in f_grid for q in (0.005, 0.02, 0.05, 0.15, 0.4)
-                if floor(f) <= q * 2 * np.pi * f <= s_max]
+                 q * 2 * np.pi * f) for f in f_grid for q in (0.05, 0.15, 0.4)
+                if q * 2 * np.pi * f >= s_min]
         _, f0, s0 = min(scan, key=lambda c: c[0])
         new, _ = refine([(f0, s0)], modes, f_s, sigma, 60)
         trial = modes + new
@@ -312,7 +295,7 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
             trial, _ = refine(trial, [], fs_t, sig_t, 40 * len(trial))
         rss = model(trial).solve(fs_t, sig_t)[0]
         bic_new = n * np.log(rss) + 4 * len(trial) * np.log(n)
-        if not bic_new < bic or any(s < 1.02 * floor(f) for f, s in trial) or any(
+        if not bic_new < bic or any(s < 1.02 * s_min for _, s in trial) or any(
                 abs(a[0] / b[0] - 1) < 0.05 for i, a in enumerate(trial) for b in trial[:i]):
             break   # no gain, a decay on its bound, or two modes at one frequency: unresolved
         modes, bic, f_s, sigma = trial, bic_new, fs_t, sig_t
@@ -321,8 +304,7 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
 
 def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
                       pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray,
-                      modes_given: list[tuple[float, float]] | None = None, *,
-                      slow: bool = False) -> FlightFit:
+                      modes_given: list[tuple[float, float]] | None = None) -> FlightFit:
     """Each impact's ``v_in``, ``v_out`` from a whole-run flight model (see the module docstring).
 
     Parameters
@@ -340,11 +322,6 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
         weight the ringing at first.
     modes_given : list of (f_hz, s_1_s), optional
         Ringing modes to use instead of those found in the record (diagnostics).
-    slow : bool
-        ``False``: ringing modes decay within a forcing period and each impact's is
-        modelled in its own flight.  ``True``: modes above :data:`SLOW_RING_RATIO` f_s may
-        ring on, with :data:`SLOW_RING_ZETA` of critical damping at least, and every
-        impact's ringing is carried into the later flights for :data:`REACH_S`.
 
     Returns
     -------
@@ -375,36 +352,30 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     xf_sub, keep = _forced(sub.k / fs_hz, omega, t_total, None)
     model = _Model(y_all[sub.k], sub, fs_hz, xf_sub)
     f_s, sigma = model.search(f_hz, 0.02 * omega, grid=True)
-    steady = replace(fallback, note="local fits kept: the flights do not determine the "
-                     "free response (steady motion: forced and free response trade off)")
-    if not slow and not _determined(model, f_s, sigma, f_hz):
-        return steady
+    # identifiable?  steady motion repeats the same flight: forced and free then trade off
+    rss0 = model.solve(f_s, sigma)[0]
+    bump = 0.5 * (model.solve(1.02 * f_s, sigma)[0] + model.solve(0.98 * f_s, sigma)[0])
+    if not (bump > 1.05 * rss0 and 0.77 * f_hz < f_s < 1.27 * f_hz):
+        return replace(fallback, note="local fits kept: the flights do not determine the "
+                       "free response (steady motion: forced and free response trade off)")
     dv = v_out_local - v_in_local
     t_imp = k_imp / fs_hz
-    reach = REACH_S if slow else 4.0 * period / fs_hz
-    pairs_sub = _pairs(sub.k / fs_hz, t_imp, reach, tails=slow)
+    reach = 4.0 * period / fs_hz
+    pairs_sub = _pairs(sub.k / fs_hz, t_imp, reach)
     if modes_given is None:
         # a ringing mode decays within a forcing period, else it is the free response's
         modes, f_s, sigma = _search_modes(
             model.y, sub, fs_hz, xf_sub, pairs_sub, np.nan_to_num(dv), f_s, sigma, 1.1 * f_s,
-            min(6.0 * f_s, 0.2 * fs_hz), max(RING_DECAY_FACTOR * sigma, 2.0 * f_hz),
-            SLOW_RING_RATIO * f_s if slow else np.inf)
+            min(6.0 * f_s, 0.2 * fs_hz), max(RING_DECAY_FACTOR * sigma, 2.0 * f_hz))
     else:
         modes = list(modes_given)
-    # identifiable?  steady motion repeats the same flight: forced and free then trade off
-    # (slow modes: judged with the ringing modelled, which left in the residual hides it)
-    if slow and modes:
-        model = _Model(y_all[sub.k], sub, fs_hz,
-                       np.hstack([xf_sub, _ring_columns(pairs_sub, dv, modes)]))
-    if slow and not _determined(model, f_s, sigma, f_hz):
-        return steady
     if not modes:
         return replace(fallback, f_s_hz=f_s, sigma_1_s=sigma,
                        note="local fits kept: no ringing found after the impacts")
     ring = _ring_columns(pairs_sub, dv, modes)
     model = _Model(y_all[sub.k], sub, fs_hz, np.hstack([xf_sub, ring]))
     f_s, sigma = model.search(f_s, sigma, grid=False)
-    pairs = _pairs(sg.k / fs_hz, t_imp, reach, tails=slow)
+    pairs = _pairs(sg.k / fs_hz, t_imp, reach)
     xf, _ = _forced(sg.k / fs_hz, omega, t_total, keep)
     vin, vout = v_in_local, v_out_local
     for _ in range(2):   # then with the impacts' own velocity changes weighting the ringing
@@ -418,12 +389,11 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
         ratio = (vout - vin) / jump_local
         sane = np.isfinite(vin) & np.isfinite(vout) & (ratio > 0.5) & (ratio < 2.0)
     med = float(np.median(ratio[sane])) if sane.any() else float("nan")
-    max_change = MAX_JUMP_CHANGE_SLOW if slow else MAX_JUMP_CHANGE
-    if not abs(med - 1.0) < max_change:
+    if not abs(med - 1.0) < MAX_JUMP_CHANGE:
         return replace(fallback, f_s_hz=f_s, sigma_1_s=sigma, note=(
             f"local fits kept: the flight model's velocity jumps differ from the local fits' "
             f"by {100 * (med - 1):+.0f} % (median), more than the ringing can explain "
-            f"({100 * max_change:.0f} %): modes {', '.join(f'{m[0]:.0f}' for m in modes)} Hz "
+            f"({100 * MAX_JUMP_CHANGE:.0f} %): modes {', '.join(f'{m[0]:.0f}' for m in modes)} Hz "
             "not resolved"))
     n_bad = int(n_imp - sane.sum())
     note = "" if n_bad == 0 else (f"local fits kept for {n_bad} of {n_imp} impacts (no flight "
@@ -431,13 +401,6 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
                                   "a factor 2 of the local fits')")
     return FlightFit(np.where(sane, vin, v_in_local), np.where(sane, vout, v_out_local), sane,
                      f_s, sigma, tuple(m[0] for m in modes), tuple(m[1] for m in modes), note)
-
-
-def _determined(model: _Model, f_s: float, sigma: float, f_hz: float) -> bool:
-    """Whether the flights pin ``f_s``: 2 % either side raises the residual by 5 %."""
-    rss0 = model.solve(f_s, sigma)[0]
-    bump = 0.5 * (model.solve(1.02 * f_s, sigma)[0] + model.solve(0.98 * f_s, sigma)[0])
-    return bool(bump > 1.05 * rss0 and 0.77 * f_hz < f_s < 1.27 * f_hz)
 
 
 def _subset(sg: _Segments, pick: np.ndarray) -> _Segments:

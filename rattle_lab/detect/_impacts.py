@@ -92,9 +92,9 @@ class ImpactParams:
         a flight give the ringing's share of each measured velocity jump
         (:attr:`ImpactLog.ringing_share`; ``v_in``/``v_out`` stay the local fits', and the
         fit pools the runs' shares and takes it off the ratios,
-        :func:`rattle_lab.fit.ratios_of_runs`).  Where that model finds nothing, lightly
-        damped modes that ring on past the next impact are modelled over whole flights,
-        and ``v_in``/``v_out`` are that model's (:attr:`ImpactLog.velocity_source`).
+        :func:`rattle_lab.fit.ratios_of_runs`).  Lightly damped modes that ring on past
+        the next impact are not modelled: their tails are in ``v_in`` too, and the fit
+        then names the bias (``e_ratio_ringing_uncorrected``).
         ``"auto"`` (default): the same where the local fits' residual after the impacts
         is at least :data:`RINGING_RESIDUAL_RATIO` times that before them (ringing is
         there), the local fits otherwise; ``"local"``: the local fits.
@@ -174,10 +174,6 @@ class ImpactLog:
     ringing_ratio : float
         The local fits' median residual after the impacts over that before them, the
         ``velocity_model = "auto"`` test for ringing (NaN where not computed).
-    velocity_source : {"local", "flights"}
-        Where ``v_in``/``v_out`` come from: the local fits, or (lightly damped higher modes
-        that ring on past the next impact) the flight model with those modes over whole
-        flights (:func:`~rattle_lab.detect._flights.flight_velocities` ``slow=True``).
     """
 
     t_s: np.ndarray
@@ -193,7 +189,6 @@ class ImpactLog:
     velocity_offset_m_s: float = 0.0
     ringing_share: float = float("nan")
     ringing_ratio: float = float("nan")
-    velocity_source: str = "local"
 
     @property
     def n_impacts(self) -> int:
@@ -525,7 +520,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         vin, vout = vin - offset, vout - offset
         with np.errstate(divide="ignore", invalid="ignore"):
             e = np.where(vin != 0, -vout / vin, np.nan)
-    note, share, ratio, source = "", float("nan"), float("nan"), "local"
+    note, share, ratio = "", float("nan"), float("nan")
     model = params.velocity_model
     if model != "local" and v is not None and excitation_freq_hz is not None:
         ratio = _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree, omega)
@@ -546,31 +541,16 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                     jumps = (flights.v_out_m_s[m] - flights.v_in_m_s[m]) / (vout[keep][m]
                                                                              - vin[keep][m])
                 share = float(np.median(1.0 - jumps[np.isfinite(jumps)]))
-            else:
-                # lightly damped modes ring on past the next impact: their tails are in v_in
-                # as well, which no share of the jump undoes; modelled over whole flights,
-                # the impacts' velocities are the model's
-                slow = flight_velocities(v, fs_hz, excitation_freq_hz, k_keep,
-                                         np.asarray(pads, dtype=float)[keep], vin[keep],
-                                         vout[keep], slow=True)
-                ms = slow.from_flights
-                if ms.sum() >= MIN_SHARE_IMPACTS:
-                    vk_in, vk_out = vin[keep], vout[keep]
-                    vk_in[ms], vk_out[ms] = slow.v_in_m_s[ms], slow.v_out_m_s[ms]
-                    vin[keep], vout[keep] = vk_in, vk_out
-                    with np.errstate(divide="ignore", invalid="ignore"):
-                        e = np.where(vin != 0, -vout / vin, np.nan)
-                    source = "flights"
-                    note = slow.note
-                else:
-                    note = f"{note}; with lightly damped modes: {slow.note.removeprefix('local fits kept: ')}"
+            elif not note:
+                note = (f"no ringing share: {int(m.sum())} impacts from the flight model, "
+                        f"needs >= {MIN_SHARE_IMPACTS}")
     return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,
                      onset_s=start_time_s + np.asarray(onsets, dtype=float)[keep] / fs_hz,
                      v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],
                      strength=np.asarray(strength, dtype=float)[keep],
                      channels=tuple(names), params=params, fs_hz=float(fs_hz),
                      velocity_note=note, velocity_offset_m_s=offset, ringing_share=share,
-                     ringing_ratio=ratio, velocity_source=source)
+                     ringing_ratio=ratio)
 
 
 #: ``velocity_model = "auto"`` runs the flight model where the local fits' median residual

@@ -235,37 +235,26 @@ class RatioStats:
         The pooled share (``n_runs == 0``: none, nothing taken off).
     ringing_runs_unmeasured : int
         Runs whose local fits showed ringing after the impacts (``ringing_ratio`` at or
-        above the detector's threshold) when no run's ringing was measured or modelled:
-        their ratios are biased.
-    runs_modelled : int
-        Runs whose velocities came from the flight model with lightly damped modes.
-    runs_left_out : int
-        Runs left out: ringing seen, neither measured nor modelled, while others were.
+        above the detector's threshold) when no run gave a share: their ratios are biased.
     """
 
     stats: RestitutionStats
     stderr: float
     ringing: RingingShare
     ringing_runs_unmeasured: int = 0
-    runs_modelled: int = 0
-    runs_left_out: int = 0
 
 
 def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
     """e from the velocity ratios of several runs' impact logs, as ``rattle-lab fit`` reports it.
 
     ``logs``: :class:`~rattle_lab.detect.ImpactLog` (or anything with ``v_in_m_s``,
-    ``v_out_m_s``, ``e``, ``ringing_share`` and, optionally, ``ringing_ratio`` and
-    ``velocity_source``), one per run, velocities relative to the striker.
-
-    * A run whose velocities came from the flight model with lightly damped modes
-      (``velocity_source == "flights"``) keeps its own ratios: its ringing is already out.
-    * The other runs' ringing shares are pooled (:func:`pooled_ringing_share`) and taken
-      off each of their ratios (:func:`ringing_corrected_ratios`).
-    * Without a share, a run whose local fits showed ringing (``ringing_ratio`` at or
-      above the detector's threshold) is left out when some run's ringing was modelled
-      (its ratio reads the higher modes too), and counted in ``ringing_runs_unmeasured``
-      otherwise (every ratio is then biased, and the fit says so).
+    ``v_out_m_s``, ``e``, ``ringing_share`` and, optionally, ``ringing_ratio``), one per
+    run, velocities relative to the striker.  The runs' ringing shares are pooled
+    (:func:`pooled_ringing_share`) and taken off every ratio
+    (:func:`ringing_corrected_ratios`).  Without any share, the logs' own ratios; a run
+    whose local fits showed ringing (``ringing_ratio`` at or above the detector's
+    threshold) is then counted in ``ringing_runs_unmeasured``: its ratios read the higher
+    modes too, and the fit says so.
 
     Examples
     --------
@@ -277,35 +266,26 @@ def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
     >>> round(r.stats.mean, 6), r.ringing.n_runs
     (0.6, 2)
     """
-    def rings(log: Any) -> bool:
-        return bool(getattr(log, "ringing_ratio", np.nan) >= RINGING_RESIDUAL_RATIO)
-
-    modelled = [getattr(log, "velocity_source", "local") == "flights" for log in logs]
-    local = [log for log, m in zip(logs, modelled) if not m]
-    ring = pooled_ringing_share(log.ringing_share for log in local)
-    e_logs, left_out = [], 0
-    for log, m in zip(logs, modelled):
-        if m:
-            e_logs.append(np.asarray(log.e, dtype=float))
-        elif ring.n_runs:
-            e_logs.append(ringing_corrected_ratios(log.v_in_m_s, log.v_out_m_s, ring.value))
-        elif any(modelled) and rings(log):
-            left_out += 1
-        else:
-            e_logs.append(np.asarray(log.e, dtype=float))
+    ring = pooled_ringing_share(log.ringing_share for log in logs)
+    if ring.n_runs:
+        e_logs = [ringing_corrected_ratios(log.v_in_m_s, log.v_out_m_s, ring.value)
+                  for log in logs]
+    else:
+        e_logs = [np.asarray(log.e, dtype=float) for log in logs]
     e_all = np.concatenate(e_logs or [np.zeros(0)])
     # a run's impacts share its frequency, level and ringing: the stderr is clustered by run
     groups = np.concatenate([np.full(e.size, i) for i, e in enumerate(e_logs)] or [np.zeros(0)])
     st = restitution_from_ratios(e_all, groups=groups)
     se = st.stderr
     if ring.n_runs and np.isfinite(ring.stderr) and st.n:
-        vi = np.concatenate([np.asarray(log.v_in_m_s, dtype=float) for log in local])
-        vo = np.concatenate([np.asarray(log.v_out_m_s, dtype=float) for log in local])
+        vi = np.concatenate([np.asarray(log.v_in_m_s, dtype=float) for log in logs])
+        vo = np.concatenate([np.asarray(log.v_out_m_s, dtype=float) for log in logs])
         with np.errstate(divide="ignore", invalid="ignore"):
             slope = float(np.nanmedian(np.abs((vo - vi) / vi)))
         se = float(np.hypot(se, slope * ring.stderr))
-    unmeasured = 0 if ring.n_runs or any(modelled) else sum(rings(log) for log in logs)
-    return RatioStats(st, se, ring, unmeasured, int(sum(modelled)), left_out)
+    unmeasured = 0 if ring.n_runs else sum(
+        1 for log in logs if getattr(log, "ringing_ratio", np.nan) >= RINGING_RESIDUAL_RATIO)
+    return RatioStats(st, se, ring, unmeasured)
 
 
 def saddle_node_threshold_ms2(freq_hz: np.ndarray, e: float, gap_m: float, f_s_hz: float,

@@ -465,18 +465,13 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                          "flight models) is theirs and is taken off the ratios"
                          + ("" if np.isfinite(ring.stderr) else "; one run: its error is "
                             "not in the standard error"))
-        if rs.runs_modelled:
-            notes.append(f"in {rs.runs_modelled} runs lightly damped higher modes ring on past the "
-                         "next impact: their velocities are the flight model's, with those "
-                         "modes over whole flights")
-        if rs.runs_left_out:
-            notes.append(f"{rs.runs_left_out} runs left out: the higher modes ring there, but "
-                         "neither their share nor the whole flights could be modelled")
         if rs.ringing_runs_unmeasured:
             notes.append(f"the plate's higher modes ring after the impacts in "
                          f"{rs.ringing_runs_unmeasured} runs, but no run's flight model "
-                         "measured them: these ratios include them and read e high; e from "
-                         "the downward thresholds does not depend on it")
+                         "measured their share of the velocity jumps (lightly damped modes "
+                         "that ring on past the next impact are not modelled): these ratios "
+                         "include them and are biased; e from the downward thresholds does "
+                         "not depend on them")
             ringing_flag = FLAG_RINGING_UNCORRECTED
         ratio = RatioRestitution(st.mean, se, "1", std=st.std, median=st.median, n=st.n,
                                  n_runs=st.n_groups, notes=tuple(notes), **extra)
