@@ -12,10 +12,11 @@ reads both.  This script measures, run by run, what whole-flight models recover:
 * ``flight, oracle ringing``: the same plus the ringing modes at the scene's own
   frequencies and decay, free amplitudes per flight: an upper bound for a model whose
   ringing frequencies come from the plate (geometry declared) rather than from the record;
-* ``record``: the detector's opt-in ``velocity_model = "flights"``
-  (:mod:`rattle_lab.detect._flights`): the same kind of model with the ringing modes
-  searched in the record itself, each impact's ringing in proportion to its velocity
-  change; its run time per run (``t record``) and the modes it found.
+* ``record``: the flight model of :mod:`rattle_lab.detect._flights` (what
+  ``velocity_model = "auto"``/``"flights"`` runs to measure the ringing's share): the same
+  kind of model with the ringing modes searched in the record itself, each impact's ringing
+  in proportion to its velocity change; its own per-impact velocities, its run time per run
+  (``t record``) and the note it left.
 
 It also prints the singular values of the stacked flights (Hankel matrices of the flights,
 block-averaged by 4): how many components stand above the noise, i.e. whether the record
@@ -33,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from rattle_lab.detect import ImpactParams, detect_impacts
+from rattle_lab.detect._flights import flight_velocities
 from rattle_lab.detect._pairing import base_velocity_at
 from rattle_lab.fit._chain import _fs_of, _t0_of, paired_plate_channels
 from rattle_lab.rig import load_scene, synthesize
@@ -122,7 +124,8 @@ def main() -> None:
                           by_q["base_acceleration"])
         fs, t0, v, a = paired_plate_channels(run, vel, acc)
         f = float(run.excitation_freq_hz)
-        log = detect_impacts(fs, velocity_m_s=v, accel_ms2=a, start_time_s=t0, excitation_freq_hz=f)
+        log = detect_impacts(fs, velocity_m_s=v, accel_ms2=a, start_time_s=t0, excitation_freq_hz=f,
+                             params=ImpactParams(velocity_model="local"))
         if log.n_impacts < 8:
             continue
         vb = base_velocity_at(base.read(), _fs_of(run, base), _t0_of(run, base), f, log.t_s)
@@ -137,11 +140,10 @@ def main() -> None:
         rows["oracle"] = flight_fit(v, fs, f, k_imp, free, ring)
         dt = time.perf_counter() - t1
         t1 = time.perf_counter()
-        log_r = detect_impacts(fs, velocity_m_s=v, accel_ms2=a, start_time_s=t0,
-                               excitation_freq_hz=f,
-                               params=ImpactParams(velocity_model="flights"))
+        fit_r = flight_velocities(v, fs, f, k_imp, np.full(k_imp.size, float(PAD)),
+                                  log.v_in_m_s, log.v_out_m_s)
         dt_r = time.perf_counter() - t1
-        rows["record"] = (log_r.v_in_m_s, log_r.v_out_m_s)
+        rows["record"] = (fit_r.v_in_m_s, fit_r.v_out_m_s)
         e, verr = {}, {}
         for name, (vi, vo) in rows.items():
             vi, vo = vi - vb, vo - vb
@@ -152,7 +154,7 @@ def main() -> None:
         print(f"{run.run_id:<10} {int(ok.sum()):>4}  {e['local']:>8.3f} {e['flight']:>9.3f} "
               f"{e['oracle']:>9.3f} {e['record']:>9.3f}  {100 * verr['local']:>14.2f}% "
               f"{100 * verr['oracle']:>6.2f}%  {dt:>7.2f}s {dt_r:>7.2f}s  "
-              f"{log_r.velocity_note or 'flight model'}")
+              f"{fit_r.note or 'flight model'}")
     print("all impacts, mean e (0 < e < 1.5): " + ", ".join(
         f"{k} {np.mean([x for x in v if 0 < x < 1.5]):.3f}" for k, v in tot.items()))
 
