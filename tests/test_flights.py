@@ -295,8 +295,8 @@ def test_fallback_is_named_in_the_run_flags(tmp_path, record):
     res = analyse_run("x", run, detect={"velocity_model": "flights"}, fit={})
     local = analyse_run("x", run, detect={}, fit={})
     np.testing.assert_array_equal(res.impacts.e, local.impacts.e)
-    assert any(f.startswith("velocity_model_local: local fits kept") for f in res.chain_flags)
-    assert not any(f.startswith("velocity_model_local") for f in local.chain_flags)
+    assert any(f.startswith("ringing_share_missing: local fits kept") for f in res.chain_flags)
+    assert not any(f.startswith("ringing_share_missing") for f in local.chain_flags)
 
 
 def test_steady_dwell_keeps_the_local_fits_with_a_note():

@@ -101,19 +101,29 @@ def test_clipping_at_the_channels_own_extreme_without_a_range():
 
 
 def test_a_quantised_smooth_peak_is_not_clipping_a_quantised_clip_is():
-    """A 16-bit record of a smooth signal repeats its top sample where the curvature is below
-    one quantum (here a slow 5 Hz sine at 25.6 kHz: ~13 samples); it steps on and off that
-    run by one quantum.  Clipped at 95 % of its peak, the same signal runs into its rail by
-    many quanta per sample: that is clipping."""
+    """A 16-bit record of a smooth signal may repeat its top sample where its curvature is
+    below one quantum (here a 30 Hz sine at 25.6 kHz: 2-4 samples), stepping on and off it
+    by a quantum or two: not clipping (the old rule refused such files).  Clipped, even at
+    99.5 % of its peak, the flat run is long: clipping, wherever the chunks split it, and
+    with a NaN right after it too."""
     lsb = 2.0 / 2**16
     t = np.arange(25600) / 25600.0
-    x = np.round(0.8 * np.sin(2 * np.pi * 5.0 * t + 0.3) / lsb) * lsb
+    x = np.round(0.8 * np.sin(2 * np.pi * 30.0 * t + 0.3) / lsb) * lsb
     top = np.flatnonzero(x == x.max())
-    assert top.size >= 3            # the flat top the old rule called clipping
-    assert _check(x, chunk=4096, n_dropout=10_000) == []
-    clipped = np.minimum(x, np.round(0.76 / lsb) * lsb)
-    [(flag, *_)] = _check(clipped, chunk=4096, n_dropout=10_000)
-    assert flag == "clipping"
+    runs = np.split(top, np.flatnonzero(np.diff(top) > 1) + 1)
+    assert max(r.size for r in runs) >= 3       # flat tops the old rule called clipping
+    for chunk in (1000, 1005, 4096):
+        assert _check(x, chunk=chunk, n_dropout=10_000) == []
+    for level in (0.95, 0.995):
+        clipped = np.minimum(x, np.round(level * x.max() / lsb) * lsb)
+        for chunk in (1000, 1005, 4096):
+            flags = [f[0] for f in _check(clipped, chunk=chunk, n_dropout=10_000)]
+            assert flags == ["clipping"], (level, chunk, flags)
+    clipped = np.minimum(x, np.round(0.95 * x.max() / lsb) * lsb)
+    i = int(np.flatnonzero(clipped == clipped.max())[0])
+    end = i + int(np.argmax(clipped[i:] < clipped.max()))
+    clipped[end] = np.nan
+    assert "clipping" in [f[0] for f in _check(clipped, chunk=4096, n_dropout=10_000)]
 
 
 def test_a_rest_level_at_one_extreme_is_not_clipping():

@@ -134,7 +134,8 @@ def as_table(summary: FitSummary) -> str:
             bias_note = getattr(fits.grazing, name).bias_note
             if bias_note:
                 lines.append(f"note: grazing.{name}: {bias_note}")
-    for key, entry in (("damping_ramp", fits.damping_ramp),
+    for key, entry in (("restitution_ratio", fits.restitution_ratio),
+                       ("damping_ramp", fits.damping_ramp),
                        ("restitution_down", fits.restitution_down)):
         for note in entry.notes if entry is not None else ():
             lines.append(f"note: {key}: {note}")

@@ -161,8 +161,9 @@ class RingingShare:
     value : float
         Median of the runs' shares (NaN without any).
     stderr : float
-        ``1.2533 std / sqrt(n)`` (the median's standard error for normal scatter; NaN
-        with fewer than 2 runs).
+        ``1.2533 sigma / sqrt(n)``, the median's standard error, with ``sigma`` the runs'
+        robust spread (1.4826 MAD: one run whose model failed does not widen it; NaN with
+        fewer than 2 runs).
     n_runs : int
         Runs with a share.
     """
@@ -191,7 +192,8 @@ def pooled_ringing_share(shares: Iterable[float]) -> RingingShare:
     s = s[np.isfinite(s)]
     if s.size == 0:
         return RingingShare(float("nan"), float("nan"), 0)
-    se = 1.2533 * float(np.std(s, ddof=1)) / np.sqrt(s.size) if s.size > 1 else float("nan")
+    sigma = 1.4826 * float(np.median(np.abs(s - np.median(s))))
+    se = 1.2533 * sigma / np.sqrt(s.size) if s.size > 1 else float("nan")
     return RingingShare(float(np.median(s)), se, int(s.size))
 
 
@@ -281,7 +283,8 @@ def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
         vi = np.concatenate([np.asarray(log.v_in_m_s, dtype=float) for log in logs])
         vo = np.concatenate([np.asarray(log.v_out_m_s, dtype=float) for log in logs])
         with np.errstate(divide="ignore", invalid="ignore"):
-            slope = float(np.nanmedian(np.abs((vo - vi) / vi)))
+            d = np.abs((vo - vi) / vi)[(e_all > 0) & (e_all < 1.5)]   # the ratios kept
+        slope = float(np.median(d)) if d.size else float("nan")
         se = float(np.hypot(se, slope * ring.stderr))
     unmeasured = 0 if ring.n_runs else sum(
         1 for log in logs if getattr(log, "ringing_ratio", np.nan) >= RINGING_RESIDUAL_RATIO)

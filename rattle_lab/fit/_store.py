@@ -105,8 +105,8 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
                          start_time_s=t0, excitation_freq_hz=f_fit)
     if vel is not None and getattr(vel, "measurand", None) == "panel_absolute":
         log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
-    if log.velocity_note:   # velocity_model = "flights" kept the local fits somewhere: say why
-        base["chain_flags"] = base["chain_flags"] + (f"velocity_model_local: {log.velocity_note}",)
+    if log.velocity_note:   # the flight model gave no ringing share, or used some impacts only
+        base["chain_flags"] = base["chain_flags"] + (f"ringing_share_missing: {log.velocity_note}",)
     names = tuple(c.name for c in used)
     duration = (v_si if v_si is not None else a_si).size / fs  # type: ignore[union-attr]
     pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)

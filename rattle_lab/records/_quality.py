@@ -12,10 +12,10 @@ flag                       fatal   what
                                    limits of an integer dtype, or else the channel's own
                                    minimum or maximum (not its rest level: flat runs at
                                    an extreme that hold most of the samples, as a gated
-                                   pulse or a command signal sits at 0; and only where the
-                                   quantised signal steps onto or off it by more than
-                                   ``SHARP_QUANTA`` quanta: a smooth peak repeats its top
-                                   sample too)
+                                   pulse or a command signal sits at 0; and, for a
+                                   quantised signal, only a run longer than ``SHORT_FLAT``
+                                   samples or several stepped onto sharply: a smooth or
+                                   noisy peak repeats its top sample a few times too)
 ``dropout``                yes     a flat run of >= ``max(n_dropout_min, dropout_min_s*fs)``
                                    identical samples not at a range limit (stuck or
                                    zero-filled acquisition), a constant channel, or a
@@ -159,8 +159,8 @@ class _Acc:
     first_start: int | None = None
     first_len: int = 0
     value: float = math.nan
-    n_sharp: int = 0                             # runs stepped onto or off sharply
-    first_sharp: tuple[int, int] | None = None
+    n_long: int = 0       # runs longer than SHORT_FLAT (quantised data: evidence of clipping)
+    n_steep: int = 0      # shorter runs stepped onto or off by more than SHARP_QUANTA quanta
 
     def add(self, starts: np.ndarray, lens: np.ndarray, values: np.ndarray) -> None:
         if starts.size == 0:
@@ -172,9 +172,11 @@ class _Acc:
             self.first_start, self.first_len, self.value = int(starts[i]), int(lens[i]), float(values[i])
 
 
-#: Without a declared range, a flat run at a quantised channel's own extreme is clipping
-#: where the signal steps into or out of it by more than this many of its smallest steps.
+#: Without a declared range, flat runs at a quantised channel's own extreme are clipping if
+#: one is longer than SHORT_FLAT samples, or more than one is stepped onto or off by more
+#: than SHARP_QUANTA of the channel's smallest steps.
 SHARP_QUANTA = 3.0
+SHORT_FLAT = 4
 
 
 class ChannelChecker:
@@ -228,6 +230,7 @@ class ChannelChecker:
         # the smallest step between neighbouring samples seen: the ADC's quantum, if any
         self._quantum = math.inf
         self._quantised: bool | None = None
+        self._open_entry = math.nan   # the step onto the open run
         # Without a known range, dropouts may turn out to be at an extreme: kept apart.
         self._dropouts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
@@ -287,24 +290,39 @@ class ChannelChecker:
             self._runs = (np.empty(cap, dtype=np.int64), np.empty(cap, dtype=np.int64),
                           np.empty(cap, dtype=np.float64))
         starts, lens, values = self._runs
+        prev_open_entry = self._open_entry
         k, self._open_start, self._open_len = flat_runs(
             x, self._tail, start, self._open_start, self._open_len, self._min_len,
             starts, lens, values)
+        xf = x.astype(np.float64)
+        before = float(self._tail[0]) if self._tail.shape[0] else math.nan
+
+        def entry_step(rel: np.ndarray, value: np.ndarray, continued: float) -> np.ndarray:
+            # the step onto each run: from the sample before it (the previous chunk's last
+            # for a run starting this chunk; a run that began in an earlier chunk keeps the
+            # step it was entered with)
+            prev = np.where(rel >= 1, xf[np.clip(rel - 1, 0, n - 1)], before)
+            return np.where(rel >= 0, np.abs(prev - value), continued)
+
         if k:
-            # each run's steps into and out of it (the sample before it may lie in an
-            # earlier chunk: unknown there); every run reported here ends inside the chunk
+            # every run reported here ends inside the chunk: the sample after it is known
             rel = starts[:k] - start
-            xf = x.astype(np.float64)
             exit_ = np.abs(xf[np.minimum(rel + lens[:k], n - 1)] - values[:k])
-            entry = np.where(rel >= 1, np.abs(xf[np.maximum(rel - 1, 0)] - values[:k]), 0.0)
+            entry = entry_step(rel, values[:k], prev_open_entry)
             self._classify(starts[:k].copy(), lens[:k].copy(), values[:k].copy(),
-                           np.maximum(entry, exit_))
+                           np.fmax(np.nan_to_num(entry, nan=0.0), np.nan_to_num(exit_, nan=0.0)))
+        if self._open_len:
+            rel_open = np.array([self._open_start - start])
+            self._open_entry = float(entry_step(rel_open, np.array([xf[-1]]),
+                                                prev_open_entry)[0])
         self._tail = x[-1:].copy()
 
     def _close_open(self) -> None:
         if self._open_len >= self._min_len:
+            # a run that reaches the end of the record: only its entry step is known
             self._classify(np.array([self._open_start]), np.array([self._open_len]),
-                           self._tail.astype(np.float64), np.array([math.inf]))
+                           self._tail.astype(np.float64),
+                           np.array([np.nan_to_num(self._open_entry, nan=0.0)]))
         self._open_len = 0
 
     def _classify(self, starts: np.ndarray, lens: np.ndarray, values: np.ndarray,
@@ -327,21 +345,26 @@ class ChannelChecker:
         cand = long_enough
         if cand.any():
             cs, cl, cv = starts[cand], lens[cand], values[cand]
-            sharp = (steps[cand] > SHARP_QUANTA * self._quantum if self._quantised
-                     else np.ones(int(cand.sum()), dtype=bool))
+            # evidence of clipping: a long flat run (a smooth top that long needs a curvature
+            # its neighbours would show), or more than one run stepped onto or off sharply
+            # (one short run, however steep its sides, may be a noisy top: 16 bits at
+            # 25.6 kHz repeat a 0.8 m/s peak 3 times between steps of 6 and 9 quanta)
+            if self._quantised:
+                long_ = cl > SHORT_FLAT
+                steep = (steps[cand] > SHARP_QUANTA * self._quantum) & ~long_
+            else:
+                long_ = np.ones(cl.size, dtype=bool)
+                steep = np.zeros(cl.size, dtype=bool)
             for acc, best, better in ((self._hi, cv.max(), np.greater),
                                       (self._lo, cv.min(), np.less)):
                 if better(best, acc.value):
                     acc.n_runs, acc.n_samples, acc.first_start, acc.value = 0, 0, None, float(best)
-                    acc.n_sharp, acc.first_sharp = 0, None
+                    acc.n_long, acc.n_steep = 0, 0
                 if best == acc.value:
                     sel = cv == best
                     acc.add(cs[sel], cl[sel], cv[sel])
-                    if (sel & sharp).any():
-                        if acc.n_sharp == 0:
-                            i = int(np.flatnonzero(sel & sharp)[0])
-                            acc.first_sharp = (int(cs[i]), int(cl[i]))
-                        acc.n_sharp += int((sel & sharp).sum())
+                    acc.n_long += int((sel & long_).sum())
+                    acc.n_steep += int((sel & steep).sum())
         drop = lens >= self.n_dropout
         if drop.any():
             self._dropouts.append((starts[drop], lens[drop], values[drop]))
@@ -371,7 +394,8 @@ class ChannelChecker:
                 # gated pulse, a command that is 0 between shots) is not clipped there: a
                 # clipped signal leaves its rail again and spends most of its time inside.
                 rest_level = flat[side] and 2 * acc.n_samples > n
-                if flat[side] and not rest_level and not constant and acc.n_sharp:
+                evidence = acc.n_long > 0 or acc.n_steep > 1
+                if flat[side] and not rest_level and not constant and evidence:
                     self.clip.add(np.array([acc.first_start]), np.array([acc.first_len]),
                                   np.array([acc.value]))
                     self.clip.n_runs += acc.n_runs - 1

@@ -75,7 +75,7 @@ from ._pipeline_spec import (DEPENDS, OUTPUTS, STAGES, Pipeline, Stage, load_pip
 #: Layout of the cached products (their classes' places and fields); a change re-runs the
 #: stages whose products a store caches.  2: the classes moved with the data-flow layout and
 #: RunResult gained chain_flags and shocks.  3: ImpactLog gained velocity_note.  4: ImpactLog
-#: gained velocity_offset_m_s and ringing_share.
+#: gained velocity_offset_m_s, ringing_share and ringing_ratio.
 CACHE_FORMAT = 4
 
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
