@@ -206,7 +206,7 @@ def ringing_corrected_ratios(v_in: object, v_out: object, share: float) -> np.nd
 
     Examples
     --------
-    >>> float(ringing_corrected_ratios([-0.1], [0.076], 0.0)[0])
+    >>> round(float(ringing_corrected_ratios([-0.1], [0.076], 0.0)[0]), 6)
     0.76
     >>> round(float(ringing_corrected_ratios([-0.1], [0.076], 1 / 11)[0]), 6)   # 1 in 11 of the jump
     0.6
