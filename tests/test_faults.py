@@ -159,15 +159,19 @@ def test_sigterm_during_ingest_cleans_up_and_keeps_the_store(tmp_path):
 def test_ctrl_c_during_model_sweep_is_interrupted_130_without_output(tmp_path):
     # numba reports a Ctrl-C inside compiled code as a SystemError; the CLI must still say
     # "interrupted" (exit 130), with no traceback and no partial CSV.  The sweep must outlast
-    # the longest wait (12 s): 400 cycles took 10 s on an idle machine after the speed work,
-    # so 2000 (about 50 s) are asked for; each run is interrupted well before its end.
+    # the longest wait (12 s): over 0.5-3 in steps of 0.0005 it took 10 s on an idle machine
+    # after the speed work, so steps of 0.0001 are asked for (about 50 s); each run is
+    # interrupted well before its end.  The child gets the default SIGINT action: a test run
+    # started in the background by a shell inherits SIGINT ignored, and Python then never
+    # turns it into KeyboardInterrupt (the sweep would finish and exit 0).
     rng = random.Random(130)
     args = [str(RATTLE_LAB), "model", "sweep", "--start", "0.5", "--stop", "3", "--step",
-            "0.0005", "--cycles", "2000", "--csv", str(tmp_path / "sweep.csv"), "--quiet"]
+            "0.0001", "--cycles", "400", "--csv", str(tmp_path / "sweep.csv"), "--quiet"]
     env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
     for _ in range(3):
         proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                env=env)
+                                env=env,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         time.sleep(rng.uniform(3.0, 12.0))
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=120)
