@@ -351,6 +351,17 @@ def pulse_centroid(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: 
     return t1
 
 
+def _fit_windows(j_lo: int, j_hi: int, lo_lim: int, hi_lim: int, n_fit: int, n_guard: int
+                 ) -> tuple[int, int, int, int]:
+    """``(pre_lo, pre_hi, post_lo, post_hi)``: the fit windows either side of a jump's
+    half-height region ``j_lo..j_hi``, ``n_pad = width + n_guard`` clear of it, at most
+    ``n_fit`` samples each, within ``lo_lim..hi_lim`` (see :func:`jump_velocities`)."""
+    n_pad = (j_hi - j_lo + 1) + n_guard
+    pre_hi = j_lo - 1 - n_pad
+    post_lo = j_hi + n_pad
+    return max(lo_lim, pre_hi - n_fit + 1), pre_hi, post_lo, min(hi_lim, post_lo + n_fit - 1)
+
+
 def jump_velocities(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: int, *,
                     n_fit: int, n_guard: int, degree: int,
                     omega_per_sample: float | None = None,
@@ -372,11 +383,7 @@ def jump_velocities(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: in
     Returns ``(t, v_in, v_out)``; ``t`` is NaN where a side has no samples (the
     velocities are then the fits at the middle of the region, NaN on the empty side).
     """
-    n_pad = (j_hi - j_lo + 1) + n_guard
-    pre_hi = j_lo - 1 - n_pad
-    pre_lo = max(lo_lim, pre_hi - n_fit + 1)
-    post_lo = j_hi + n_pad
-    post_hi = min(hi_lim, post_lo + n_fit - 1)
+    pre_lo, pre_hi, post_lo, post_hi = _fit_windows(j_lo, j_hi, lo_lim, hi_lim, n_fit, n_guard)
     nan = float("nan")
     fits = []
     for lo, hi in ((pre_lo, pre_hi), (post_lo, post_hi)):
@@ -396,6 +403,7 @@ def jump_velocities(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: in
     t = float(post_lo - (np.sum(step) - 0.5 * (step[0] + step[-1])))
     t = min(max(t, float(pre_hi)), float(post_lo))
     if accel is not None:
+        n_pad = post_lo - j_hi
         t_a = pulse_centroid(accel, int(round(t)), n_pad + (j_hi - j_lo + 1) // 2, lo_lim,
                              n_fit=n_fit, degree=degree, omega_per_sample=omega_per_sample)
         if np.isfinite(t_a) and pre_hi <= t_a <= post_lo:
@@ -580,11 +588,8 @@ def _ringing_residual_ratio(v: np.ndarray, spans: list[tuple[int, int, int, int]
     n_fit = RESIDUAL_WINDOW_FACTOR * n_fit
     for i in idx:
         j_lo, j_hi, lo_lim, hi_lim = spans[i]
-        n_pad = (j_hi - j_lo + 1) + n_guard
-        pre_hi = j_lo - 1 - n_pad
-        pre_lo = max(lo_lim, pre_hi - n_fit + 1)
-        post_lo = j_hi + n_pad
-        post_hi = min(hi_lim, post_lo + n_fit - 1)
+        pre_lo, pre_hi, post_lo, post_hi = _fit_windows(j_lo, j_hi, lo_lim, hi_lim, n_fit,
+                                                        n_guard)
         rms = []
         for lo, hi in ((pre_lo, pre_hi), (post_lo, post_hi)):
             if hi - lo + 1 < n_fit:
