@@ -9,6 +9,7 @@ folder does.  A SIGTERM'd writer removes its own.
 
 from __future__ import annotations
 
+import argparse
 import os
 import random
 import shutil
@@ -21,6 +22,7 @@ import pytest
 from record_factory import RATTLE_LAB, make_record, write
 
 from rattle_lab._atomic import TMP_MARKER
+from rattle_lab.cli import _run_command
 from rattle_lab.store import ingest, open_stored_record, read_catalogue, read_results
 
 pytestmark = pytest.mark.slow
@@ -154,6 +156,39 @@ def test_sigterm_during_ingest_cleans_up_and_keeps_the_store(tmp_path):
     assert err == "rattle-lab: terminated\n" and out == ""
     assert store.read_bytes() == before
     assert not [p for p in tmp_path.iterdir() if TMP_MARKER in p.name]
+
+
+@pytest.mark.parametrize(("signum", "status", "line"), [
+    (signal.SIGTERM, 143, "rattle-lab: terminated\n"),
+    (signal.SIGINT, 130, "rattle-lab: interrupted\n"),
+])
+def test_a_signal_whose_exception_was_swallowed_still_stops_the_command(
+        capsys, signum, status, line):
+    # CI once saw SIGTERM land inside h5py's type-conversion callback (Python logging called
+    # from Cython): h5py dropped the Terminated and raised a bare TypeError, and the CLI printed
+    # a traceback and exited 1.  The same sequence by hand: the signal's exception is swallowed
+    # and an unrelated one, with no chain back to it, comes out of the command.
+    def command(args):
+        swallowed = False
+        try:
+            os.kill(os.getpid(), signum)
+            time.sleep(10)  # the handler runs here, at the next bytecode
+        except BaseException:  # noqa: BLE001 - what the compiled code did
+            swallowed = True
+        if swallowed:
+            raise TypeError("Operation not defined for data type class")
+        return 0
+
+    term, intr = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
+    assert _run_command(command, argparse.Namespace()) == status
+    assert capsys.readouterr().err == line
+    assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == (term, intr)
+
+    def bug(args):
+        raise TypeError("a bug")
+
+    with pytest.raises(TypeError, match="a bug"):  # without a signal, a bug still shows as one
+        _run_command(bug, argparse.Namespace())
 
 
 def test_ctrl_c_during_model_sweep_is_interrupted_130_without_output(tmp_path):

@@ -9,7 +9,8 @@ Errors: a :class:`~rattle_lab.exceptions.RattleLabError`, or an ``OSError``
 (a directory given as the output, a read-only folder, a full disk), becomes
 one line on stderr and exit status 2, never a traceback.  Ctrl-C (also when it
 lands inside compiled numba code, which reports it as a ``SystemError``) prints
-``interrupted`` and exits 130; SIGTERM prints ``terminated`` and exits 143.
+``interrupted`` and exits 130; SIGTERM prints ``terminated`` and exits 143.  A signal
+counts even where compiled code swallowed its exception and raised another.
 Either way the temporary files of the writer are removed and no partial output
 is left (outputs are written atomically).  Data go to stdout or ``--output``;
 messages go to stderr.  Option values are checked by the shared types of
@@ -25,7 +26,7 @@ import importlib
 import os
 import signal
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from types import FrameType
 
 from rattle_lab._version import __version__
@@ -66,22 +67,41 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread so that writers clean up as for Ctrl-C."""
 
 
-def _on_sigterm(signum: int, frame: FrameType | None) -> None:
-    raise Terminated()
-
-
 @contextlib.contextmanager
-def _sigterm_raises() -> Iterator[None]:
-    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only)."""
+def _signals_raise(received: list[KeyboardInterrupt]) -> Iterator[None]:
+    """Turn SIGTERM into :class:`Terminated` and SIGINT into ``KeyboardInterrupt``.
+
+    Each exception raised is also appended to ``received``: a handler runs at whatever
+    Python line is current, and code called from C (h5py's type-conversion callbacks
+    log through Python) can swallow the exception and raise another one in its place
+    (a ``TypeError`` from h5py, a ``SystemError`` from numba).  :func:`main` then still
+    knows that the command was stopped by a signal.  SIGINT is left alone where it is
+    ignored (a command started by ``nohup`` or in the background by a shell) or has a
+    handler of its own.  Main thread only; elsewhere nothing is changed.
+    """
+
+    def on_sigterm(signum: int, frame: FrameType | None) -> None:
+        received.append(Terminated())
+        raise received[-1]
+
+    def on_sigint(signum: int, frame: FrameType | None) -> None:
+        received.append(KeyboardInterrupt())
+        raise received[-1]
+
     try:
-        previous = signal.signal(signal.SIGTERM, _on_sigterm)
-    except ValueError:  # not the main thread: leave the handler alone
+        previous_term = signal.signal(signal.SIGTERM, on_sigterm)
+    except ValueError:  # not the main thread: leave the handlers alone
         yield
         return
+    previous_int = signal.getsignal(signal.SIGINT)
+    if previous_int is signal.default_int_handler:
+        signal.signal(signal.SIGINT, on_sigint)
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGTERM, previous_term)
+        if previous_int is signal.default_int_handler:
+            signal.signal(signal.SIGINT, previous_int)
 
 
 def _interrupt_in(exc: BaseException) -> KeyboardInterrupt | None:
@@ -115,28 +135,32 @@ def main(argv: Sequence[str] | None = None) -> int:
     if func is None:
         parser.print_help(sys.stderr)
         return 2
+    return _run_command(func, args)
+
+
+def _run_command(func: Callable[[argparse.Namespace], int | None], args: argparse.Namespace) -> int:
+    """Run one command; map its failure to a message and an exit status."""
+    received: list[KeyboardInterrupt] = []
     try:
-        with _sigterm_raises():
+        with _signals_raise(received):
             return int(func(args) or 0)
-    except RattleLabError as exc:
-        message = " ".join(str(exc).split())  # exactly one line
-        print(f"rattle-lab: error: {message}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt as exc:
-        return _interrupted(exc)
-    except SystemError as exc:
-        interrupt = _interrupt_in(exc)
-        if interrupt is None:
-            raise
-        return _interrupted(interrupt)
-    except BrokenPipeError:
-        # the reader went away (e.g. `rattle-lab ... | head`): stop quietly
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-        return 1
-    except OSError as exc:  # an output or input the system refused: the user's to fix
-        print(f"rattle-lab: error: {_os_error_line(exc)}", file=sys.stderr)
-        return 2
+    except BaseException as exc:  # noqa: BLE001 - each kind is mapped below or re-raised
+        interrupt = _interrupt_in(exc) or (received[0] if received else None)
+        if interrupt is not None:  # a signal stopped it, whatever exception came out
+            return _interrupted(interrupt)
+        if isinstance(exc, RattleLabError):
+            message = " ".join(str(exc).split())  # exactly one line
+            print(f"rattle-lab: error: {message}", file=sys.stderr)
+            return 2
+        if isinstance(exc, BrokenPipeError):
+            # the reader went away (e.g. `rattle-lab ... | head`): stop quietly
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            return 1
+        if isinstance(exc, OSError):  # an output or input the system refused: the user's to fix
+            print(f"rattle-lab: error: {_os_error_line(exc)}", file=sys.stderr)
+            return 2
+        raise
 
 
 def _interrupted(exc: KeyboardInterrupt) -> int:
