@@ -37,9 +37,11 @@ install: $(STAMP_RUN)
 demo: $(STAMP_RUN)
 	$(BIN)/rattle-lab demo --out demo_out
 
-## make test: the whole test suite and every docstring example (doctests)
+## make test: the whole test suite and every docstring example (doctests), on TEST_JOBS
+## processes (pytest-xdist; TEST_JOBS=0 runs it in this one)
+TEST_JOBS ?= 2
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_JOBS)
 
 ## make lint: ruff (style, bugs) and mypy (types of the package)
 lint: $(STAMP_DEV)

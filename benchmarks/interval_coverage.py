@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import sys
 import time
 from pathlib import Path
 
@@ -134,6 +135,9 @@ def main() -> None:
         for name, (truth, lo, hi) in res.items():
             hits.setdefault(name, []).append(bool(lo <= truth <= hi))
             width.setdefault(name, []).append((hi - lo) / 2 / truth)
+        print(f"campaign {seed + 1}/{args.n}: " + " ".join(
+            f"{name}={'in' if h[-1] else 'OUT'}" for name, h in hits.items()),
+            file=sys.stderr, flush=True)
     dt = time.perf_counter() - t0
     what = f"rig scene {args.rig}" if args.rig else f"noise_rel {args.noise:g}"
     print(f"coverage of the reported 95 % intervals over {args.n} seeded campaigns "
