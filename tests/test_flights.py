@@ -312,3 +312,53 @@ def test_steady_dwell_keeps_the_local_fits_with_a_note():
                              params=ImpactParams(velocity_model="flights"))
     assert flights.velocity_note.startswith("local fits kept")
     np.testing.assert_array_equal(flights.e, local.e)
+
+
+def test_carried_tail_columns_are_the_direct_sum_over_every_earlier_impact():
+    # reference: the definition, summed impact by impact with no recursion and no reach
+    from rattle_lab.detect._flights import _tail_columns, _tails
+
+    rng = np.random.default_rng(5)
+    t_imp = np.sort(rng.uniform(0.0, 0.5, 40))
+    dv = rng.uniform(0.05, 0.3, 40)
+    t = np.sort(rng.uniform(-0.01, 0.55, 500))
+    modes = [(171.0, 21.5), (390.0, 49.0)]
+    cols = _tail_columns(_tails(t, t_imp), dv, modes)
+    for j, (f, s) in enumerate(modes):
+        tau = t[:, None] - t_imp[None, :]
+        after = tau > 0
+        env = np.where(after, dv[None, :] * np.exp(-s * np.where(after, tau, 0.0)), 0.0)
+        ref_c = np.sum(env * np.cos(2 * np.pi * f * tau), axis=1)
+        ref_s = np.sum(env * np.sin(2 * np.pi * f * tau), axis=1)
+        # 40 terms of size <= 0.3 summed in double precision: agreement to 1e-12 absolute
+        np.testing.assert_allclose(cols[:, 2 * j], ref_c, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(cols[:, 2 * j + 1], ref_s, rtol=0, atol=1e-12)
+    assert np.all(cols[t < t_imp[0]] == 0.0)
+
+
+def test_ring_modes_are_checked():
+    from rattle_lab.detect import ImpactParams
+    from rattle_lab.exceptions import ParameterError
+
+    assert ImpactParams(ring_modes=[[171, 21.5]]).ring_modes == ((171.0, 21.5),)
+    for bad in ([[171.0]], [[171.0, -1.0]], [[0.0, 5.0]], "x", [[float("nan"), 1.0]]):
+        with pytest.raises(ParameterError, match="ring_modes"):
+            ImpactParams(ring_modes=bad)
+    with pytest.raises(ParameterError, match="ring_modes_runs"):
+        ImpactParams(ring_modes_runs=-1)
+
+
+def test_ringing_runs_without_a_share_or_modes_are_named_unmeasured():
+    from types import SimpleNamespace as Log
+
+    from rattle_lab.fit import ratios_of_runs
+
+    vi = np.array([-0.1, -0.2])
+
+    def log(ratio, modes=()):
+        return Log(v_in_m_s=vi, v_out_m_s=-0.55 * vi, e=np.full(2, 0.55),
+                   ringing_share=float("nan"), ringing_ratio=ratio, ring_modes=modes)
+
+    assert ratios_of_runs([log(1.5), log(1.0), log(float("nan"))]).ringing_runs_unmeasured == 1
+    carried = ratios_of_runs([log(1.5, ((171.0, 21.5),)), log(1.3, ((171.0, 21.5),))])
+    assert carried.ringing_runs_unmeasured == 0 and carried.stats.mean == pytest.approx(0.55)

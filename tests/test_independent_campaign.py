@@ -11,16 +11,18 @@ Tolerances: impact times within 10 us (a fifth of a sample at 25.6 kHz); the med
 ``|v_in| >= 0.1 m/s`` within 5 % (the per-impact scatter from noise and truncated fit
 windows is ~0.05; 60-80 impacts per run make the median good to ~2 %).
 
-Known limit, not asserted: when the vibrometer also sees the higher modes (here 28 % of
-each velocity jump, ``ring_in_velocity=True``), ``e`` from the local velocity fits is the
-contact point's, not the first mode's (~1.0 instead of 0.55): the local fits cannot
-separate modes 1.8 times apart in frequency over a few milliseconds.
+When the vibrometer also sees the higher modes (here 28 % of each velocity jump,
+``ring_in_velocity=True``), ``e`` from the local velocity fits is the contact point's, not
+the first mode's (~1.0 instead of 0.55): the local fits cannot separate modes 1.8 times
+apart in frequency over a few milliseconds.  The fit then finds the modes across the runs
+and takes the velocities from the flight model (the last test).
 """
 
 from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -136,13 +138,46 @@ def test_undeclared_or_uncorrectable_measurand_is_flagged(tmp_path):
     assert f"data-quality flag: {key}/no_base: velocity_panel_absolute" in table
 
 
-def test_unmeasured_ringing_in_the_vibrometer_is_named(tmp_path):
-    """With the higher modes in the vibrometer (this generator's lightly damped modes, 2 %
-    of critical, ringing on past the next impact) the ratios read them too (e ~1 for 0.55)
-    and no flight model measures their share on these steady dwells: the fit must say so,
-    with a data-quality flag and a note on e from the ratios, not report e silently."""
-    _, _, _, summary = _campaign(tmp_path, Chain(ring_in_velocity=True))
-    assert "e_ratio_ringing_uncorrected" in summary["data_quality"]
+def test_lightly_damped_ringing_in_the_vibrometer_is_found_across_the_runs(tmp_path):
+    """With the higher modes in the vibrometer (this generator's modes at 171, 293 and 390 Hz,
+    2 % of critical, 28 % of each velocity jump, ringing on past the next impact) the local
+    fits read e ~1 for 0.55, and no run's own flight model measures their share on these
+    steady dwells.  The fit finds the modes across the two runs (each impact's ringing
+    carried on, the runs' impact times differ) and takes v_in and v_out from the flight
+    model with them.  Tolerances: the modes' frequencies within 1 % (the pooled search's
+    scatter over seeds 3-5 was 0.3 %); e within 6 % (two runs of 50 impacts; the run means
+    scatter by about 3 %) and its reported 95 % interval (two runs: Student t with one
+    degree of freedom) covers the truth; no ringing flag."""
+    plant, _, _, summary = _campaign(tmp_path, Chain(ring_in_velocity=True))
+    assert "e_ratio_ringing_uncorrected" not in summary["data_quality"]
     ratio = summary["fits"]["restitution_ratio"]
-    assert any("higher modes ring after the impacts" in n for n in ratio["notes"])
-    assert ratio["value"] > 1.3 * Plant().e       # the bias the note names is there
+    (note,) = [n for n in ratio["notes"] if "ring on past the next impact" in n]
+    found = [float(x) for x in re.findall(r"([0-9.]+) Hz \(decay", note)]
+    assert len(found) == 3
+    for f_true, f in zip(Chain().ring_hz, sorted(found)):
+        assert abs(f / f_true - 1) < 0.01, (found, note)
+    assert abs(ratio["value"] / plant.e - 1) < 0.06, ratio
+    assert abs(ratio["value"] - plant.e) <= 1.96 * ratio["stderr"], ratio
+    assert ratio["n"] >= 80 and ratio["n_runs"] == 2
+
+def test_ringing_modes_from_one_run_are_flagged(tmp_path):
+    """A record of one run: the modes are searched in it alone, where their tails and the
+    fundamental's free response can trade off (single 1.5 s ramps of this generator gave e
+    -15 %); the fit still corrects, but names it with a data-quality flag and a note.  On this
+    single dwell e came out +4.3 %: within 10 % is asserted (the one-run range seen was -15 %
+    to +10 %, so this is a check of the path, not of the accuracy)."""
+    plant = Plant()
+    path = tmp_path / "one.h5"
+    write_campaign(path, plant, Chain(ring_in_velocity=True),
+                   [{"run_id": "dwell_97", "protocol": "sine_dwell", "freq_hz": 97.0,
+                     "levels": np.full(100, 1.3 * _grazing_ms2(plant, 97.0))}], seed=1)
+    store = tmp_path / "one_store.h5"
+    ingest([path], store, quiet=True)
+    proc = run_cli("fit", str(store), "--json", "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads(proc.stdout)
+    assert "e_ratio_ring_modes_one_run" in summary["data_quality"]
+    ratio = summary["fits"]["restitution_ratio"]
+    assert any("found in one run" in n for n in ratio["notes"])
+    assert any("one run only" in n for n in ratio["notes"])
+    assert abs(ratio["value"] / plant.e - 1) < 0.10, ratio

@@ -73,8 +73,9 @@ PACKAGES: dict[str, list[str]] = {
         "COMMAND_MODULES", "build_parser", "main"
     ],
     "rattle_lab.detect": [
-        "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "SoundPeaks", "a_weight",
-        "a_weighting_db", "cross_correlation_delay", "detect_impacts", "impact_pattern",
+        "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "RingingProblem", "SoundPeaks",
+        "a_weight", "a_weighting_db", "campaign_ring_modes", "cross_correlation_delay",
+        "detect_impacts", "impact_pattern",
         "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
         "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle"
     ],

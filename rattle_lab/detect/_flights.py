@@ -49,6 +49,17 @@ positions, so the fit pools the runs' shares (median) and takes it off every rat
 (:func:`rattle_lab.fit.ringing_corrected_ratios`): e from the ratios then comes out
 within 0.1 % there (local fits alone +27 %).  A run takes several seconds
 (``benchmarks/ringing_separability.py``).
+
+**Lightly damped modes** ring on past the next impact (a mode at 2 % of critical decays
+over several flights): their tails are in ``v_in`` as well as in the jump, no share of the
+jump undoes that, and within one run the tails and the fundamental's free response trade
+off (the search above rejects a mode that lasts a flight).  Across a campaign's runs the
+modes are the same while the impacts come at other times: :func:`campaign_ring_modes`
+pools the runs (:class:`RingingProblem`, one per run whose own model measured no share)
+and searches the modes with each impact's ringing carried on over every later flight
+(:func:`_tail_columns`, exact recursion over the impacts); each run is then fitted with
+the modes fixed (``flight_velocities(..., modes_given, carried=True)``) and ``v_in`` and
+``v_out`` are the model's (``benchmarks/slow_ringing.py``).
 """
 
 from __future__ import annotations
@@ -68,6 +79,9 @@ MIN_FLIGHT_SAMPLES = 12
 KNOT_S = 1.0
 #: Largest change of the median velocity jump from the local fits' that ringing explains.
 MAX_JUMP_CHANGE = 0.25
+#: The same with tails carried on (lightly damped modes: each jump reads its own ringing
+#: and the earlier impacts' tails).
+MAX_JUMP_CHANGE_CARRIED = 0.5
 #: Most ringing modes modelled.
 MAX_RING_MODES = 3
 #: Most flights the searches for f_s, the damping and the ringing use.
@@ -196,6 +210,47 @@ def _ring_columns(pairs: _Pairs, dv: np.ndarray, modes: list[tuple[float, float]
     return cols
 
 
+@dataclass(frozen=True)
+class _Tails:
+    """Where each sample lies after the last impact before it: tails carried on for ever."""
+
+    last: np.ndarray      # the last impact before each sample (-1: none)
+    dt: np.ndarray        # time since it, s
+    t_imp: np.ndarray     # impact times, s
+
+
+def _tails(t_s: np.ndarray, t_imp_s: np.ndarray) -> _Tails:
+    last = np.searchsorted(t_imp_s, t_s, side="right") - 1
+    dt = np.where(last >= 0, t_s - t_imp_s[np.maximum(last, 0)], 0.0)
+    return _Tails(last, dt, np.asarray(t_imp_s, float))
+
+
+def _tail_columns(tails: _Tails, dv: np.ndarray, modes: list[tuple[float, float]]
+                  ) -> np.ndarray:
+    """As :func:`_ring_columns`, each impact's ringing summed over every later sample.
+
+    ``C_k = sum_{i <= k} dv_i exp(p (t_k - t_i))`` with ``p = -s + i w``, by recursion over
+    the impacts; a sample after impact ``k`` is ``C_k exp(p (t - t_k))``: exact, with no
+    reach to cut the tails at.
+    """
+    cols = np.zeros((tails.last.size, 2 * len(modes)))
+    d = np.nan_to_num(dv)
+    gaps = np.diff(tails.t_imp)
+    ok = tails.last >= 0
+    for j, (f_hz, s) in enumerate(modes):
+        p = complex(-s, 2.0 * np.pi * f_hz)
+        step = np.exp(p * gaps)
+        c = np.empty(d.size, dtype=complex)
+        acc = 0j
+        for k in range(d.size):
+            acc = acc * step[k - 1] + d[k] if k else complex(d[0])
+            c[k] = acc
+        z = np.zeros(tails.last.size, dtype=complex)
+        z[ok] = c[tails.last[ok]] * np.exp(p * tails.dt[ok])
+        cols[:, 2 * j], cols[:, 2 * j + 1] = z.real, z.imag
+    return cols
+
+
 class _Model:
     """The run model on fixed segments; ``solve`` eliminates each flight's free response."""
 
@@ -304,7 +359,8 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
 
 def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
                       pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray,
-                      modes_given: list[tuple[float, float]] | None = None) -> FlightFit:
+                      modes_given: list[tuple[float, float]] | None = None, *,
+                      carried: bool = False) -> FlightFit:
     """Each impact's ``v_in``, ``v_out`` from a whole-run flight model (see the module docstring).
 
     Parameters
@@ -321,7 +377,13 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
         The local fits' velocities: the fallback, and the impacts' velocity changes that
         weight the ringing at first.
     modes_given : list of (f_hz, s_1_s), optional
-        Ringing modes to use instead of those found in the record (diagnostics).
+        Ringing modes to use instead of those found in the record (the campaign's, from
+        :func:`campaign_ring_modes`, or diagnostics).
+    carried : bool
+        Each impact's ringing carried on over every later flight (lightly damped modes:
+        :func:`_tail_columns`) instead of within its own flight; with ``modes_given``.
+        The jumps may then differ from the local fits' by up to
+        :data:`MAX_JUMP_CHANGE_CARRIED`.
 
     Returns
     -------
@@ -332,25 +394,26 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     v_in_local = np.asarray(v_in_local, float)
     v_out_local = np.asarray(v_out_local, float)
     fallback = FlightFit(v_in_local.copy(), v_out_local.copy(), np.zeros(n_imp, dtype=bool))
-    if n_imp < MIN_IMPACTS:
-        return replace(fallback, note=f"local fits kept: {n_imp} impacts, a flight model needs "
-                       f">= {MIN_IMPACTS}")
-    period = fs_hz / f_hz
-    sg = _segments(v.size, k_imp, np.asarray(pad, float), int(round(1.5 * period)))
-    n_flights = int(np.sum((sg.left >= 0) & (sg.right >= 0)))
-    if n_flights < MIN_IMPACTS:
-        return replace(fallback, note=f"local fits kept: {n_flights} flights of >= "
-                       f"{MIN_FLIGHT_SAMPLES} samples between impacts (chatter or short "
-                       f"flights), a flight model needs >= {MIN_IMPACTS}")
+    setup = _setup(v, fs_hz, f_hz, k_imp, pad)
+    if isinstance(setup, str):
+        return replace(fallback, note=setup)
+    sg, sub, xf_sub, keep = setup
     omega = 2.0 * np.pi * f_hz
+    period = fs_hz / f_hz
     t_total = v.size / fs_hz
     y_all = np.asarray(v, float)
-    # the searches use at most SEARCH_SEGMENTS flights, spread over the run
-    pick = np.unique(np.linspace(0, sg.starts.size - 1,
-                                 min(sg.starts.size, SEARCH_SEGMENTS)).round().astype(int))
-    sub = _subset(sg, pick)
-    xf_sub, keep = _forced(sub.k / fs_hz, omega, t_total, None)
-    model = _Model(y_all[sub.k], sub, fs_hz, xf_sub)
+    t_imp = k_imp / fs_hz
+    reach = 4.0 * period / fs_hz
+
+    def ring(t_s: np.ndarray, dv: np.ndarray, modes: list[tuple[float, float]]) -> np.ndarray:
+        if carried:
+            return _tail_columns(_tails(t_s, t_imp), dv, modes)
+        return _ring_columns(_pairs(t_s, t_imp, reach), dv, modes)
+
+    dv = np.nan_to_num(v_out_local - v_in_local)
+    x0 = xf_sub if modes_given is None else np.hstack(
+        [xf_sub, ring(sub.k / fs_hz, dv, list(modes_given))])
+    model = _Model(y_all[sub.k], sub, fs_hz, x0)
     f_s, sigma = model.search(f_hz, 0.02 * omega, grid=True)
     # identifiable?  steady motion repeats the same flight: forced and free then trade off
     rss0 = model.solve(f_s, sigma)[0]
@@ -358,30 +421,23 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     if not (bump > 1.05 * rss0 and 0.77 * f_hz < f_s < 1.27 * f_hz):
         return replace(fallback, note="local fits kept: the flights do not determine the "
                        "free response (steady motion: forced and free response trade off)")
-    dv = v_out_local - v_in_local
-    t_imp = k_imp / fs_hz
-    reach = 4.0 * period / fs_hz
-    pairs_sub = _pairs(sub.k / fs_hz, t_imp, reach)
     if modes_given is None:
         # a ringing mode decays within a forcing period, else it is the free response's
         modes, f_s, sigma = _search_modes(
-            model.y, sub, fs_hz, xf_sub, pairs_sub, np.nan_to_num(dv), f_s, sigma, 1.1 * f_s,
-            min(6.0 * f_s, 0.2 * fs_hz), max(RING_DECAY_FACTOR * sigma, 2.0 * f_hz))
+            model.y, sub, fs_hz, xf_sub, _pairs(sub.k / fs_hz, t_imp, reach), dv, f_s, sigma,
+            1.1 * f_s, min(6.0 * f_s, 0.2 * fs_hz), max(RING_DECAY_FACTOR * sigma, 2.0 * f_hz))
     else:
         modes = list(modes_given)
     if not modes:
         return replace(fallback, f_s_hz=f_s, sigma_1_s=sigma,
                        note="local fits kept: no ringing found after the impacts")
-    ring = _ring_columns(pairs_sub, dv, modes)
-    model = _Model(y_all[sub.k], sub, fs_hz, np.hstack([xf_sub, ring]))
+    model = _Model(y_all[sub.k], sub, fs_hz, np.hstack([xf_sub, ring(sub.k / fs_hz, dv, modes)]))
     f_s, sigma = model.search(f_s, sigma, grid=False)
-    pairs = _pairs(sg.k / fs_hz, t_imp, reach)
     xf, _ = _forced(sg.k / fs_hz, omega, t_total, keep)
     vin, vout = v_in_local, v_out_local
     for _ in range(2):   # then with the impacts' own velocity changes weighting the ringing
         dv = np.where(np.isfinite(vout - vin), vout - vin, np.nan_to_num(dv))
-        model = _Model(y_all[sg.k], sg, fs_hz,
-                       np.hstack([xf, _ring_columns(pairs, dv, modes)]))
+        model = _Model(y_all[sg.k], sg, fs_hz, np.hstack([xf, ring(sg.k / fs_hz, dv, modes)]))
         vin, vout = _evaluate(model, f_s, sigma, keep, omega, t_total, k_imp)
     # (the channel may be an absolute vibrometer: judge the jump, not the velocities' signs)
     jump_local = v_out_local - v_in_local
@@ -389,11 +445,12 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
         ratio = (vout - vin) / jump_local
         sane = np.isfinite(vin) & np.isfinite(vout) & (ratio > 0.5) & (ratio < 2.0)
     med = float(np.median(ratio[sane])) if sane.any() else float("nan")
-    if not abs(med - 1.0) < MAX_JUMP_CHANGE:
+    limit = MAX_JUMP_CHANGE_CARRIED if carried else MAX_JUMP_CHANGE
+    if not abs(med - 1.0) < limit:
         return replace(fallback, f_s_hz=f_s, sigma_1_s=sigma, note=(
             f"local fits kept: the flight model's velocity jumps differ from the local fits' "
             f"by {100 * (med - 1):+.0f} % (median), more than the ringing can explain "
-            f"({100 * MAX_JUMP_CHANGE:.0f} %): modes {', '.join(f'{m[0]:.0f}' for m in modes)} Hz "
+            f"({100 * limit:.0f} %): modes {', '.join(f'{m[0]:.0f}' for m in modes)} Hz "
             "not resolved"))
     n_bad = int(n_imp - sane.sum())
     note = "" if n_bad == 0 else (f"local fits kept for {n_bad} of {n_imp} impacts (no flight "
@@ -401,6 +458,135 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
                                   "a factor 2 of the local fits')")
     return FlightFit(np.where(sane, vin, v_in_local), np.where(sane, vout, v_out_local), sane,
                      f_s, sigma, tuple(m[0] for m in modes), tuple(m[1] for m in modes), note)
+
+
+def _setup(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray, pad: np.ndarray
+           ) -> tuple[_Segments, _Segments, np.ndarray, np.ndarray] | str:
+    """The run's flights, the searches' subset of them and its forced columns; or why not."""
+    n_imp = k_imp.size
+    if n_imp < MIN_IMPACTS:
+        return f"local fits kept: {n_imp} impacts, a flight model needs >= {MIN_IMPACTS}"
+    period = fs_hz / f_hz
+    sg = _segments(v.size, k_imp, np.asarray(pad, float), int(round(1.5 * period)))
+    n_flights = int(np.sum((sg.left >= 0) & (sg.right >= 0)))
+    if n_flights < MIN_IMPACTS:
+        return (f"local fits kept: {n_flights} flights of >= {MIN_FLIGHT_SAMPLES} samples "
+                f"between impacts (chatter or short flights), a flight model needs "
+                f">= {MIN_IMPACTS}")
+    # the searches use at most SEARCH_SEGMENTS flights, spread over the run
+    pick = np.unique(np.linspace(0, sg.starts.size - 1,
+                                 min(sg.starts.size, SEARCH_SEGMENTS)).round().astype(int))
+    sub = _subset(sg, pick)
+    xf_sub, keep = _forced(sub.k / fs_hz, 2.0 * np.pi * f_hz, v.size / fs_hz, None)
+    return sg, sub, xf_sub, keep
+
+
+@dataclass(frozen=True)
+class RingingProblem:
+    """One run's flights, reduced for the campaign's search of ringing modes.
+
+    Made by :func:`ringing_problem` where a run rings and its own flight model measured
+    no share; pooled by :func:`campaign_ring_modes`.  The searches' subset of flights
+    (at most :data:`SEARCH_SEGMENTS`), their forced-response columns, the impacts and
+    their velocity changes, and the fundamental's ``(f_s, sigma)`` found without ringing.
+    """
+
+    y: np.ndarray
+    segments: _Segments
+    fs_hz: float
+    forced: np.ndarray
+    t_imp_s: np.ndarray
+    dv: np.ndarray
+    f_s_hz: float
+    sigma_1_s: float
+    n_impacts: int
+
+
+def ringing_problem(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
+                    pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray
+                    ) -> RingingProblem | None:
+    """One run's part of the campaign's search for ringing modes (None where too short)."""
+    setup = _setup(v, fs_hz, f_hz, k_imp, pad)
+    if isinstance(setup, str):
+        return None
+    _, sub, xf_sub, _ = setup
+    y = np.asarray(v, float)[sub.k]
+    f_s, sigma = _Model(y, sub, fs_hz, xf_sub).search(f_hz, 0.04 * np.pi * f_hz, grid=True)
+    return RingingProblem(y, sub, float(fs_hz), xf_sub, np.asarray(k_imp, float) / fs_hz,
+                          np.nan_to_num(np.asarray(v_out_local, float)
+                                        - np.asarray(v_in_local, float)),
+                          f_s, sigma, int(k_imp.size))
+
+
+def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, float], ...]:
+    """Ringing modes ``(f_hz, s_1_s)`` shared by a campaign's runs, tails carried on.
+
+    Lightly damped higher modes ring on past the next impact: within one run their tails
+    and the fundamental's free response trade off, but the modes are the plate's and the
+    same in every run, while each run's impacts come at its own times.  The search
+    minimises the mean over the runs of each run's residual relative to its residual
+    without ringing (every run's amplitudes, forced response and free responses
+    eliminated exactly by :class:`_Model`), each impact's ringing carried over every later
+    flight (:func:`_tail_columns`).  Modes are added one at a time as in
+    :func:`_search_modes` (a scan over frequency, 1.1-6 times the runs' median ``f_s``,
+    and decay; Nelder-Mead on every mode found so far), at most :data:`MAX_RING_MODES`,
+    while the Bayesian information criterion of the pooled residuals falls.
+    """
+    ok = [p for p in problems if p is not None]
+    if not ok:
+        return ()
+    tails = [_tails(p.segments.k / p.fs_hz, p.t_imp_s) for p in ok]
+    base = [_Model(p.y, p.segments, p.fs_hz, p.forced).solve(p.f_s_hz, p.sigma_1_s)[0]
+            for p in ok]
+    n_all = sum(p.y.size for p in ok)
+    f_s = float(np.median([p.f_s_hz for p in ok]))
+    f_lo, f_hi = 1.1 * f_s, min(6.0 * f_s, 0.2 * min(p.fs_hz for p in ok))
+
+    fund = [(p.f_s_hz, p.sigma_1_s) for p in ok]
+
+    def model(i: int, modes: list[tuple[float, float]]) -> _Model:
+        p = ok[i]
+        return _Model(p.y, p.segments, p.fs_hz,
+                      np.hstack([p.forced, _tail_columns(tails[i], p.dv, modes)]))
+
+    def rss(modes: list[tuple[float, float]]) -> np.ndarray:
+        return np.array([model(i, modes).solve(*fund[i])[0] for i in range(len(ok))])
+
+    def objective(par: np.ndarray) -> float:
+        modes = [(float(par[2 * j]), float(np.exp(par[2 * j + 1]))) for j in range(par.size // 2)]
+        if any(not (f_lo <= f <= f_hi and 0.001 * f <= s <= 0.3 * 2 * np.pi * f)
+               for f, s in modes):
+            return np.inf
+        return float(np.mean(rss(modes) / base))
+
+    def bic(modes: list[tuple[float, float]]) -> float:
+        sizes = np.array([p.y.size for p in ok])
+        r = rss(modes) if modes else np.array(base)
+        return float(np.sum(sizes * np.log(r / sizes)) + 4 * len(modes) * np.log(n_all))
+
+    modes: list[tuple[float, float]] = []
+    best = bic(modes)
+    grid = np.geomspace(f_lo, f_hi, 30)
+    for _ in range(MAX_RING_MODES):
+        scan = [(objective(np.array([x for f, s in modes + [(fr, q * 2 * np.pi * fr)]
+                                     for x in (f, np.log(s))])), fr, q * 2 * np.pi * fr)
+                for fr in grid for q in (0.005, 0.02, 0.06, 0.15)]
+        _, f0, s0 = min(scan, key=lambda c: c[0])
+        trial = modes + [(f0, s0)]
+        p0 = np.array([x for f, s in trial for x in (f, np.log(s))])
+        simplex = [p0] + [p0 + np.eye(p0.size)[i] * (0.02 * p0[i] if i % 2 == 0 else 0.3)
+                          for i in range(p0.size)]
+        sol = minimize(objective, p0, method="Nelder-Mead",
+                       options={"maxfev": 60 * len(trial), "xatol": 1e-3, "fatol": 0.0,
+                                "initial_simplex": simplex})
+        trial = [(float(sol.x[2 * j]), float(np.exp(sol.x[2 * j + 1])))
+                 for j in range(len(trial))]
+        b = bic(trial)
+        if not b < best or any(abs(a[0] / c[0] - 1) < 0.05
+                               for i, a in enumerate(trial) for c in trial[:i]):
+            break   # no gain, or two modes at one frequency: unresolved
+        modes, best = trial, b
+    return tuple(sorted(modes))
 
 
 def _subset(sg: _Segments, pick: np.ndarray) -> _Segments:
@@ -443,4 +629,5 @@ def _evaluate(model: _Model, f_s: float, sigma: float, keep: np.ndarray, omega: 
     return vin, vout
 
 
-__all__ = ["FlightFit", "flight_velocities"]
+__all__ = ["FlightFit", "RingingProblem", "campaign_ring_modes", "flight_velocities",
+           "ringing_problem"]

@@ -38,7 +38,7 @@ import numpy as np
 
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, detrended_abs, n_samples_of, robust_sigma
-from ._flights import flight_velocities
+from ._flights import RingingProblem, flight_velocities, ringing_problem
 
 
 @dataclass(frozen=True)
@@ -93,11 +93,26 @@ class ImpactParams:
         (:attr:`ImpactLog.ringing_share`; ``v_in``/``v_out`` stay the local fits', and the
         fit pools the runs' shares and takes it off the ratios,
         :func:`rattle_lab.fit.ratios_of_runs`).  Lightly damped modes that ring on past
-        the next impact are not modelled: their tails are in ``v_in`` too, and the fit
-        then names the bias (``e_ratio_ringing_uncorrected``).
+        the next impact have their tails in ``v_in`` too: no run's flight model then
+        measures a share, the run keeps its part of a campaign-wide search
+        (:attr:`ImpactLog.ringing_problem`), and ``rattle-lab fit`` finds the modes across
+        the runs and detects again with them (``ring_modes``); where none is found, the
+        fit names the bias (``e_ratio_ringing_uncorrected``).
         ``"auto"`` (default): the same where the local fits' residual after the impacts
         is at least :data:`RINGING_RESIDUAL_RATIO` times that before them (ringing is
         there), the local fits otherwise; ``"local"``: the local fits.
+    ring_modes : tuple of (f_hz, s_1_s)
+        The plate's lightly damped higher modes (frequency, Hz, and decay rate, 1/s), as
+        the campaign's search found them (:func:`rattle_lab.detect.campaign_ring_modes`,
+        run by ``rattle-lab fit`` and the pipeline where runs ring and no run's flight
+        model measured a share) or as a modal test gives them.  With a velocity channel
+        and a constant excitation frequency, ``v_in`` and ``v_out`` then come from the
+        flight model with these modes fixed and each impact's ringing carried on over the
+        later flights; impacts the model cannot give velocities keep none (NaN: their
+        local fits read the tails).  Empty (default): not used.
+    ring_modes_runs : int
+        How many runs ``ring_modes`` were found from (0: given; the fit names a search
+        that had one run only).
     """
 
     on: float = 12.0
@@ -114,8 +129,22 @@ class ImpactParams:
     sine_guard_s: float = 3e-4
     min_reversal: float = 0.5
     velocity_model: Literal["auto", "local", "flights"] = "auto"
+    ring_modes: tuple[tuple[float, float], ...] = ()
+    ring_modes_runs: int = 0
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.ring_modes_runs, (int, np.integer)) and self.ring_modes_runs >= 0):
+            raise ParameterError(f"`ring_modes_runs` must be an integer >= 0, was "
+                                 f"{self.ring_modes_runs!r}")
+        try:
+            modes = tuple((float(f), float(s)) for f, s in self.ring_modes)
+        except (TypeError, ValueError):
+            raise ParameterError("`ring_modes` must be pairs [frequency_hz, decay_1_s], was "
+                                 f"{self.ring_modes!r}") from None
+        if not all(np.isfinite(f) and f > 0 and np.isfinite(s) and s > 0 for f, s in modes):
+            raise ParameterError(f"`ring_modes`: each frequency and decay rate must be > 0, "
+                                 f"was {self.ring_modes!r}")
+        object.__setattr__(self, "ring_modes", modes)
         if not (np.isfinite(self.off) and self.off > 0):
             raise ParameterError(f"`off` must be > 0, was {self.off}")
         if not (np.isfinite(self.on) and self.on > self.off):
@@ -174,6 +203,12 @@ class ImpactLog:
     ringing_ratio : float
         The local fits' median residual after the impacts over that before them, the
         ``velocity_model = "auto"`` test for ringing (NaN where not computed).
+    ring_modes : tuple of (f_hz, s_1_s)
+        The ringing modes whose tails were carried on (``ImpactParams.ring_modes``):
+        ``v_in`` and ``v_out`` are then the flight model's; empty otherwise.
+    ringing_problem : RingingProblem or None
+        Where the run rings and its flight model measured no share: its part of the
+        campaign's search for ringing modes (not compared, not kept in caches).
     """
 
     t_s: np.ndarray
@@ -189,6 +224,12 @@ class ImpactLog:
     velocity_offset_m_s: float = 0.0
     ringing_share: float = float("nan")
     ringing_ratio: float = float("nan")
+    ring_modes: tuple[tuple[float, float], ...] = ()
+    ringing_problem: RingingProblem | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:   # (pairs come back from a cache as lists)
+        object.__setattr__(self, "ring_modes",
+                           tuple((float(f), float(s)) for f, s in self.ring_modes))
 
     @property
     def n_impacts(self) -> int:
@@ -529,8 +570,24 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         with np.errstate(divide="ignore", invalid="ignore"):
             e = np.where(vin != 0, -vout / vin, np.nan)
     note, share, ratio = "", float("nan"), float("nan")
+    problem: RingingProblem | None = None
     model = params.velocity_model
-    if model != "local" and v is not None and excitation_freq_hz is not None:
+    k_keep = np.asarray(t_idx, dtype=float)[keep]
+    pad_keep = np.asarray(pads, dtype=float)[keep] if v is not None else np.zeros(0)
+    if params.ring_modes and v is not None and excitation_freq_hz is not None:
+        model = "local"
+        flights = flight_velocities(v, fs_hz, excitation_freq_hz, k_keep, pad_keep, vin[keep],
+                                    vout[keep], list(params.ring_modes), carried=True)
+        m = flights.from_flights
+        vin[keep] = np.where(m, flights.v_in_m_s, np.nan)
+        vout[keep] = np.where(m, flights.v_out_m_s, np.nan)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            e = np.where(vin != 0, -vout / vin, np.nan)
+        if not m.all():
+            note = (f"no velocities for {int((~m).sum())} of {m.size} impacts: "
+                    + (flights.note or "the flight model with the campaign's ringing modes "
+                       "gave none"))
+    elif model != "local" and v is not None and excitation_freq_hz is not None:
         ratio = _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree, omega)
         if model == "auto":
             model = "flights" if ratio >= RINGING_RESIDUAL_RATIO else "local"
@@ -538,10 +595,8 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         if excitation_freq_hz is None:
             note = "no ringing share: the flight model needs a constant excitation frequency"
         else:
-            k_keep = np.asarray(t_idx, dtype=float)[keep]
-            flights = flight_velocities(v, fs_hz, excitation_freq_hz, k_keep,
-                                        np.asarray(pads, dtype=float)[keep], vin[keep],
-                                        vout[keep])
+            flights = flight_velocities(v, fs_hz, excitation_freq_hz, k_keep, pad_keep,
+                                        vin[keep], vout[keep])
             note = flights.note
             m = flights.from_flights
             if m.sum() >= MIN_SHARE_IMPACTS:
@@ -549,16 +604,22 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                     jumps = (flights.v_out_m_s[m] - flights.v_in_m_s[m]) / (vout[keep][m]
                                                                              - vin[keep][m])
                 share = float(np.median(1.0 - jumps[np.isfinite(jumps)]))
-            elif not note:
-                note = (f"no ringing share: {int(m.sum())} impacts from the flight model, "
-                        f"needs >= {MIN_SHARE_IMPACTS}")
+            else:
+                if not note:
+                    note = (f"no ringing share: {int(m.sum())} impacts from the flight model, "
+                            f"needs >= {MIN_SHARE_IMPACTS}")
+                # lightly damped modes?  the campaign's runs together may find them
+                problem = ringing_problem(v, fs_hz, excitation_freq_hz, k_keep, pad_keep,
+                                          vin[keep], vout[keep])
     return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,
                      onset_s=start_time_s + np.asarray(onsets, dtype=float)[keep] / fs_hz,
                      v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],
                      strength=np.asarray(strength, dtype=float)[keep],
                      channels=tuple(names), params=params, fs_hz=float(fs_hz),
                      velocity_note=note, velocity_offset_m_s=offset, ringing_share=share,
-                     ringing_ratio=ratio)
+                     ringing_ratio=ratio, ring_modes=params.ring_modes if params.ring_modes
+                     and v is not None and excitation_freq_hz is not None else (),
+                     ringing_problem=problem)
 
 
 #: ``velocity_model = "auto"`` runs the flight model where the local fits' median residual

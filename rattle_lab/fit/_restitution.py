@@ -219,6 +219,8 @@ def ringing_corrected_ratios(v_in: object, v_out: object, share: float) -> np.nd
 
 #: Data-quality flag: the vibrometer rings after the impacts and no run measured the share.
 FLAG_RINGING_UNCORRECTED = "e_ratio_ringing_uncorrected"
+#: Data-quality flag: the lightly damped ringing modes were found from one run only.
+FLAG_RING_MODES_ONE_RUN = "e_ratio_ring_modes_one_run"
 
 
 @dataclass(frozen=True)
@@ -256,7 +258,8 @@ def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
     (:func:`ringing_corrected_ratios`).  Without any share, the logs' own ratios; a run
     whose local fits showed ringing (``ringing_ratio`` at or above the detector's
     threshold) is then counted in ``ringing_runs_unmeasured``: its ratios read the higher
-    modes too, and the fit says so.
+    modes too, and the fit says so; unless its velocities came from the flight model with
+    the campaign's ringing modes (``ring_modes``, tails carried on).
 
     Examples
     --------
@@ -287,7 +290,8 @@ def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
         slope = float(np.median(d)) if d.size else float("nan")
         se = float(np.hypot(se, slope * ring.stderr))
     unmeasured = 0 if ring.n_runs else sum(
-        1 for log in logs if getattr(log, "ringing_ratio", np.nan) >= RINGING_RESIDUAL_RATIO)
+        1 for log in logs if getattr(log, "ringing_ratio", np.nan) >= RINGING_RESIDUAL_RATIO
+        and not getattr(log, "ring_modes", ()))
     return RatioStats(st, se, ring, unmeasured)
 
 

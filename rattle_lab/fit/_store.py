@@ -35,7 +35,8 @@ from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
 from ._grazing import GrazingFit, fit_grazing
 from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._damping import fit_zeta_ramp
-from ._restitution import FLAG_RINGING_UNCORRECTED, fit_restitution_down, ratios_of_runs
+from ._restitution import (FLAG_RING_MODES_ONE_RUN, FLAG_RINGING_UNCORRECTED,
+                           fit_restitution_down, ratios_of_runs)
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
 from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
                          GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
@@ -106,7 +107,8 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     if vel is not None and getattr(vel, "measurand", None) == "panel_absolute":
         log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
     if log.velocity_note:   # the flight model gave no ringing share, or used some impacts only
-        base["chain_flags"] = base["chain_flags"] + (f"ringing_share_missing: {log.velocity_note}",)
+        what = "ringing_velocities_missing" if log.ring_modes else "ringing_share_missing"
+        base["chain_flags"] = base["chain_flags"] + (f"{what}: {log.velocity_note}",)
     names = tuple(c.name for c in used)
     duration = (v_si if v_si is not None else a_si).size / fs  # type: ignore[union-attr]
     pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)
@@ -465,6 +467,23 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                          "flight models) is theirs and is taken off the ratios"
                          + ("" if np.isfinite(ring.stderr) else "; one run: its error is "
                             "not in the standard error"))
+        carried = [r.impacts for r in ok if r.impacts is not None and r.impacts.ring_modes]
+        if carried:
+            modes = carried[0].ring_modes
+            n_src = max(int(log.params.ring_modes_runs) for log in carried)
+            where = (f"found across {n_src} runs" if n_src > 1 else "found in one run"
+                     if n_src == 1 else "given")
+            notes.append("the plate's higher modes ring on past the next impact: modes "
+                         + ", ".join(f"{f:.1f} Hz (decay {s:.1f} 1/s)" for f, s in modes)
+                         + f" {where}; in {len(carried)} runs v_in and v_out are the flight "
+                         "model's with each impact's ringing carried on (impacts it gives no "
+                         "velocities are left out)")
+            if n_src == 1:
+                notes.append("one run only: within a run the modes' tails and the "
+                             "fundamental's free response can trade off (single ramps of "
+                             "the independent generator gave e from -15 % to +10 %); the "
+                             "runs of a campaign at other frequencies pin the modes down")
+                ringing_flag = FLAG_RING_MODES_ONE_RUN
         if rs.ringing_runs_unmeasured:
             notes.append(f"the plate's higher modes ring after the impacts in "
                          f"{rs.ringing_runs_unmeasured} runs, but no run's flight model "

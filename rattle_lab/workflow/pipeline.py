@@ -54,6 +54,7 @@ different code.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -61,6 +62,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from rattle_lab._atomic import atomic_path
 from rattle_lab._progress import progress
@@ -75,8 +78,9 @@ from ._pipeline_spec import (DEPENDS, OUTPUTS, STAGES, Pipeline, Stage, load_pip
 #: Layout of the cached products (their classes' places and fields); a change re-runs the
 #: stages whose products a store caches.  2: the classes moved with the data-flow layout and
 #: RunResult gained chain_flags and shocks.  3: ImpactLog gained velocity_note.  4: ImpactLog
-#: gained velocity_offset_m_s, ringing_share and ringing_ratio.
-CACHE_FORMAT = 4
+#: gained velocity_offset_m_s, ringing_share and ringing_ratio.  5: ImpactLog gained
+#: ring_modes (and ringing_problem, never cached).
+CACHE_FORMAT = 5
 
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
@@ -261,9 +265,16 @@ def detect_runs(store: str | os.PathLike[str], detect: Mapping[str, Any],
     check_linked_inputs(store, dict.fromkeys(catalogue["input_key"]))
     jobs = [(str(store), str(k), str(r)) for k, r in zip(catalogue["input_key"],
                                                        catalogue["run_id"])]
+    results = _map_runs(jobs, detect, fit, scheduler=scheduler, quiet=quiet, desc="detect")
+    return _campaign_ringing(results, jobs, detect, fit, scheduler=scheduler, quiet=quiet)
+
+
+def _map_runs(jobs: list[tuple[str, str, str]], detect: Mapping[str, Any],
+              fit: Mapping[str, Any], *, scheduler: Any, quiet: bool, desc: str) -> list[Any]:
+    """:func:`detect_run` of every job, in order: serially or on a Dask cluster."""
     if scheduler is None:
         return [detect_run(*job, detect, fit) for job in progress(
-            jobs, total=len(jobs), desc="detect", quiet=quiet, unit="run")]
+            jobs, total=len(jobs), desc=desc, quiet=quiet, unit="run")]
     from distributed import as_completed
 
     client, owned = _connect(scheduler)
@@ -272,13 +283,56 @@ def detect_runs(store: str | os.PathLike[str], detect: Mapping[str, Any],
                              code=_FINGERPRINT, pure=False) if jobs else []
         position = {f.key: i for i, f in enumerate(futures)}
         results: list[Any] = [None] * len(futures)
-        for fut in progress(as_completed(futures), total=len(futures), desc="detect",
+        for fut in progress(as_completed(futures), total=len(futures), desc=desc,
                             quiet=quiet, unit="run"):
             results[position[fut.key]] = fut.result()
         return results
     finally:
         if owned:
             client.close()
+
+
+def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
+                      detect: Mapping[str, Any], fit: Mapping[str, Any], *, scheduler: Any,
+                      quiet: bool) -> list[Any]:
+    """Lightly damped ringing, found across the campaign's runs and taken out of each.
+
+    Where runs ring after their impacts and no run's own flight model measured the
+    ringing's share of the velocity jumps (modes that ring on past the next impact), the
+    runs' flights are pooled to find the plate's ringing modes
+    (:func:`rattle_lab.detect.campaign_ring_modes`), and every shaker run with impacts is
+    detected again with them (``ring_modes``: each impact's ringing carried on, ``v_in``
+    and ``v_out`` from the flight model).  Otherwise, and where no mode is found, the
+    results are returned as they are (the fit then flags the ratios).  The runs' parts of
+    the search are dropped from the results either way.
+    """
+    from rattle_lab.detect import campaign_ring_modes
+
+    logs = [getattr(r, "impacts", None) for r in results]
+    problems = [log.ringing_problem for log in logs if log is not None
+                and log.ringing_problem is not None]
+    shares = [log.ringing_share for log in logs if log is not None]
+    redo: list[int] = []
+    if (problems and not any(np.isfinite(s) for s in shares)
+            and detect.get("velocity_model", "auto") != "local"
+            and not detect.get("ring_modes")):
+        modes = campaign_ring_modes(problems)
+        if modes:
+            redo = [i for i, r in enumerate(results) if r.status == "ok"
+                    and r.impacts is not None and r.impacts.n_impacts
+                    and np.isfinite(r.freq_hz) and r.protocol != "transient"
+                    and np.isfinite(r.impacts.v_in_m_s).any()]
+            again = _map_runs([jobs[i] for i in redo],
+                              {**detect, "ring_modes": [list(m) for m in modes],
+                               "ring_modes_runs": len(problems)}, fit,
+                              scheduler=scheduler, quiet=quiet, desc="detect (ringing modes)")
+            results = list(results)
+            for i, r in zip(redo, again):
+                results[i] = r
+    return [r if getattr(r, "impacts", None) is None or r.impacts.ringing_problem is None
+            else dataclasses.replace(r, impacts=dataclasses.replace(r.impacts,
+                                                                    ringing_problem=None))
+            for r in results]
 
 
 def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipeline) -> None:
