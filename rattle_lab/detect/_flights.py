@@ -390,6 +390,8 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     FlightFit
         With :attr:`FlightFit.note` empty when every impact's velocities come from the model.
     """
+    if carried and modes_given is None:
+        raise ValueError("carried tails need the modes (modes_given)")
     n_imp = k_imp.size
     v_in_local = np.asarray(v_in_local, float)
     v_out_local = np.asarray(v_out_local, float)

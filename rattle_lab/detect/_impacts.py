@@ -109,7 +109,8 @@ class ImpactParams:
         and a constant excitation frequency, ``v_in`` and ``v_out`` then come from the
         flight model with these modes fixed and each impact's ringing carried on over the
         later flights; impacts the model cannot give velocities keep none (NaN: their
-        local fits read the tails).  Empty (default): not used.
+        local fits read the tails).  Given, it is used whatever ``velocity_model`` says.
+        Empty (default): not used.
     ring_modes_runs : int
         How many runs ``ring_modes`` were found from (0: given; the fit names a search
         that had one run only).
@@ -133,7 +134,8 @@ class ImpactParams:
     ring_modes_runs: int = 0
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.ring_modes_runs, (int, np.integer)) and self.ring_modes_runs >= 0):
+        if isinstance(self.ring_modes_runs, bool) or not (
+                isinstance(self.ring_modes_runs, (int, np.integer)) and self.ring_modes_runs >= 0):
             raise ParameterError(f"`ring_modes_runs` must be an integer >= 0, was "
                                  f"{self.ring_modes_runs!r}")
         try:
@@ -576,17 +578,27 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     pad_keep = np.asarray(pads, dtype=float)[keep] if v is not None else np.zeros(0)
     if params.ring_modes and v is not None and excitation_freq_hz is not None:
         model = "local"
-        flights = flight_velocities(v, fs_hz, excitation_freq_hz, k_keep, pad_keep, vin[keep],
-                                    vout[keep], list(params.ring_modes), carried=True)
-        m = flights.from_flights
-        vin[keep] = np.where(m, flights.v_in_m_s, np.nan)
-        vout[keep] = np.where(m, flights.v_out_m_s, np.nan)
+        ratio = _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree, omega)
+        # every trigger with a jump bounds a flight and starts a tail, also one whose
+        # reversal test failed (an absolute vibrometer's velocities carry the base's): a
+        # missing impact would leave its jump and its ringing out of the run-wide model
+        src = np.isfinite(vin) & np.isfinite(vout)
+        flights = flight_velocities(v, fs_hz, excitation_freq_hz,
+                                    np.asarray(t_idx, dtype=float)[src],
+                                    np.asarray(pads, dtype=float)[src], vin[src], vout[src],
+                                    list(params.ring_modes), carried=True)
+        got = np.zeros(vin.size, dtype=bool)
+        got[src] = flights.from_flights
+        vin = np.where(got, _scatter(vin.size, src, flights.v_in_m_s), np.nan)
+        vout = np.where(got, _scatter(vin.size, src, flights.v_out_m_s), np.nan)
         with np.errstate(divide="ignore", invalid="ignore"):
             e = np.where(vin != 0, -vout / vin, np.nan)
-        if not m.all():
-            note = (f"no velocities for {int((~m).sum())} of {m.size} impacts: "
-                    + (flights.note or "the flight model with the campaign's ringing modes "
-                       "gave none"))
+        n_out = int((~got[keep]).sum())
+        if n_out:
+            why = flights.note.removeprefix("local fits kept: ").removeprefix(
+                "local fits kept for ") or "the flight model gave none"
+            note = (f"no velocities for {n_out} of {int(keep.sum())} impacts, left out (their "
+                    f"local fits read the ringing modes' tails): {why}")
     elif model != "local" and v is not None and excitation_freq_hz is not None:
         ratio = _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree, omega)
         if model == "auto":
@@ -620,6 +632,12 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                      ringing_ratio=ratio, ring_modes=params.ring_modes if params.ring_modes
                      and v is not None and excitation_freq_hz is not None else (),
                      ringing_problem=problem)
+
+
+def _scatter(n: int, mask: np.ndarray, values: np.ndarray) -> np.ndarray:
+    out = np.full(n, np.nan)
+    out[mask] = values
+    return out
 
 
 #: ``velocity_model = "auto"`` runs the flight model where the local fits' median residual

@@ -456,46 +456,47 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     # flight model gave one, is taken off every run's ratios
     rs = ratios_of_runs([r.impacts for r in ok if r.impacts is not None])
     st, ring = rs.stats, rs.ringing
-    ratio, ringing_flag = None, None
+    ratio, ringing_flags = None, list[str]()
+    notes, extra = list[str](), dict[str, Any]()
+    if ring.n_runs:
+        extra = dict(ringing_share=ring.value, ringing_share_stderr=_f(ring.stderr),
+                     ringing_runs=ring.n_runs)
+        notes.append(f"the plate's higher modes ring after each impact: {100 * ring.value:.1f} "
+                     f"% of each measured velocity jump (median of {ring.n_runs} runs' "
+                     "flight models) is theirs and is taken off the ratios"
+                     + ("" if np.isfinite(ring.stderr) else "; one run: its error is "
+                        "not in the standard error"))
+    carried = [r.impacts for r in ok if r.impacts is not None and r.impacts.ring_modes]
+    if carried:
+        modes = carried[0].ring_modes
+        n_src = max(int(log.params.ring_modes_runs) for log in carried)
+        where = (f"found across {n_src} runs" if n_src > 1 else "found in one run"
+                 if n_src == 1 else "given")
+        n_with = sum(1 for log in carried if np.isfinite(log.v_in_m_s).any())
+        notes.append("the plate's higher modes ring on past the next impact: modes "
+                     + ", ".join(f"{f:.1f} Hz (decay {s:.1f} 1/s)" for f, s in modes)
+                     + f" {where}; in {n_with} runs v_in and v_out are the flight model's "
+                     "with each impact's ringing carried on (impacts it gives no velocities "
+                     "are left out)")
+        if n_src == 1:
+            notes.append("one run only: within a run the modes' tails and the "
+                         "fundamental's free response can trade off (single ramps of "
+                         "the independent generator gave e from -15 % to +10 %); the "
+                         "runs of a campaign at other frequencies pin the modes down")
+            ringing_flags.append(FLAG_RING_MODES_ONE_RUN)
+    if rs.ringing_runs_unmeasured:
+        notes.append(f"the plate's higher modes ring after the impacts in "
+                     f"{rs.ringing_runs_unmeasured} runs, but no run's flight model "
+                     "measured their share of the velocity jumps and no modes were found "
+                     "across the runs: these ratios include them and are biased; e from the "
+                     "downward thresholds does not depend on them")
+        ringing_flags.append(FLAG_RINGING_UNCORRECTED)
     if st.n:
-        se, notes, extra = rs.stderr, list[str](), dict[str, Any]()
-        if ring.n_runs:
-            extra = dict(ringing_share=ring.value, ringing_share_stderr=_f(ring.stderr),
-                         ringing_runs=ring.n_runs)
-            notes.append(f"the plate's higher modes ring after each impact: {100 * ring.value:.1f} "
-                         f"% of each measured velocity jump (median of {ring.n_runs} runs' "
-                         "flight models) is theirs and is taken off the ratios"
-                         + ("" if np.isfinite(ring.stderr) else "; one run: its error is "
-                            "not in the standard error"))
-        carried = [r.impacts for r in ok if r.impacts is not None and r.impacts.ring_modes]
-        if carried:
-            modes = carried[0].ring_modes
-            n_src = max(int(log.params.ring_modes_runs) for log in carried)
-            where = (f"found across {n_src} runs" if n_src > 1 else "found in one run"
-                     if n_src == 1 else "given")
-            notes.append("the plate's higher modes ring on past the next impact: modes "
-                         + ", ".join(f"{f:.1f} Hz (decay {s:.1f} 1/s)" for f, s in modes)
-                         + f" {where}; in {len(carried)} runs v_in and v_out are the flight "
-                         "model's with each impact's ringing carried on (impacts it gives no "
-                         "velocities are left out)")
-            if n_src == 1:
-                notes.append("one run only: within a run the modes' tails and the "
-                             "fundamental's free response can trade off (single ramps of "
-                             "the independent generator gave e from -15 % to +10 %); the "
-                             "runs of a campaign at other frequencies pin the modes down")
-                ringing_flag = FLAG_RING_MODES_ONE_RUN
-        if rs.ringing_runs_unmeasured:
-            notes.append(f"the plate's higher modes ring after the impacts in "
-                         f"{rs.ringing_runs_unmeasured} runs, but no run's flight model "
-                         "measured their share of the velocity jumps (lightly damped modes "
-                         "that ring on past the next impact are not modelled): these ratios "
-                         "include them and are biased; e from the downward thresholds does "
-                         "not depend on them")
-            ringing_flag = FLAG_RINGING_UNCORRECTED
-        ratio = RatioRestitution(st.mean, se, "1", std=st.std, median=st.median, n=st.n,
+        ratio = RatioRestitution(st.mean, rs.stderr, "1", std=st.std, median=st.median, n=st.n,
                                  n_runs=st.n_groups, notes=tuple(notes), **extra)
     else:
-        missing["restitution_ratio"] = "no impact with a velocity on both sides"
+        missing["restitution_ratio"] = " ".join(
+            ["no impact with a velocity on both sides"] + [f"({n})" for n in notes])
     # issue 15: the ramp lag biases eq. (3.4)'s gap as well as its zeta; the ramp-corrected
     # fit removes each threshold's replayed lag and gives gap, f_s and zeta together
     rg: RampGrazingFit | None = None
@@ -556,7 +557,7 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         participation=ParticipationInfo(participation.value, participation.source),
         # (a store of single shocks fits no modal law: the participation does not enter)
         data_quality=(tuple(participation.flags) if any(r.protocol != "transient" for r in ok)
-                      else ()) + chain + ((ringing_flag,) if ringing_flag else ())
+                      else ()) + chain + tuple(ringing_flags)
         + tuple(flags or ()),
         transients=tuple(TransientRun(r.input_key, r.run_id, tuple(dict(c) for c in r.shocks))
                          for r in ok if r.protocol == "transient"))

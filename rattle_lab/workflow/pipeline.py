@@ -302,8 +302,9 @@ def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
     runs' flights are pooled to find the plate's ringing modes
     (:func:`rattle_lab.detect.campaign_ring_modes`), and every shaker run with impacts is
     detected again with them (``ring_modes``: each impact's ringing carried on, ``v_in``
-    and ``v_out`` from the flight model).  Otherwise, and where no mode is found, the
-    results are returned as they are (the fit then flags the ratios).  The runs' parts of
+    and ``v_out`` from the flight model).  Otherwise, where no mode is found, or where the
+    modes give no run any velocities, the results are returned as they are (the fit then
+    flags the ratios).  The runs' parts of
     the search are dropped from the results either way.
     """
     from rattle_lab.detect import campaign_ring_modes
@@ -326,9 +327,13 @@ def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
                               {**detect, "ring_modes": [list(m) for m in modes],
                                "ring_modes_runs": len(problems)}, fit,
                               scheduler=scheduler, quiet=quiet, desc="detect (ringing modes)")
-            results = list(results)
-            for i, r in zip(redo, again):
-                results[i] = r
+            if any(np.isfinite(r.impacts.v_in_m_s).any() for r in again
+                   if getattr(r, "impacts", None) is not None):
+                results = list(results)
+                for i, r in zip(redo, again):
+                    results[i] = r
+            # (else the modes gave no run velocities: the first pass stands, and the fit
+            # flags its ratios as uncorrected)
     return [r if getattr(r, "impacts", None) is None or r.impacts.ringing_problem is None
             else dataclasses.replace(r, impacts=dataclasses.replace(r.impacts,
                                                                     ringing_problem=None))
