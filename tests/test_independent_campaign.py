@@ -142,16 +142,20 @@ def test_lightly_damped_ringing_in_the_vibrometer_is_found_across_the_runs(tmp_p
     """With the higher modes in the vibrometer (this generator's modes at 171, 293 and 390 Hz,
     2 % of critical, 28 % of each velocity jump, ringing on past the next impact) the local
     fits read e ~1 for 0.55, and no run's own flight model measures their share on these
-    steady dwells.  The fit finds the modes across the two runs (each impact's ringing
-    carried on, the runs' impact times differ) and takes v_in and v_out from the flight
-    model with them.  Tolerances: the modes' frequencies within 1 % (the pooled search's
-    scatter over seeds 3-5 was 0.3 %); e within 6 % (two runs of 50 impacts; the run means
-    scatter by about 3 %) and its reported 95 % interval (two runs: Student t with one
-    degree of freedom) covers the truth; no ringing flag."""
+    steady dwells (and the test for ringing passes one of them by: the tails are in the
+    residual before each impact too).  The fit finds the modes across the two runs (each
+    impact's ringing carried on, the runs' impact times differ) and takes v_in and v_out
+    from the flight model with them.  Tolerances: the modes' frequencies within 1 % (the
+    search's scatter over seeds 3 and 4 and the 9-run campaigns was 0.3 %); e within 6 %
+    (two runs of 50 impacts; the run means scatter by about 3 %; +3.9 % seen) and its
+    reported 95 % interval (two runs: Student t with one degree of freedom) covers the
+    truth; no ringing flag."""
     plant, _, _, summary = _campaign(tmp_path, Chain(ring_in_velocity=True))
-    assert "e_ratio_ringing_uncorrected" not in summary["data_quality"]
+    assert not {"e_ratio_ringing_uncorrected", "e_ratio_ring_modes_one_run"} & set(
+        summary["data_quality"])
     ratio = summary["fits"]["restitution_ratio"]
     (note,) = [n for n in ratio["notes"] if "ring on past the next impact" in n]
+    assert "found across 2 runs" in note
     found = [float(x) for x in re.findall(r"([0-9.]+) Hz \(decay", note)]
     assert len(found) == 3
     for f_true, f in zip(Chain().ring_hz, sorted(found)):
@@ -163,9 +167,9 @@ def test_lightly_damped_ringing_in_the_vibrometer_is_found_across_the_runs(tmp_p
 def test_ringing_modes_from_one_run_are_flagged(tmp_path):
     """A record of one run: the modes are searched in it alone, where their tails and the
     fundamental's free response can trade off (single 1.5 s ramps of this generator gave e
-    -15 %); the fit still corrects, but names it with a data-quality flag and a note.  On this
-    single dwell e came out +4.3 %: within 10 % is asserted (the one-run range seen was -15 %
-    to +10 %, so this is a check of the path, not of the accuracy)."""
+    -9.5 % and +9.8 %); the fit still corrects, but names it with a data-quality flag and a
+    note.  On this single dwell e came out +4.3 %: within 10 % is asserted (the one-run
+    range seen), so this checks the path, not the accuracy."""
     plant = Plant()
     path = tmp_path / "one.h5"
     write_campaign(path, plant, Chain(ring_in_velocity=True),

@@ -31,6 +31,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -597,6 +598,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         if n_out:
             why = flights.note.removeprefix("local fits kept: ").removeprefix(
                 "local fits kept for ") or "the flight model gave none"
+            why = re.sub(r"^\d+ of \d+ impacts \((.*)\)$", r"\1", why)
             note = (f"no velocities for {n_out} of {int(keep.sum())} impacts, left out (their "
                     f"local fits read the ringing modes' tails): {why}")
     elif model != "local" and v is not None and excitation_freq_hz is not None:

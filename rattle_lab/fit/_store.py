@@ -481,7 +481,7 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         if n_src == 1:
             notes.append("one run only: within a run the modes' tails and the "
                          "fundamental's free response can trade off (single ramps of "
-                         "the independent generator gave e from -15 % to +10 %); the "
+                         "the independent generator gave e from -10 % to +10 %); the "
                          "runs of a campaign at other frequencies pin the modes down")
             ringing_flags.append(FLAG_RING_MODES_ONE_RUN)
     if rs.ringing_runs_unmeasured:

@@ -300,12 +300,14 @@ def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
     Where runs ring after their impacts and no run's own flight model measured the
     ringing's share of the velocity jumps (modes that ring on past the next impact), the
     runs' flights are pooled to find the plate's ringing modes
-    (:func:`rattle_lab.detect.campaign_ring_modes`), and every shaker run with impacts is
+    (:func:`rattle_lab.detect.campaign_ring_modes`; the other shaker runs' flights join
+    them: their own test for ringing sees the tails on both sides of an impact and can
+    pass them by), and every shaker run with impacts is
     detected again with them (``ring_modes``: each impact's ringing carried on, ``v_in``
     and ``v_out`` from the flight model).  Otherwise, where no mode is found, or where the
     modes give no run any velocities, the results are returned as they are (the fit then
-    flags the ratios).  The runs' parts of
-    the search are dropped from the results either way.
+    flags the ratios).  The runs' parts of the search are dropped from the results either
+    way.
     """
     from rattle_lab.detect import campaign_ring_modes
 
@@ -317,12 +319,20 @@ def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
     if (problems and not any(np.isfinite(s) for s in shares)
             and detect.get("velocity_model", "auto") != "local"
             and not detect.get("ring_modes")):
+        redo = [i for i, r in enumerate(results) if r.status == "ok"
+                and r.impacts is not None and r.impacts.n_impacts
+                and np.isfinite(r.freq_hz) and r.protocol != "transient"
+                and np.isfinite(r.impacts.v_in_m_s).any()]
+        # the tails are in the residual before an impact as well as after it, so the test
+        # for ringing can pass a run by: the other shaker runs' flights join the search
+        others = [i for i in redo if results[i].impacts.ringing_problem is None]
+        more = _map_runs([jobs[i] for i in others], {**detect, "velocity_model": "flights"},
+                         fit, scheduler=scheduler, quiet=quiet, desc="detect (flights)")
+        problems += [r.impacts.ringing_problem for r in more
+                     if getattr(r, "impacts", None) is not None
+                     and r.impacts.ringing_problem is not None]
         modes = campaign_ring_modes(problems)
         if modes:
-            redo = [i for i, r in enumerate(results) if r.status == "ok"
-                    and r.impacts is not None and r.impacts.n_impacts
-                    and np.isfinite(r.freq_hz) and r.protocol != "transient"
-                    and np.isfinite(r.impacts.v_in_m_s).any()]
             again = _map_runs([jobs[i] for i in redo],
                               {**detect, "ring_modes": [list(m) for m in modes],
                                "ring_modes_runs": len(problems)}, fit,
