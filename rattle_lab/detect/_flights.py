@@ -300,6 +300,22 @@ class _Model:
         return float(res.x[0]), abs(float(res.x[1]))
 
 
+def _pack(modes: list[tuple[float, float]]) -> np.ndarray:
+    """Modes ``(f, s)`` as the searches' parameters ``(f, ln s, ...)``."""
+    return np.array([x for f, s in modes for x in (f, np.log(s))])
+
+
+def _unpack(p: np.ndarray) -> list[tuple[float, float]]:
+    return [(float(p[2 * j]), float(np.exp(p[2 * j + 1]))) for j in range(p.size // 2)]
+
+
+def _simplex(p0: np.ndarray, step_f: float) -> list[np.ndarray]:
+    """Nelder-Mead's first simplex: each frequency moved by ``step_f`` of itself, each
+    ``ln s`` by 0.3."""
+    return [p0] + [p0 + np.eye(p0.size)[i] * (step_f * p0[i] if i % 2 == 0 else 0.3)
+                   for i in range(p0.size)]
+
+
 def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
                   pairs: _Pairs, dv: np.ndarray, f_s: float, sigma: float,
                   f_lo_hz: float, f_hi_hz: float, s_min: float
@@ -322,18 +338,15 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
     def refine(modes: list[tuple[float, float]], fixed: list[tuple[float, float]],
                fs_: float, sig_: float, maxfev: int) -> tuple[list[tuple[float, float]], float]:
         def obj(p: np.ndarray) -> float:
-            ms = [(float(p[2 * j]), float(np.exp(p[2 * j + 1]))) for j in range(p.size // 2)]
+            ms = _unpack(p)
             if any(not (f_lo_hz <= f <= f_hi_hz and s_min <= s <= s_max) for f, s in ms):
                 return np.inf
             return model(fixed + ms).solve(fs_, sig_)[0]
-        p0 = np.array([x for f, s in modes for x in (f, np.log(s))])
-        simplex = [p0] + [p0 + np.eye(p0.size)[i] * (0.05 * p0[i] if i % 2 == 0 else 0.3)
-                          for i in range(p0.size)]
+        p0 = _pack(modes)
         sol = minimize(obj, p0, method="Nelder-Mead",
                        options={"maxfev": maxfev, "xatol": 1e-3, "fatol": 0.0,
-                                "initial_simplex": simplex})
-        return ([(float(sol.x[2 * j]), float(np.exp(sol.x[2 * j + 1])))
-                 for j in range(sol.x.size // 2)], float(sol.fun))
+                                "initial_simplex": _simplex(p0, 0.05)})
+        return _unpack(sol.x), float(sol.fun)
 
     modes: list[tuple[float, float]] = []
     bic = n * np.log(model(modes).solve(f_s, sigma)[0])
@@ -501,7 +514,6 @@ class RingingProblem:
     dv: np.ndarray
     f_s_hz: float
     sigma_1_s: float
-    n_impacts: int
 
 
 def ringing_problem(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
@@ -517,7 +529,7 @@ def ringing_problem(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
     return RingingProblem(y, sub, float(fs_hz), xf_sub, np.asarray(k_imp, float) / fs_hz,
                           np.nan_to_num(np.asarray(v_out_local, float)
                                         - np.asarray(v_in_local, float)),
-                          f_s, sigma, int(k_imp.size))
+                          f_s, sigma)
 
 
 def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, float], ...]:
@@ -544,18 +556,17 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
     f_s = float(np.median([p.f_s_hz for p in ok]))
     f_lo, f_hi = 1.1 * f_s, min(6.0 * f_s, 0.2 * min(p.fs_hz for p in ok))
 
-    fund = [(p.f_s_hz, p.sigma_1_s) for p in ok]
-
     def model(i: int, modes: list[tuple[float, float]]) -> _Model:
         p = ok[i]
         return _Model(p.y, p.segments, p.fs_hz,
                       np.hstack([p.forced, _tail_columns(tails[i], p.dv, modes)]))
 
     def rss(modes: list[tuple[float, float]]) -> np.ndarray:
-        return np.array([model(i, modes).solve(*fund[i])[0] for i in range(len(ok))])
+        return np.array([model(i, modes).solve(ok[i].f_s_hz, ok[i].sigma_1_s)[0]
+                         for i in range(len(ok))])
 
     def objective(par: np.ndarray) -> float:
-        modes = [(float(par[2 * j]), float(np.exp(par[2 * j + 1]))) for j in range(par.size // 2)]
+        modes = _unpack(par)
         if any(not (f_lo <= f <= f_hi and 0.001 * f <= s <= 0.3 * 2 * np.pi * f)
                for f, s in modes):
             return np.inf
@@ -570,19 +581,15 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
     best = bic(modes)
     grid = np.geomspace(f_lo, f_hi, 30)
     for _ in range(MAX_RING_MODES):
-        scan = [(objective(np.array([x for f, s in modes + [(fr, q * 2 * np.pi * fr)]
-                                     for x in (f, np.log(s))])), fr, q * 2 * np.pi * fr)
+        scan = [(objective(_pack(modes + [(fr, q * 2 * np.pi * fr)])), fr, q * 2 * np.pi * fr)
                 for fr in grid for q in (0.005, 0.02, 0.06, 0.15)]
         _, f0, s0 = min(scan, key=lambda c: c[0])
         trial = modes + [(f0, s0)]
-        p0 = np.array([x for f, s in trial for x in (f, np.log(s))])
-        simplex = [p0] + [p0 + np.eye(p0.size)[i] * (0.02 * p0[i] if i % 2 == 0 else 0.3)
-                          for i in range(p0.size)]
+        p0 = _pack(trial)
         sol = minimize(objective, p0, method="Nelder-Mead",
                        options={"maxfev": 60 * len(trial), "xatol": 1e-3, "fatol": 0.0,
-                                "initial_simplex": simplex})
-        trial = [(float(sol.x[2 * j]), float(np.exp(sol.x[2 * j + 1])))
-                 for j in range(len(trial))]
+                                "initial_simplex": _simplex(p0, 0.02)})
+        trial = _unpack(sol.x)
         b = bic(trial)
         if not b < best or any(abs(a[0] / c[0] - 1) < 0.05
                                for i, a in enumerate(trial) for c in trial[:i]):

@@ -577,7 +577,9 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     model = params.velocity_model
     k_keep = np.asarray(t_idx, dtype=float)[keep]
     pad_keep = np.asarray(pads, dtype=float)[keep] if v is not None else np.zeros(0)
+    carried = False   # ImpactParams.ring_modes applied
     if params.ring_modes and v is not None and excitation_freq_hz is not None:
+        carried = True
         model = "local"
         ratio = _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree, omega)
         # every trigger with a jump bounds a flight and starts a tail, also one whose
@@ -590,8 +592,9 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                                     list(params.ring_modes), carried=True)
         got = np.zeros(vin.size, dtype=bool)
         got[src] = flights.from_flights
-        vin = np.where(got, _scatter(vin.size, src, flights.v_in_m_s), np.nan)
-        vout = np.where(got, _scatter(vin.size, src, flights.v_out_m_s), np.nan)
+        vin, vout = np.full(vin.size, np.nan), np.full(vin.size, np.nan)
+        vin[got] = flights.v_in_m_s[flights.from_flights]
+        vout[got] = flights.v_out_m_s[flights.from_flights]
         with np.errstate(divide="ignore", invalid="ignore"):
             e = np.where(vin != 0, -vout / vin, np.nan)
         n_out = int((~got[keep]).sum())
@@ -631,15 +634,8 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                      strength=np.asarray(strength, dtype=float)[keep],
                      channels=tuple(names), params=params, fs_hz=float(fs_hz),
                      velocity_note=note, velocity_offset_m_s=offset, ringing_share=share,
-                     ringing_ratio=ratio, ring_modes=params.ring_modes if params.ring_modes
-                     and v is not None and excitation_freq_hz is not None else (),
+                     ringing_ratio=ratio, ring_modes=params.ring_modes if carried else (),
                      ringing_problem=problem)
-
-
-def _scatter(n: int, mask: np.ndarray, values: np.ndarray) -> np.ndarray:
-    out = np.full(n, np.nan)
-    out[mask] = values
-    return out
 
 
 #: ``velocity_model = "auto"`` runs the flight model where the local fits' median residual

@@ -315,7 +315,6 @@ def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
     problems = [log.ringing_problem for log in logs if log is not None
                 and log.ringing_problem is not None]
     shares = [log.ringing_share for log in logs if log is not None]
-    redo: list[int] = []
     if (problems and not any(np.isfinite(s) for s in shares)
             and detect.get("velocity_model", "auto") != "local"
             and not detect.get("ring_modes")):
