@@ -90,7 +90,8 @@ def threshold_content(data: ReportData) -> ThresholdContent:
         missing = (("eq. 3.4 fit curve", not_fitted(data, "grazing", "grazing fit absent")),)
     hyst = threshold_hysteresis(up, down)
     width = 0.6 * (float(np.min(np.diff(f))) if f.size > 1 else 1.0)
-    return ThresholdContent(f, up, down, hyst, np.isfinite(hyst) & (hyst < 0),
+    negative = np.isin(f, [fx for fx, _ in report_negative_hysteresis(data)])
+    return ThresholdContent(f, up, down, hyst, negative,
                             np.isfinite(up) & np.isfinite(down), width, curve, missing)
 
 
