@@ -40,7 +40,7 @@ from collections.abc import Callable
 import numpy as np
 
 from rattle_lab.model.modal import (ModalResult, ModalState, ModalSystem, contact_from_name, plate_system,
-                     rayleigh_pressure, simulate_modal)
+                     rayleigh_pressure, residual_pressure, simulate_modal)
 from rattle_lab.model.modal._sound import C_AIR_M_S, plate_surface
 from rattle_lab.model.modal._system import Contact
 from rattle_lab.model.plate import Plate
@@ -113,7 +113,8 @@ def build_system(scene: Scene) -> tuple[ModalSystem, Contact]:
     ys = plate.b_m / 2 if spec.striker_y_m is None else spec.striker_y_m
     try:
         system = plate_system(plate, n_modes=spec.modes, gap_m=scene.model.gap_m, striker_xy_m=(xs, ys),
-                              pressure_pa=0.0, freq_hz=scene.runs[0].freq_hz, zeta=scene.model.zeta)
+                              pressure_pa=0.0, freq_hz=scene.runs[0].freq_hz, zeta=scene.model.zeta,
+                              omitted_modes=spec.contact != "rigid")
     except SceneError:
         raise
     except ValueError as exc:   # ParameterError: e.g. the striker off the plate
@@ -222,8 +223,18 @@ def simulate_run_modal(scene: Scene, base: ModalSystem, contact: Contact, run: R
     mic = None
     if scene.sensor("mic") is not None:
         counter.add("acoustic")
-        mic = rayleigh_pressure(plate_surface(base, scene.model.modal.radiation_grid), velocity, t0 + t,
-                                (0.5 * plate.a_m, 0.5 * plate.b_m, scene.mic_distance_m))
+        mic_xyz = (0.5 * plate.a_m, 0.5 * plate.b_m, scene.mic_distance_m)
+        mic = rayleigh_pressure(plate_surface(base, scene.model.modal.radiation_grid), velocity, t0 + t, mic_xyz)
+        if base.corrected:
+            def deflection(tt: np.ndarray) -> np.ndarray:
+                tt = np.clip(np.asarray(tt, dtype=float), t_lo, t_hi)
+                idx = np.clip(np.searchsorted(starts, tt, side="right") - 1, 0, len(results) - 1)
+                out = np.empty(tt.size)
+                for i in np.unique(idx):
+                    sel = idx == i
+                    out[sel] = results[i].residual_deflection_m(tt[sel])
+                return out
+            mic = mic + residual_pressure(base, deflection, t0 + t, mic_xyz)
     eps = [r.impacts for r in results[(0 if settle is None else 1):]]
     cat: Callable[[list[np.ndarray]], np.ndarray] = lambda parts: np.concatenate(parts) if parts else np.empty(0)
     counts = np.array([len(e) for e in eps], dtype=np.int64)
