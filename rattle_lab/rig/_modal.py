@@ -20,13 +20,18 @@ What the channels get:
   over the whole run (settling included, so the first samples hear the motion before),
   with its propagation delay; plus the fan tone of ``[artefacts]``.
 
+The compliant contacts include the omitted modes' element at the contact point (issue 24,
+:func:`rattle_lab.model.modal.plate_system` with ``omitted_modes=True``) and the sound its
+point source; the rigid contact keeps the plain truncated sum.
+
 The truth's impacts are the contact episodes (first touch to final separation) and
 ``v_in_m_s``, ``v_out_m_s`` are the velocities of the plate **at the contact point**,
 towards the striker at first touch and away from it at final separation.  The main
 mode's own restitution per impact (``e_mode1``) is summarised in ``/truth`` as ``e``
 (its ``v_in**2``-weighted mean over the campaign, clipped to [0, 1]) and the extra
 attribute ``e_mode1_weighted``.  An episode that straddles a ramp's piece boundary
-is reported as two (rare: contacts last ~0.1 ms, pieces several forcing periods).
+is reported as two (contacts through the omitted modes' element last ~1.5 ms on the
+thesis plate, pieces several forcing periods of ~10 ms).
 """
 
 from __future__ import annotations

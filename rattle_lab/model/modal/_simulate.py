@@ -143,11 +143,14 @@ class _Engine:
 
     # ------------------------------------------------------------------ run
     def run(self, t: float, p: np.ndarray, v: np.ndarray, t_end: float,
-            max_events: int) -> tuple[float, np.ndarray, np.ndarray, int]:
+            max_events: int, in_contact: bool = False) -> tuple[float, np.ndarray, np.ndarray, int]:
         mode = FREE
         on_stop = False
         n_events = 0
         c_start: tuple[float, float, np.ndarray] | None = None  # (t, u_in, v before) of an open contact
+        if in_contact:  # a compliant contact going on at the start (e.g. across a ramp's pieces)
+            mode = KV if isinstance(self.contact, KelvinVoigtContact) else HERTZ
+            c_start = (t, max(float(self.beta @ v) + self.rate * self.r, 0.0), v.copy())
         while t < t_end:
             n_events += 1
             if n_events > max_events:
@@ -427,7 +430,8 @@ def simulate_modal(system: ModalSystem, contact: Contact | None = None, *, cycle
     cycles, duration_s : float
         Run length, in forcing periods or seconds (exactly one).
     state : ModalState, optional
-        Start (default: at rest at t = 0); must not penetrate the striker.
+        Start (default: at rest at t = 0); it may start inside a compliant contact (the
+        end state of a run whose contact was going on), not inside a rigid one.
     episode_gap_s : float, optional
         Contacts closer than this are one impact (default ``0.25 * 2 pi / omega_1``).
         Episodes that may still go on at the end of the run are left out of ``impacts``
@@ -476,7 +480,8 @@ def simulate_modal(system: ModalSystem, contact: Contact | None = None, *, cycle
         state = ModalState(t_s=0.0, p=np.zeros(n), v=np.zeros(n))
     if state.p.size != n or state.v.size != n:
         raise ParameterError(f"`state` must have {n} modal coordinates, had {state.p.size}")
-    if float(system.beta @ state.p) - state.r_m > system.gap_m * (1 + 1e-12):
+    in_contact = float(system.beta @ state.p) - state.r_m > system.gap_m * (1 + 1e-12)
+    if in_contact and isinstance(contact, RigidContact):
         raise ParameterError("`state` penetrates the striker (beta . p - r > gap)")
     if state.r_m != 0.0 and not system.corrected:
         raise ParameterError("`state` has a local deflection r but the system has no omitted-modes element")
@@ -486,7 +491,7 @@ def simulate_modal(system: ModalSystem, contact: Contact | None = None, *, cycle
     budget = max_events if max_events is not None else 10**6 + int(2000 * dur * system.freq_hz)
     eng = _Engine(system, contact, dense, hertz_rtol)
     eng.r = state.r_m
-    t, p, v, n_events = eng.run(state.t_s, state.p.copy(), state.v.copy(), state.t_s + dur, budget)
+    t, p, v, n_events = eng.run(state.t_s, state.p.copy(), state.v.copy(), state.t_s + dur, budget, in_contact)
     cs = eng.contacts
     log = ContactLog(t_start_s=np.array([c[0] for c in cs]), t_end_s=np.array([c[1] for c in cs]),
                      u_in_m_s=np.array([c[2] for c in cs]), u_out_m_s=np.array([c[3] for c in cs]),
