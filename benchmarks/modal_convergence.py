@@ -73,7 +73,8 @@ def main() -> None:
                 print(f"| {r['n']} | {i + 1} | {im.t_s[i] * 1e3:.4f} | {im.v_in_m_s[i]:.4f} | {r['q1_in'][i]:.4f} | "
                       f"{im.e_mode1[i]:.4f} | "
                       f"{im.n_contacts[i]} | {r['heard'][i]:.3f} |")
-        print("\n| N | run [s] | impacts | contacts | mean e_mode1 (std; s.e.) | S = fitted peak/v_in [Pa/(m/s)] (s.e.) |")
+        print("\n| N | run [s] | impacts | contacts | mean e_mode1 (std; s.e.) "
+              "| S = fitted peak/v_in [Pa/(m/s)] (s.e.) |")
         print("|---|---|---|---|---|---|")
         for r in rows:
             print(f"| {r['n']} | {r['s']:.0f} | {r['count']} | {r['contacts']} | {r['e_mean']:.4f} ({r['e_std']:.3f}; "

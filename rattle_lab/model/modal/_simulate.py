@@ -168,7 +168,8 @@ class _Engine:
                 if self.corr:
                     a = np.append(a, -r0 + 0j)
                     lam = np.append(lam, -self.rate + 0j)
-                    ev = (lambda s, C=C, Pt=Pt, fm=fm, r0=r0: (*fm.state(C, Pt, s), r0 * np.exp(-self.rate * s)))
+                    ev: Any = (lambda s, C=C, Pt=Pt, fm=fm, r0=r0:
+                               (*fm.state(C, Pt, s), r0 * np.exp(-self.rate * s)))
                 else:
                     ev = (lambda s, C=C, Pt=Pt, fm=fm: fm.state(C, Pt, s))
                 d0 = ex.value(a, lam, c0, 0.0, 0)
@@ -272,7 +273,7 @@ class _Engine:
         if self.corr:
             gamma, Zt = kv.start(np.concatenate([p, v, [self.r]]), th)
             a, lam, c0 = kv.functional(gamma, Zt, -self.kv_frow, -self.kv_f0)
-            ev = (lambda s, g=gamma, Z=Zt: _split3(kv.state(g, Z, s), n))
+            ev: Any = (lambda s, g=gamma, Z=Zt: _split3(kv.state(g, Z, s), n))
         else:
             gamma, Zt = kv.start(np.concatenate([p, v]), th)
             w = -np.concatenate([k * self.beta, c * self.beta])

@@ -423,7 +423,7 @@ def _omitted(plate: Plate, modes: object, keep: np.ndarray, shape: np.ndarray, m
     Z = infinite_plate_impedance(plate)
     w_all = np.asarray(plate.omega_rad_s(modes.lam), dtype=float)  # type: ignore[attr-defined]
     w_n = float(np.max(w_all[keep]))
-    W_all = np.asarray(modes.evaluate(xs / plate.a_m, ys / plate.b_m), dtype=float)  # type: ignore[attr-defined]
+    W_all = np.asarray(modes.evaluate(xs / plate.a_m, ys / plate.b_m), dtype=float)  # type: ignore[attr-defined, type-var]
     seen = np.abs(W_all) > 1e-9
     seen[keep] = False
     above = w_all[seen & (w_all > w_n)]
