@@ -198,10 +198,12 @@ def measured_peak(p_pa: np.ndarray, fs_hz: float) -> tuple[float, float]:
     Fast: the exponential time weighting of IEC 61672-1 (tau = 0.125 s) on the
     microphone's mean square, Z (flat) frequency weighting.
     """
-    from rattle_lab.acoustics._levels import fast_time_weighted
+    from scipy.signal import lfilter
 
     pm = microphone(p_pa, fs_hz)
-    fast = fast_time_weighted(pm**2, fs_hz)
+    # the sampled first-order lag on p^2, from rest (the model layer does not import acoustics/)
+    a = math.exp(-1.0 / (fs_hz * 0.125))
+    fast = lfilter([1.0 - a], [1.0, -a], pm**2)
     lf = 10.0 * math.log10(max(float(np.max(fast)), 1e-300) / (20e-6) ** 2)
     return float(np.max(np.abs(pm))), lf
 
