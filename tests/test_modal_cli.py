@@ -63,3 +63,23 @@ def test_table_output_and_bad_input():
     assert len(bad.stderr.strip().splitlines()) == 1 and "gap_m" in bad.stderr
     bad = run("--striker", "1.0", "0.1")
     assert bad.returncode == 2 and "striker_xy_m" in bad.stderr
+
+
+@pytest.mark.slow  # > 8 s (measured under load)
+def test_omitted_modes_element_is_on_by_default_and_can_be_left_out():
+    # Issue 24: the compliant contacts get the omitted modes' element by default; its
+    # impedance is the infinite plate's, 8 sqrt(D m'') (computed here from the defaults).
+    D = 7e10 * 1e-9 / (12 * (1 - 0.34**2))
+    Z = 8 * (D * 2710 * 1e-3) ** 0.5
+    out = json.loads(run("--cycles", "4", "--modes", "6", "--json").stdout)
+    assert out["omitted_modes"]["local_impedance_n_s_m"] == pytest.approx(Z, rel=1e-12)
+    assert out["omitted_modes"]["residual_compliance_m_n"] > 0
+    assert all(imp["n_contacts"] == 1 for imp in out["impacts"])
+    assert len(out["mic_measured"]) == len(out["impacts"])
+    assert all(0 < h < 1.2 * p for h, p in zip(out["mic_measured"], out["mic"]))
+    assert 60 < out["mic_fast_max_db"] < 140
+    plain = json.loads(run("--cycles", "4", "--modes", "6", "--json", "--no-omitted-modes").stdout)
+    assert plain["omitted_modes"] is None
+    # the rigid contact never has the element (it has no meaning against a dashpot)
+    rigid = json.loads(run("--cycles", "4", "--modes", "2", "--contact", "rigid", "--json").stdout)
+    assert rigid["omitted_modes"] is None

@@ -102,11 +102,14 @@ PACKAGES: dict[str, list[str]] = {
         "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K"
     ],
     "rattle_lab.model.modal": [
-        "CONTACT_NAMES", "THESIS_HERTZ_N_M15", "THESIS_PLATE", "THESIS_STRIKER_STIFFNESS_N_M",
+        "CONTACT_NAMES", "MIC_CORNER_HZ", "THESIS_HERTZ_N_M15", "THESIS_PLATE",
+        "THESIS_STRIKER_STIFFNESS_N_M",
         "ContactLog", "EpisodeLog", "HertzContact", "KelvinVoigtContact", "ModalChannels",
         "ModalResult", "ModalState", "ModalSystem", "RadiatingSurface", "RigidContact",
-        "contact_from_name", "modal_channels", "plate_surface", "plate_system",
-        "predicted_spl_slope", "rayleigh_pressure", "rayleigh_zeta", "simulate_modal"
+        "contact_from_name", "infinite_plate_impedance", "measured_peak", "microphone",
+        "modal_channels", "plate_surface", "plate_system",
+        "predicted_spl_slope", "rayleigh_pressure", "rayleigh_zeta", "residual_pressure",
+        "simulate_modal"
     ],
     "rattle_lab.model.plate": [
         "Plate", "PlateMode", "PlateModes", "TableMode", "EDGE_ORDER", "DEFAULT_N_TERMS",

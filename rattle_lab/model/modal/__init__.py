@@ -10,15 +10,17 @@
 
 from ._scene import ModalChannels, modal_channels
 from ._simulate import simulate_modal
-from ._sound import RadiatingSurface, plate_surface, rayleigh_pressure
+from ._sound import (MIC_CORNER_HZ, RadiatingSurface, measured_peak, microphone, plate_surface,
+                     rayleigh_pressure, residual_pressure)
 from ._spl import predicted_spl_slope
 from ._system import (CONTACT_NAMES, THESIS_HERTZ_N_M15, THESIS_PLATE, THESIS_STRIKER_STIFFNESS_N_M,
                       HertzContact, KelvinVoigtContact, ModalSystem, RigidContact, contact_from_name,
-                      plate_system, rayleigh_zeta)
+                      infinite_plate_impedance, plate_system, rayleigh_zeta)
 from ._types import ContactLog, EpisodeLog, ModalResult, ModalState
 
 __all__ = [
     "CONTACT_NAMES",
+    "MIC_CORNER_HZ",
     "THESIS_HERTZ_N_M15",
     "THESIS_PLATE",
     "THESIS_STRIKER_STIFFNESS_N_M",
@@ -33,11 +35,15 @@ __all__ = [
     "RadiatingSurface",
     "RigidContact",
     "contact_from_name",
+    "infinite_plate_impedance",
+    "measured_peak",
+    "microphone",
     "modal_channels",
     "plate_surface",
     "plate_system",
     "predicted_spl_slope",
     "rayleigh_pressure",
     "rayleigh_zeta",
+    "residual_pressure",
     "simulate_modal",
 ]

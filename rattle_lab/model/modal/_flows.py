@@ -138,3 +138,28 @@ class LinearFlow:
         a = np.concatenate([a, [harm]])
         lam = np.concatenate([self.Lam, [1j * self.Omega]])
         return a, lam, float(c0 + (np.dot(w, self.zc) if self.n else 0.0))
+
+
+class AffineFlow(LinearFlow):
+    """Exact flow of the first-order system ``z' = A z + f0 + phi cos(theta)`` (any size m).
+
+    Used where the state is not ``(p, p')`` alone: the modes plus the omitted modes'
+    local deflection ``r`` (Kelvin-Voigt contact with the contact-point element).
+    """
+
+    def __init__(self, A: np.ndarray, f0: np.ndarray, phi: np.ndarray, Omega: float) -> None:
+        m = A.shape[0]
+        self.n = m
+        self.Omega = Omega
+        Lam, V = scipy.linalg.eig(A)
+        if np.any(Lam.real > 1e-9 * np.max(np.abs(Lam))):
+            raise ParameterError("the coupled contact system is unstable (an eigenvalue has Re > 0)")
+        cond = np.linalg.cond(V)
+        if not np.isfinite(cond) or cond > 1e10:
+            raise ParameterError(f"the contact system's eigenvectors are ill-conditioned (cond {cond:.2e}); "
+                                 "a repeated eigenvalue, e.g. critical damping, is not supported")
+        self.Lam = np.minimum(Lam.real, 0.0) + 1j * Lam.imag
+        self.V = V
+        self.Vinv = np.linalg.inv(V)
+        self.zc = -np.linalg.solve(A, f0)
+        self.Z = np.linalg.solve(1j * Omega * np.eye(m) - A, phi.astype(complex))

@@ -14,7 +14,7 @@ import numpy.typing as npt
 
 from rattle_lab.exceptions import ParameterError
 from ._simulate import simulate_modal
-from ._sound import C_AIR_M_S, peak_per_impact, plate_surface, rayleigh_pressure
+from ._sound import C_AIR_M_S, peak_per_impact, plate_surface, rayleigh_pressure, residual_pressure
 from ._system import Contact, ModalSystem
 from ._types import EpisodeLog, ModalResult, ModalState
 
@@ -108,6 +108,9 @@ def modal_channels(system: ModalSystem, contact: Contact | None, t_s: npt.ArrayL
         return res.modal_velocity_m_s(np.clip(tt, t0, res.state.t_s))
 
     pressure = rayleigh_pressure(plate_surface(system, n_grid), velocity, t, mic, oversample=oversample)  # type: ignore[arg-type]
+    if system.corrected:
+        pressure = pressure + residual_pressure(
+            system, lambda tt: res.residual_deflection_m(np.clip(tt, t0, res.state.t_s)), t, mic)  # type: ignore[arg-type]
     delay = float(np.hypot(np.hypot(mic[0] - xs, mic[1] - ys), mic[2])) / C_AIR_M_S
     peaks = peak_per_impact(pressure, t, res.impacts.t_s, delay)
     return ModalChannels(t_s=t, displacement_m=np.asarray(disp), velocity_m_s=np.asarray(vel), mic_pa=pressure,

@@ -17,6 +17,12 @@ Contact laws
     linear and solved exactly (:class:`~rattle_lab.model.modal._flows.LinearFlow`); the
     contact ends when ``f_c`` reaches zero (to rounding).  After a separation with
     ``delta > 0`` (c > 0) the contact resumes where ``f_c`` turns positive again.
+    *omitted modes* (``system.corrected``): the contact point is ``beta . p - r`` with
+    ``k_r r + Z r' = f_c`` (:mod:`~rattle_lab.model.modal._system`); in free flight ``r``
+    relaxes as ``exp(-s k_r / Z)``, one more real term of the exponential sums, and the
+    Kelvin-Voigt contact is the exact linear flow of ``(p, p', r)``.  The rigid contact
+    is not defined with the element (a rigid striker against a dashpot has no impulse):
+    use a compliant one.
     *hertz*: ``f_c = k_H delta**1.5``, integrated by DOP853 (``scipy.integrate.solve_ivp``,
     rtol ``hertz_rtol``, atol ``hertz_rtol`` times the gap's scale) with the separation
     ``delta = 0`` located by its event finder on the dense output.
@@ -36,7 +42,7 @@ import scipy.linalg
 
 from rattle_lab.exceptions import ParameterError, SimulationError
 from . import _expsum as ex
-from ._flows import FreeModes, LinearFlow, _mv
+from ._flows import AffineFlow, FreeModes, LinearFlow, _mv
 from ._system import Contact, HertzContact, KelvinVoigtContact, ModalSystem, RigidContact
 from ._types import ContactLog, EpisodeLog, ModalResult, ModalState
 
@@ -63,6 +69,15 @@ class _Engine:
         self.gap = system.gap_m
         self.Omega = system.Omega_rad_s
         self.fm = FreeModes(self.omega, self.zeta, self.phi, self.Omega)
+        self.corr = system.corrected
+        self.Zl = system.local_impedance_n_s_m
+        self.Gr = system.residual_compliance_m_n
+        self.rate = 1.0 / (self.Gr * self.Zl) if self.corr else 0.0
+        self.r = 0.0
+        if self.corr and isinstance(contact, RigidContact):
+            raise ParameterError("the rigid contact is not defined with the omitted modes' element (a rigid "
+                                 "striker against the plate's local impedance has no impulse); use a "
+                                 "kelvin-voigt or hertz contact, or a system without the element")
         self.window = min(1.0 / system.freq_hz, 2.0 * math.pi / float(np.min(self.omega)))
         self.tol_d = TOL_REL * self.gap
         n = system.n_modes
@@ -72,7 +87,10 @@ class _Engine:
         if isinstance(contact, KelvinVoigtContact):
             k, c = contact.stiffness_n_m, contact.damping_n_s_m
             bb = np.outer(self.beta, self.beta)
-            self.kv = LinearFlow(K0 + k * bb, C0 + c * bb, k * self.gap * self.beta, self.phi, self.Omega)
+            if self.corr:
+                self._kv_corrected(k, c)
+            else:
+                self.kv = LinearFlow(K0 + k * bb, C0 + c * bb, k * self.gap * self.beta, self.phi, self.Omega)
             self.tol_f = TOL_REL * k * self.gap
         if isinstance(contact, RigidContact):
             T = scipy.linalg.null_space(self.beta[None, :]) if n > 1 else np.zeros((1, 0))
@@ -89,6 +107,27 @@ class _Engine:
         self.contacts: list[tuple[float, float, float, float, int, np.ndarray, np.ndarray]] = []
         self.segments: list[tuple[float, float, Any]] = []
 
+    def _kv_corrected(self, k: float, c: float) -> None:
+        """Kelvin-Voigt contact through the element: the linear flow of ``z = (p, p', r)``."""
+        n = self.sys.n_modes
+        b, Zl, Gr = self.beta, self.Zl, self.Gr
+        # r' = g . z + g0 (from Z r' + r / G = k delta + c delta', delta = beta . p - r - gap)
+        g = np.concatenate([k * b, c * b, [-(k + 1.0 / Gr)]]) / (Zl + c)
+        g0 = -k * self.gap / (Zl + c)
+        # f_c = f_row . z + f_c0
+        f_row = np.concatenate([k * b, c * b, [-k]]) - c * g
+        f_c0 = -k * self.gap - c * g0
+        A = np.zeros((2 * n + 1, 2 * n + 1))
+        A[:n, n:2 * n] = np.eye(n)
+        A[n:2 * n, :n] = -self.K0
+        A[n:2 * n, n:2 * n] = -self.C0
+        A[n:2 * n, :] -= np.outer(b, f_row)
+        A[2 * n, :] = g
+        f0 = np.concatenate([np.zeros(n), -b * f_c0, [g0]])
+        ph = np.concatenate([np.zeros(n), self.phi, [0.0]])
+        self.kv = AffineFlow(A, f0, ph, self.Omega)
+        self.kv_g, self.kv_g0, self.kv_frow, self.kv_f0 = g, g0, f_row, f_c0
+
     # ------------------------------------------------------------------ helpers
     def theta(self, t: float) -> float:
         return self.Omega * t + self.sys.phase_rad
@@ -104,11 +143,14 @@ class _Engine:
 
     # ------------------------------------------------------------------ run
     def run(self, t: float, p: np.ndarray, v: np.ndarray, t_end: float,
-            max_events: int) -> tuple[float, np.ndarray, np.ndarray, int]:
+            max_events: int, in_contact: bool = False) -> tuple[float, np.ndarray, np.ndarray, int]:
         mode = FREE
         on_stop = False
         n_events = 0
         c_start: tuple[float, float, np.ndarray] | None = None  # (t, u_in, v before) of an open contact
+        if in_contact:  # a compliant contact going on at the start (e.g. across a ramp's pieces)
+            mode = KV if isinstance(self.contact, KelvinVoigtContact) else HERTZ
+            c_start = (t, max(float(self.beta @ v) + self.rate * self.r, 0.0), v.copy())
         while t < t_end:
             n_events += 1
             if n_events > max_events:
@@ -121,11 +163,18 @@ class _Engine:
             if mode == FREE:
                 C, Pt = self.fm.start(p, v, th)
                 a, lam, c0 = self.fm.functional(C, Pt, self.beta, None, -self.gap)
-                d0 = ex.value(a, lam, c0, 0.0, 0)
                 fm = self.fm
-                ev = (lambda s, C=C, Pt=Pt, fm=fm: fm.state(C, Pt, s))
+                r0 = self.r
+                if self.corr:
+                    a = np.append(a, -r0 + 0j)
+                    lam = np.append(lam, -self.rate + 0j)
+                    ev: Any = (lambda s, C=C, Pt=Pt, fm=fm, r0=r0:
+                               (*fm.state(C, Pt, s), r0 * np.exp(-self.rate * s)))
+                else:
+                    ev = (lambda s, C=C, Pt=Pt, fm=fm: fm.state(C, Pt, s))
+                d0 = ex.value(a, lam, c0, 0.0, 0)
                 if isinstance(self.contact, KelvinVoigtContact) and d0 > self.tol_d:
-                    s_hit, kind, to_contact = self._free_inside(C, Pt, a, lam, c0, win)
+                    s_hit, kind, to_contact = self._free_inside(C, Pt, a, lam, c0, win, r0)
                 else:
                     s_lo = 0.0
                     if on_stop or d0 > -self.tol_d:
@@ -138,11 +187,13 @@ class _Engine:
                 if not to_contact:
                     s_adv = s_hit if kind != ex.NONE else win
                     p, v = fm.state(C, Pt, s_adv)
+                    self.r = r0 * math.exp(-self.rate * s_adv)
                     self.record(t, t + s_adv, ev)
                     t += s_adv
                     on_stop = kind != ex.NONE  # left the stop region (delta = 0 going down)
                     continue
                 p, v = fm.state(C, Pt, s_hit)
+                self.r = r0 * math.exp(-self.rate * s_hit)
                 self.record(t, t + s_hit, ev)
                 t += s_hit
                 on_stop = False
@@ -164,11 +215,14 @@ class _Engine:
 
     # ------------------------------------------------------------------ free flight from inside (KV, c > 0)
     def _free_inside(self, C: np.ndarray, Pt: np.ndarray, a: np.ndarray, lam: np.ndarray, c0: float,
-                     win: float) -> tuple[float, int, bool]:
+                     win: float, r0: float) -> tuple[float, int, bool]:
         """Free flight that starts with delta > 0 after a Kelvin-Voigt release at f_c = 0."""
         assert isinstance(self.contact, KelvinVoigtContact)
         k, c = self.contact.stiffness_n_m, self.contact.damping_n_s_m
         af, lamf, cf = self.fm.functional(C, Pt, k * self.beta, c * self.beta, -k * self.gap)
+        if self.corr:  # f_c = k (.. - r) + c (.. - r'), r' = -rate r
+            af = np.append(af, (-k + c * self.rate) * r0 + 0j)
+            lamf = np.append(lamf, -self.rate + 0j)
         s_lo = ex.start_exclusion(af, lamf, cf, 0.0, win)
         if s_lo == 0.0:
             return 0.0, ex.GRAZE, True
@@ -182,7 +236,7 @@ class _Engine:
 
     # ------------------------------------------------------------------ contact onset
     def _touch(self, t: float, p: np.ndarray, v: np.ndarray, kind: int) -> tuple[int, np.ndarray, np.ndarray, Any]:
-        u = max(float(self.beta @ v), 0.0)
+        u = max(float(self.beta @ v) + self.rate * self.r, 0.0)
         v_before = v.copy()
         if isinstance(self.contact, RigidContact):
             e = self.contact.e
@@ -205,9 +259,10 @@ class _Engine:
             return KV, p, v, (t, u, v_before)
         return HERTZ, p, v, (t, u, v_before)
 
-    def _close(self, c_start: Any, t: float, v: np.ndarray, kind: int) -> None:
+    def _close(self, c_start: Any, t: float, v: np.ndarray, kind: int, u_out: float | None = None) -> None:
         t0, u, v_before = c_start
-        self.contacts.append((t0, t, u, -float(self.beta @ v), kind, v_before, v.copy()))
+        uo = -float(self.beta @ v) if u_out is None else u_out
+        self.contacts.append((t0, t, u, uo, kind, v_before, v.copy()))
 
     # ------------------------------------------------------------------ Kelvin-Voigt contact
     def _kv_step(self, t: float, p: np.ndarray, v: np.ndarray, th: float, win: float, c_start: Any) -> tuple:
@@ -215,25 +270,34 @@ class _Engine:
         k, c = self.contact.stiffness_n_m, self.contact.damping_n_s_m
         kv = self.kv
         n = self.sys.n_modes
-        gamma, Zt = kv.start(np.concatenate([p, v]), th)
-        w = -np.concatenate([k * self.beta, c * self.beta])
-        a, lam, c0 = kv.functional(gamma, Zt, w, k * self.gap)
+        if self.corr:
+            gamma, Zt = kv.start(np.concatenate([p, v, [self.r]]), th)
+            a, lam, c0 = kv.functional(gamma, Zt, -self.kv_frow, -self.kv_f0)
+            ev: Any = (lambda s, g=gamma, Z=Zt: _split3(kv.state(g, Z, s), n))
+        else:
+            gamma, Zt = kv.start(np.concatenate([p, v]), th)
+            w = -np.concatenate([k * self.beta, c * self.beta])
+            a, lam, c0 = kv.functional(gamma, Zt, w, k * self.gap)
+            ev = (lambda s, g=gamma, Z=Zt: _split(kv.state(g, Z, s), n))
         h0 = ex.value(a, lam, c0, 0.0, 0)
-        ev = (lambda s, g=gamma, Z=Zt: _split(kv.state(g, Z, s), n))
         s_lo = 0.0
         if h0 > -self.tol_f:
             s_lo = ex.start_exclusion(a, lam, c0, 0.0, win)
             if s_lo == 0.0:  # grazing touch: the force never becomes positive
-                self._close(c_start, t, v, 1)
+                self._close(c_start, t, v, 1, -float(self.beta @ v) - self.rate * self.r if self.corr else None)
                 return FREE, t, p, v, None, True
         kind, s, _ = ex.first_touch(a, lam, c0, s_lo, win, self.tol_f)
         z = kv.state(gamma, Zt, s)
         self.record(t, t + s, ev)
         t += s
-        p, v = z[:n].copy(), z[n:].copy()
+        p, v = z[:n].copy(), z[n:2 * n].copy()
+        u_out = None
+        if self.corr:
+            self.r = float(z[2 * n])
+            u_out = -(float(self.beta @ v) - float(self.kv_g @ z + self.kv_g0))
         if kind == ex.NONE:
             return KV, t, p, v, c_start, False
-        self._close(c_start, t, v, 0)
+        self._close(c_start, t, v, 0, u_out)
         return FREE, t, p, v, None, True
 
     # ------------------------------------------------------------------ rigid contact: sticking
@@ -275,18 +339,25 @@ class _Engine:
         c1 = 2.0 * self.zeta * self.omega
         w2 = self.omega**2
 
+        corr, Zl, Gr = self.corr, self.Zl, self.Gr
+
         def rhs(s: float, y: np.ndarray) -> np.ndarray:
-            d = float(beta @ y[:n]) - gap
+            d = float(beta @ y[:n]) - gap - (y[2 * n] if corr else 0.0)
             f = kh * d * math.sqrt(d) if d > 0 else 0.0
-            return np.concatenate([y[n:], phi * math.cos(th + Om * s) - c1 * y[n:] - w2 * y[:n] - beta * f])
+            dv = phi * math.cos(th + Om * s) - c1 * y[n:2 * n] - w2 * y[:n] - beta * f
+            if corr:
+                return np.concatenate([y[n:2 * n], dv, [(f - y[2 * n] / Gr) / Zl]])
+            return np.concatenate([y[n:], dv])
 
         def sep(s: float, y: np.ndarray) -> float:
-            return float(beta @ y[:n]) - gap
+            return float(beta @ y[:n]) - gap - (y[2 * n] if corr else 0.0)
         sep.terminal = True  # type: ignore[attr-defined]
         sep.direction = -1  # type: ignore[attr-defined]
         p_scale = gap / math.sqrt(self.nb2)
-        atol = np.concatenate([np.full(n, p_scale), np.full(n, p_scale * float(np.max(self.omega)))])
-        sol = solve_ivp(rhs, (0.0, win), np.concatenate([p, v]), method="DOP853", rtol=self.hertz_rtol,
+        atol = np.concatenate([np.full(n, p_scale), np.full(n, p_scale * float(np.max(self.omega)))]
+                              + ([[gap]] if corr else []))
+        y0 = np.concatenate([p, v] + ([[self.r]] if corr else []))
+        sol = solve_ivp(rhs, (0.0, win), y0, method="DOP853", rtol=self.hertz_rtol,
                         atol=self.hertz_rtol * atol, events=sep, dense_output=self.dense)
         if not sol.success:
             raise SimulationError(f"Hertz contact integration failed at t = {t:.17g} s: {sol.message}")
@@ -298,18 +369,24 @@ class _Engine:
             y = sol.y[:, -1]
         if self.dense:
             so = sol.sol
-            self.record(t, t + s, lambda x, so=so: _split(so(x), n))
+            self.record(t, t + s, (lambda x, so=so: _split3(so(x), n)) if corr else (lambda x, so=so: _split(so(x), n)))
         t += s
-        p, v = y[:n].copy(), y[n:].copy()
+        p, v = y[:n].copy(), y[n:2 * n].copy()
+        if corr:
+            self.r = float(y[2 * n])
         if not sol.t_events[0].size:
             return HERTZ, t, p, v, c_start, False
-        p = p + beta * ((gap - float(beta @ p)) / self.nb2)  # on the stop to rounding
-        self._close(c_start, t, v, 0)
+        p = p + beta * ((gap + self.r - float(beta @ p)) / self.nb2)  # on the stop to rounding
+        self._close(c_start, t, v, 0, -float(beta @ v) - self.rate * self.r if corr else None)
         return FREE, t, p, v, None, True
 
 
 def _split(z: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     return z[:n], z[n:]
+
+
+def _split3(z: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, Any]:
+    return z[:n], z[n:2 * n], z[2 * n]
 
 
 def _pinned(p0: np.ndarray, s: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -354,7 +431,8 @@ def simulate_modal(system: ModalSystem, contact: Contact | None = None, *, cycle
     cycles, duration_s : float
         Run length, in forcing periods or seconds (exactly one).
     state : ModalState, optional
-        Start (default: at rest at t = 0); must not penetrate the striker.
+        Start (default: at rest at t = 0); it may start inside a compliant contact (the
+        end state of a run whose contact was going on), not inside a rigid one.
     episode_gap_s : float, optional
         Contacts closer than this are one impact (default ``0.25 * 2 pi / omega_1``).
         Episodes that may still go on at the end of the run are left out of ``impacts``
@@ -403,14 +481,18 @@ def simulate_modal(system: ModalSystem, contact: Contact | None = None, *, cycle
         state = ModalState(t_s=0.0, p=np.zeros(n), v=np.zeros(n))
     if state.p.size != n or state.v.size != n:
         raise ParameterError(f"`state` must have {n} modal coordinates, had {state.p.size}")
-    if float(system.beta @ state.p) > system.gap_m * (1 + 1e-12):
-        raise ParameterError("`state` penetrates the striker (beta . p > gap)")
+    in_contact = float(system.beta @ state.p) - state.r_m > system.gap_m * (1 + 1e-12)
+    if in_contact and isinstance(contact, RigidContact):
+        raise ParameterError("`state` penetrates the striker (beta . p - r > gap)")
+    if state.r_m != 0.0 and not system.corrected:
+        raise ParameterError("`state` has a local deflection r but the system has no omitted-modes element")
     gap_s = 0.25 * 2.0 * math.pi / float(system.omega_rad_s[0]) if episode_gap_s is None else float(episode_gap_s)
     if not (gap_s >= 0 and math.isfinite(gap_s)):
         raise ParameterError(f"`episode_gap_s` must be finite and >= 0, was {episode_gap_s}")
     budget = max_events if max_events is not None else 10**6 + int(2000 * dur * system.freq_hz)
     eng = _Engine(system, contact, dense, hertz_rtol)
-    t, p, v, n_events = eng.run(state.t_s, state.p.copy(), state.v.copy(), state.t_s + dur, budget)
+    eng.r = state.r_m
+    t, p, v, n_events = eng.run(state.t_s, state.p.copy(), state.v.copy(), state.t_s + dur, budget, in_contact)
     cs = eng.contacts
     log = ContactLog(t_start_s=np.array([c[0] for c in cs]), t_end_s=np.array([c[1] for c in cs]),
                      u_in_m_s=np.array([c[2] for c in cs]), u_out_m_s=np.array([c[3] for c in cs]),
@@ -429,4 +511,4 @@ def simulate_modal(system: ModalSystem, contact: Contact | None = None, *, cycle
                          mode_velocity_in=eps_log.mode_velocity_in / sq,
                          mode_velocity_out=eps_log.mode_velocity_out / sq)
     return ModalResult(system=system, contact=contact, contacts=log, impacts=eps_log,
-                       state=ModalState(t_s=t, p=p, v=v), segments=tuple(eng.segments), n_events=n_events)
+                       state=ModalState(t_s=t, p=p, v=v, r_m=eng.r), segments=tuple(eng.segments), n_events=n_events)

@@ -17,7 +17,7 @@ import numpy as np
 
 from rattle_lab.exceptions import ParameterError
 from ._simulate import simulate_modal
-from ._sound import C_AIR_M_S, plate_surface, rayleigh_pressure
+from ._sound import C_AIR_M_S, plate_surface, rayleigh_pressure, residual_pressure
 from ._system import Contact, ModalSystem
 from ._types import ModalState
 
@@ -73,6 +73,7 @@ def predicted_spl_slope(system: ModalSystem, contact: Contact | None = None, *,
     t = np.arange(0.0, span, 1.0 / fs_hz)
     p = rayleigh_pressure(plate_surface(quiet, n_grid), lambda tt: res.modal_velocity_m_s(np.clip(tt, 0.0, span)),
                           t, mic)
+    p = p + residual_pressure(quiet, lambda tt: res.residual_deflection_m(np.clip(tt, 0.0, span)), t, mic)
     # Only the impact's sound: the free mode-1 motion before it radiates (weakly) too.
     t_hit = float(res.contacts.t_start_s[0])
     delay = float(np.hypot(np.hypot(mic[0] - system.striker_xi * plate.a_m,

@@ -19,6 +19,23 @@ the modal energy is ``sum_k (p_k'**2 + omega_k**2 p_k**2) / 2``.  The effective
 mass of the plate at the striker, ``1 / sum_k beta_k**2``, falls as modes are
 added (a plate's point impedance is finite): a rigid contact then becomes a
 cluster of micro-impacts, and a compliant contact is the law that converges in N.
+
+Omitted modes (issue 24)
+    A truncated sum has neither the plate's local impedance nor the flexibility of the
+    modes it leaves out.  With ``local_impedance_n_s_m = Z > 0`` the omitted modes are
+    represented at the contact point by a spring ``k_r`` in parallel with a dashpot ``Z``,
+    in series between the retained modes and the striker: the contact point sits at
+    ``sum_k beta_k p_k - r`` and the local deflection ``r`` obeys ``k_r r + Z r' = f_c``.
+    Its mobility ``i omega / (k_r + i omega Z)`` is the omitted modes' static residual
+    flexibility ``1 / k_r`` well below their frequencies (the residual-flexibility or
+    mode-acceleration correction, Craig & Kurdila, *Fundamentals of Structural Dynamics*,
+    2nd ed., 2006, section 14.3) and the infinite-plate point impedance
+    ``Z = 8 sqrt(D m'')`` well above (Cremer, Heckl & Petersson, *Structure-Borne Sound*,
+    3rd ed., 2005, section 5.3; the plate model of Zener, Phys. Rev. 59, 669 (1941)).
+    :func:`plate_system` sets both from the asymptotic modal density: a point of a thin
+    plate has ``sum_k beta_k**2 delta(omega - omega_k) ~ 2 / (pi Z)`` on average, so the
+    modes above the cut ``omega_c`` (midway between the last retained and the first
+    omitted mode) have the residual flexibility ``2 / (pi Z omega_c)``.
 """
 
 from __future__ import annotations
@@ -50,6 +67,12 @@ THESIS_HERTZ_N_M15 = 4.0 / 3.0 / ((1 - 0.3**2) / 2.1e11 + (1 - 0.34**2) / 7e10) 
 #: ~100 modes of the thesis plate; lambda_1 of CFCF (free edges converge slowly, from
 #: above) moves by 3e-4 relative from 24 to 28 terms.
 MODAL_N_TERMS = 24
+#: At most this many beam functions per side: from 34 terms the CFCF solve mixes up
+#: modes (measured: modes 8 to 12 of the thesis plate change which of them are seen at
+#: the centre, and a 40-term basis moves mode 2 of the excited set from 186 Hz to 312 Hz;
+#: 20 to 32 terms agree to 1e-4 in lambda), so more modes than this basis resolves are
+#: refused rather than computed wrong.
+MODAL_N_TERMS_MAX = 32
 
 
 def _pos(name: str, v: float, allow_zero: bool = False) -> float:
@@ -164,6 +187,17 @@ class ModalSystem:
     modes : object
         The :class:`rattle_lab.model.plate.PlateModes` used (None for hand-built systems);
         gives the shapes anywhere for the sound.
+    local_impedance_n_s_m : float
+        ``Z`` [N s/m] of the omitted modes' element at the contact point (module
+        docstring); 0 (default): no element, the plain truncated sum.
+    residual_compliance_m_n : float
+        ``1 / k_r`` [m/N], the omitted modes' static flexibility at the contact point;
+        > 0 when ``Z > 0``, 0 otherwise.
+    residual_volume_m2_kg : float
+        ``eta`` [m^2/kg]: the omitted modes' volume acceleration per newton of the
+        element's dashpot force, ``1/m'' - sum_k L_k W_k(x_s, y_s) / M_k`` (the full sum
+        is ``1/m''`` by completeness); radiates as a baffled point source at the
+        striker (:func:`~rattle_lab.model.modal.residual_pressure`).
     """
 
     omega_rad_s: np.ndarray
@@ -179,6 +213,9 @@ class ModalSystem:
     striker_xi: float = float("nan")
     striker_eta: float = float("nan")
     modes: object = None
+    local_impedance_n_s_m: float = 0.0
+    residual_compliance_m_n: float = 0.0
+    residual_volume_m2_kg: float = 0.0
 
     def __post_init__(self) -> None:
         arrays = {}
@@ -215,6 +252,17 @@ class ModalSystem:
         # striker is on a node line to rounding (e.g. a clamped edge gives ~5e-16).
         if not np.any(np.abs(self.shape_at_striker) > 1e-9):
             raise ParameterError("the striker sits on a node line of every mode (all |W_k(x_s, y_s)| <= 1e-9)")
+        Zl = _pos("local_impedance_n_s_m", self.local_impedance_n_s_m, True)
+        Gr = _pos("residual_compliance_m_n", self.residual_compliance_m_n, True)
+        if (Zl > 0) != (Gr > 0):
+            raise ParameterError("`local_impedance_n_s_m` and `residual_compliance_m_n` must be both > 0 "
+                                 f"(omitted modes represented) or both 0, were {Zl} and {Gr}")
+        eta = float(self.residual_volume_m2_kg)
+        if not math.isfinite(eta):
+            raise ParameterError(f"`residual_volume_m2_kg` must be finite, was {self.residual_volume_m2_kg}")
+        object.__setattr__(self, "local_impedance_n_s_m", Zl)
+        object.__setattr__(self, "residual_compliance_m_n", Gr)
+        object.__setattr__(self, "residual_volume_m2_kg", eta)
         W = 2.0 * math.pi * self.freq_hz
         if np.any((self.zeta == 0) & (self.omega_rad_s == W) & (self.pressure_pa > 0)):
             raise ParameterError("undamped resonance (zeta = 0 and omega_k = Omega) has no periodic response")
@@ -241,6 +289,26 @@ class ModalSystem:
         return np.asarray(self.load_m2 * self.pressure_pa / np.sqrt(self.modal_mass_kg))
 
     @property
+    def corrected(self) -> bool:
+        """Whether the omitted modes are represented at the contact point (``Z > 0``)."""
+        return self.local_impedance_n_s_m > 0.0
+
+    def point_mobility(self, omega_rad_s: npt.ArrayLike) -> np.ndarray:
+        """Driving-point mobility ``v / F`` [m/(N s)] at the striker, complex, ``e^{i omega t}``.
+
+        ``sum_k beta_k**2 i omega / (omega_k**2 - omega**2 + 2 i zeta_k omega_k omega)``
+        plus the omitted modes' element ``i omega / (k_r + i omega Z)`` when present.
+        """
+        w = np.asarray(omega_rad_s, dtype=float)
+        b2 = self.beta**2
+        den = (self.omega_rad_s[:, None] ** 2 - w[None, :] ** 2
+               + 2j * (self.zeta * self.omega_rad_s)[:, None] * w[None, :])
+        y = np.sum(b2[:, None] * 1j * w[None, :] / den, axis=0)
+        if self.corrected:
+            y = y + 1j * w / (1.0 / self.residual_compliance_m_n + 1j * w * self.local_impedance_n_s_m)
+        return np.asarray(y.reshape(np.shape(w)))
+
+    @property
     def effective_mass_kg(self) -> float:
         """Plate mass seen at the striker, ``1 / sum_k beta_k**2`` [kg]."""
         return float(1.0 / np.sum(self.beta**2))
@@ -255,7 +323,8 @@ class ModalSystem:
 def plate_system(plate: Plate = THESIS_PLATE, *, n_modes: int = 8, gap_m: float = 1e-3,
                  striker_xy_m: tuple[float, float] | None = None, pressure_pa: float = 285.0,
                  freq_hz: float = 99.8, zeta: float | npt.ArrayLike = 0.05, phase_rad: float = 0.0,
-                 n_terms: int | None = None, skip_unexcited: bool = False) -> ModalSystem:
+                 n_terms: int | None = None, skip_unexcited: bool = False,
+                 omitted_modes: bool = False) -> ModalSystem:
     """The modal system of a plate from the Rayleigh-Ritz solver (closed form for SSSS).
 
     Parameters
@@ -281,6 +350,12 @@ def plate_system(plate: Plate = THESIS_PLATE, *, n_modes: int = 8, gap_m: float 
         Keep only modes that both the pressure and a centred striker can excite
         (doubly symmetric, ``Q1 != 0``), N of them.  Other modes take no energy from a
         centred striker and are not forced, so they do not change the motion.
+    omitted_modes : bool
+        Represent the modes left out at the contact point (module docstring): the
+        infinite-plate impedance ``Z = 8 sqrt(D m'')`` in parallel with the residual
+        flexibility ``2 / (pi Z omega_c)``, ``omega_c`` midway between the last retained
+        and the next mode seen at the striker.  The CLI and ``[model] kind = "modal"``
+        scenes turn it on; off here so that ``N = 1`` stays the SDF model.
 
     Returns
     -------
@@ -300,10 +375,11 @@ def plate_system(plate: Plate = THESIS_PLATE, *, n_modes: int = 8, gap_m: float 
     if not (0.0 <= xs <= plate.a_m and 0.0 <= ys <= plate.b_m):
         raise ParameterError(f"`striker_xy_m` must lie on the plate [0, {plate.a_m}] x [0, {plate.b_m}], "
                              f"was ({xs}, {ys})")
-    n_solve = 4 * n + 4 if skip_unexcited else n
-    terms = n_terms if n_terms is not None else max(MODAL_N_TERMS, int(math.ceil(2.0 * math.sqrt(n_solve))) + 4)
+    n_solve = 4 * n + 4 if skip_unexcited else (n + 4 if omitted_modes else n)
+    terms = n_terms if n_terms is not None else min(max(MODAL_N_TERMS, int(math.ceil(2.0 * math.sqrt(n_solve))) + 4),
+                                                    MODAL_N_TERMS_MAX)
     modes = ritz_modes(plate.aspect_ratio, plate.edges, nu=plate.nu, n_modes=n_solve, n_terms=terms)
-    keep = np.arange(n_solve)
+    keep = np.arange(n)
     if skip_unexcited:
         keep = np.flatnonzero(np.abs(modes.Q1) > 1e-9 * np.max(np.abs(modes.Q1)))[:n]
         if keep.size < n:
@@ -317,11 +393,49 @@ def plate_system(plate: Plate = THESIS_PLATE, *, n_modes: int = 8, gap_m: float 
     z = np.broadcast_to(np.asarray(zeta, dtype=float), (keep.size,)) if np.ndim(zeta) == 0 else np.asarray(zeta)
     if z.size != keep.size:
         raise ParameterError(f"`zeta` must be one value or one per mode ({keep.size}), had {z.size}")
+    mass = plate.mass_per_area_kg_m2 * a2 * modes.Q2[keep]
+    extra: dict[str, float] = {}
+    if omitted_modes:
+        extra = _omitted(plate, modes, keep, shape, mass, a2 * modes.Q1[keep], xs, ys)
     return ModalSystem(
-        omega_rad_s=omega, zeta=z, modal_mass_kg=plate.mass_per_area_kg_m2 * a2 * modes.Q2[keep],
+        omega_rad_s=omega, zeta=z, modal_mass_kg=mass,
         load_m2=a2 * modes.Q1[keep], shape_at_striker=shape, gap_m=gap_m, pressure_pa=pressure_pa,
         freq_hz=freq_hz, phase_rad=phase_rad, plate=plate, striker_xi=xs / plate.a_m,
-        striker_eta=ys / plate.b_m, modes=_ModeSubset(modes, keep))
+        striker_eta=ys / plate.b_m, modes=_ModeSubset(modes, keep), **extra)
+
+
+def infinite_plate_impedance(plate: Plate) -> float:
+    """Driving-point impedance ``Z = 8 sqrt(D m'')`` [N s/m] of the infinite thin plate (real).
+
+    Cremer, Heckl & Petersson, *Structure-Borne Sound* (2005), section 5.3.
+
+    Examples
+    --------
+    >>> round(infinite_plate_impedance(THESIS_PLATE), 1)
+    33.8
+    """
+    return 8.0 * math.sqrt(plate.flexural_rigidity_nm * plate.mass_per_area_kg_m2)
+
+
+def _omitted(plate: Plate, modes: object, keep: np.ndarray, shape: np.ndarray, mass: np.ndarray,
+             load: np.ndarray, xs: float, ys: float) -> dict[str, float]:
+    """``local_impedance_n_s_m``, ``residual_compliance_m_n``, ``residual_volume_m2_kg`` of the omitted modes."""
+    Z = infinite_plate_impedance(plate)
+    w_all = np.asarray(plate.omega_rad_s(modes.lam), dtype=float)  # type: ignore[attr-defined]
+    w_n = float(np.max(w_all[keep]))
+    W_all = np.asarray(modes.evaluate(xs / plate.a_m, ys / plate.b_m), dtype=float)  # type: ignore[attr-defined, type-var]
+    seen = np.abs(W_all) > 1e-9
+    seen[keep] = False
+    above = w_all[seen & (w_all > w_n)]
+    # The next mode seen at the striker (or, if none was solved, one mean spacing above:
+    # 1 / n(omega) of the doubly symmetric quarter, n = S sqrt(m''/D) / (4 pi) per rad/s).
+    spacing = 4.0 * math.pi / (plate.a_m * plate.b_m * math.sqrt(plate.mass_per_area_kg_m2
+                                                                  / plate.flexural_rigidity_nm)) / 4.0
+    w_next = float(np.min(above)) if above.size else w_n + spacing
+    w_c = 0.5 * (w_n + w_next)
+    G = 2.0 / (math.pi * Z * w_c)
+    eta = 1.0 / plate.mass_per_area_kg_m2 - float(np.sum(load * shape / mass))
+    return {"local_impedance_n_s_m": Z, "residual_compliance_m_n": G, "residual_volume_m2_kg": eta}
 
 
 @dataclass(frozen=True, eq=False)

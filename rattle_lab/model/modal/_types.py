@@ -28,14 +28,19 @@ class ModalState:
         ``p_k = sqrt(M_k) q_k`` [kg^1/2 m], shape (N,).
     v : numpy.ndarray
         ``p_k'`` [kg^1/2 m/s], shape (N,).
+    r_m : float
+        Local deflection of the omitted modes' element at the contact point [m] (0 when
+        the system has none); the contact point is at ``beta . p - r``.
     """
 
     t_s: float
     p: np.ndarray
     v: np.ndarray
+    r_m: float = 0.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "t_s", float(self.t_s))
+        object.__setattr__(self, "r_m", float(self.r_m))
         object.__setattr__(self, "p", _ro(self.p))
         object.__setattr__(self, "v", _ro(self.v))
 
@@ -157,10 +162,28 @@ class ModalResult:
         for i in np.unique(idx):
             sel = idx == i
             t0, _, ev = self.segments[i]
-            pp, vv = ev(t[sel] - t0)
-            p[:, sel] = pp
-            v[:, sel] = vv
+            out = ev(t[sel] - t0)
+            p[:, sel] = out[0]
+            v[:, sel] = out[1]
         return p, v
+
+    def residual_deflection_m(self, t_s: Any) -> np.ndarray:
+        """Local deflection ``r(t)`` [m] of the omitted modes' element (zeros without one)."""
+        from rattle_lab.exceptions import ParameterError
+
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        if not self.system.corrected:
+            return np.zeros(t.size)
+        if not self.segments:
+            raise ParameterError("the run kept no segments; simulate with `dense=True`")
+        starts = np.array([seg[0] for seg in self.segments])
+        idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.segments) - 1)
+        r = np.empty(t.size)
+        for i in np.unique(idx):
+            sel = idx == i
+            t0, _, ev = self.segments[i]
+            r[sel] = ev(t[sel] - t0)[2]
+        return r
 
     def modal_velocity_m_s(self, t_s: Any) -> np.ndarray:
         """Modal velocities ``q_k'(t)`` [m/s] (shapes' normalisation), shape (N, n_t)."""
