@@ -13,6 +13,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from ._common import fmt, landscape_figure, table
 from ._content_types import AcousticsContent
+from ._pages_psychoacoustics import psychoacoustics_inset  # [issue 26]
 
 
 def acoustics_page(c: AcousticsContent) -> list[Figure]:
@@ -80,6 +81,7 @@ def acoustics_page(c: AcousticsContent) -> list[Figure]:
                    str((r.get("calibration") or {}).get("source", "declared"))]
                   for r in rows[:14]]
     table(ax_t, table_rows, cols, 7.0)
+    psychoacoustics_inset(ax_t, rows)  # [issue 26] P, impacts/s, N above background vs v
     ax_t.set_title("Per run: levels in dB re 20 uPa, loudness in sone, sharpness (DIN 45692) "
                    "in acum", fontsize=9, loc="left")
     if len(rows) > 14:
