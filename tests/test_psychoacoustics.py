@@ -180,3 +180,46 @@ def test_uncalibrated_microphone_gives_no_loudness_but_a_flag():
     # impulsiveness and impacts per second do not need the sensitivity
     assert unc["impulse_prominence"] == pytest.approx(cal["impulse_prominence"], abs=1e-9)
     assert unc["impacts_per_s"] == pytest.approx(cal["impacts_per_s"], rel=1e-12)
+
+
+@pytest.mark.slow  # the installed CLI: ingest and fit (~15-60 s on a loaded machine)
+def test_fit_json_has_the_psychoacoustic_keys(tmp_path):
+    # The installed CLI on a record made here: a microphone hearing a steady 1 kHz tone of
+    # 70 dB SPL (faded in over 50 ms) beside a plate that never reaches the striker.  No
+    # impact: the whole run is background, whose ISO 532-1 N5 is the tone's
+    # 2^((70 - 40)/10) = 8 sone (+-3 %: the standard's tables' rounding, as in
+    # test_cli_fit_acoustics); no rattle, so no loudness above it and no impact rate.
+    import json
+
+    from rattle_lab.records import Channel, Record, Run, write_record
+
+    from record_factory import plate_rig, run_cli
+
+    n = int(1.0 * FS)
+    t = np.arange(n) / FS
+    p = np.sqrt(2) * P0 * 10 ** (70 / 20) * np.sin(2 * np.pi * 1000 * t)
+    n_on = round(0.05 * FS)
+    p[:n_on] *= 0.5 - 0.5 * np.cos(np.pi * np.arange(n_on) / n_on)
+    common = dict(sample_rate_hz=FS, start_time_s=0.0)
+    run = Run("dwell_050", "sine_dwell", (
+        Channel("velocity", "plate_velocity", "m/s", 1e-3 * np.sin(2 * np.pi * 50 * t), **common),
+        Channel("mic", "sound_pressure", "Pa", p, **common)),
+        excitation_freq_hz=50.0, nominal_level=1.0, nominal_level_units="m/s^2",
+        start_time_iso="2024-03-01T14:10:00Z")
+    src = write_record(tmp_path / "rec.h5", Record("tone", "measured", plate_rig(), (run,)))
+    store = tmp_path / "store.h5"
+    assert run_cli("ingest", str(src), "-o", str(store), "--quiet").returncode == 0
+    proc = run_cli("fit", str(store), "--json", "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    (row,) = json.loads(proc.stdout)["runs"]
+    ac = row["acoustics"]
+    assert set(ac) >= {"roughness_asper", "tonality_tu", "loudness_ecma_sone",
+                       "impulse_prominence", "impulse_penalty_db", "impacts_per_s",
+                       "loudness_above_background_sone", "episodes", "background_stretches",
+                       "psychoacoustic_flags"}
+    assert ac["episodes"] == [] and ac["impacts_per_s"] is None
+    assert ac["loudness_above_background_sone"] is None
+    assert ac["roughness_asper"] is None   # ECMA-418-2 is off by default
+    (bg,) = ac["background_stretches"]
+    assert bg["loudness_n5_sone"] == pytest.approx(8.0, rel=0.03)
+    assert ac["background_loudness_n5_sone"] == pytest.approx(8.0, rel=0.03)
