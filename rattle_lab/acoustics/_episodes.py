@@ -42,7 +42,7 @@ import numpy as np
 
 from rattle_lab.exceptions import RattleLabError
 from ._ecma418 import FLAG_UNAVAILABLE, MIN_ECMA_S, ecma418, ecma418_available
-from ._impulsiveness import Onsets, find_onsets
+from ._impulsiveness import ONSET_STEP_S, Onsets, find_onsets
 from ._loudness import FieldType, loudness
 
 #: Background stretches shorter than this get no loudness (ISO 532-1's temporal
@@ -130,8 +130,8 @@ def episode_psychoacoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: o
     loud_ok = with_loudness and calibrated
     if not calibrated:
         flags.append(FLAG_UNCALIBRATED)
-    onsets = (find_onsets(p, fs_hz, start_time_s=start_time_s) if p.size >= 0.2 * fs_hz
-              else Onsets(*(np.zeros(0) for _ in range(5))))
+    onsets = (find_onsets(p, fs_hz, start_time_s=start_time_s, step_s=ONSET_STEP_S)
+              if p.size >= 0.2 * fs_hz else Onsets(*(np.zeros(0) for _ in range(5))))
     want_ecma = ecma418_s > 0 and calibrated
     if want_ecma and not ecma418_available():
         flags.append(FLAG_UNAVAILABLE)
@@ -151,7 +151,9 @@ def episode_psychoacoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: o
         e: dict[str, Any] = {"t_start_s": a, "t_end_s": b, "n_impacts": int(t_in.size),
                              "impacts_per_s": k / s if s > 0 else None,
                              "loudness_n5_sone": n5, "loudness_max_sone": nmax,
-                             **onsets.within(a - 1.0 / fs_hz, b).rating()}
+                             # an onset starts at the L_AF sample before the rise: up to
+                             # one step (10 ms) before the episode's first impact
+                             **onsets.within(a - ONSET_STEP_S - 1.0 / fs_hz, b).rating()}
         e.update(dict.fromkeys(_ECMA_KEYS, None))
         e["ecma418_s"] = 0.0
         if want_ecma and min(budget, seg.size / fs_hz) >= MIN_ECMA_S:

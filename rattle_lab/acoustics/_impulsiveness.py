@@ -44,6 +44,8 @@ from ._levels import P_REF_PA, fast_time_weighted
 ONSET_GRADIENT_DB_S = 10.0
 #: Dips of the gradient shorter than this do not end an onset, s.
 ONSET_GAP_S = 0.05
+#: Sampling step of ``L_AF`` for the onsets, s.
+ONSET_STEP_S = 0.01
 
 
 def adjustment_db(prominence: float) -> float:
@@ -116,7 +118,7 @@ class Onsets:
                 "impulse_onset_rate_db_s": float(self.onset_rate_db_s[i])}
 
 
-def laf_db(pressure_pa: object, fs_hz: float, step_s: float = 0.01) -> np.ndarray:
+def laf_db(pressure_pa: object, fs_hz: float, step_s: float = ONSET_STEP_S) -> np.ndarray:
     """``L_AF`` sampled every ``step_s`` (sample ``k`` at ``(k + 1) step_s - 1/fs``), dB re 20 uPa.
 
     The F weighting starts at rest; the first 0.5 s are its start-up (callers
@@ -134,7 +136,7 @@ def laf_db(pressure_pa: object, fs_hz: float, step_s: float = 0.01) -> np.ndarra
 
 
 def find_onsets(pressure_pa: object, fs_hz: float, *, start_time_s: float = 0.0,
-                step_s: float = 0.01, settle_s: float = 0.5) -> Onsets:
+                step_s: float = ONSET_STEP_S, settle_s: float = 0.5) -> Onsets:
     """The onsets of ``L_AF`` (see the module) of a pressure record.
 
     Parameters
@@ -196,5 +198,5 @@ def find_onsets(pressure_pa: object, fs_hz: float, *, start_time_s: float = 0.0,
     return Onsets(t[s][sel], t[e][sel], ld[sel], rate[sel], prom[sel])
 
 
-__all__ = ["ONSET_GAP_S", "ONSET_GRADIENT_DB_S", "Onsets", "adjustment_db", "find_onsets",
-           "laf_db", "prominence"]
+__all__ = ["ONSET_GAP_S", "ONSET_GRADIENT_DB_S", "ONSET_STEP_S", "Onsets", "adjustment_db",
+           "find_onsets", "laf_db", "prominence"]
