@@ -15,7 +15,8 @@ the *background* is the rest of the run.  Per episode:
 Per run: ``impacts_per_s`` over the episodes together (``sum(n - 1) / sum(t_last - t_first)``),
 the most prominent onset of the run, the episodes' duration-weighted ECMA-418-2 values and
 ``rattle_loudness_n5_sone``, their duration-weighted N5.  The background stretches
-(at least :data:`MIN_BACKGROUND_S` long) get their own N5.
+(at least :data:`MIN_BACKGROUND_S` long) get their own N5, of their central
+:data:`MAX_BACKGROUND_S` at most.
 
 The loudness *above background* compares the rattle with the background stretches of the
 whole campaign (all runs of one fit, runs without impacts included),
@@ -48,6 +49,9 @@ from ._loudness import FieldType, loudness
 #: Background stretches shorter than this get no loudness (ISO 532-1's temporal
 #: integration and the N5 percentile need a few hundred 2 ms values), s.
 MIN_BACKGROUND_S = 0.5
+#: A background stretch's loudness is that of its central this many seconds at most (the
+#: background is steady; this bounds the cost of a long quiet run), s.
+MAX_BACKGROUND_S = 2.0
 #: Episodes shorter than this get no ISO 532-1 loudness (the function's own minimum), s.
 MIN_EPISODE_LOUDNESS_S = 0.1
 #: Coverage factor of the background test (one-sided, about 97.7 % for normal spread).
@@ -167,7 +171,9 @@ def episode_psychoacoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: o
         entries.append(e)
     backgrounds = []
     for i0, i1 in background:
-        n5 = (_n5(p[i0:i1], fs_hz, field_type)[0]
+        half = (i1 - i0 - round(MAX_BACKGROUND_S * fs_hz)) // 2
+        c0, c1 = (i0 + half, i1 - half) if half > 0 else (i0, i1)
+        n5 = (_n5(p[c0:c1], fs_hz, field_type)[0]
               if loud_ok and (i1 - i0) >= MIN_BACKGROUND_S * fs_hz else _NAN)
         backgrounds.append({"t_start_s": start_time_s + i0 / fs_hz,
                             "t_end_s": start_time_s + i1 / fs_hz, "loudness_n5_sone": n5})
@@ -244,4 +250,5 @@ def campaign_background(summaries: Sequence[dict[str, Any] | None]) -> list[dict
 
 
 __all__ = ["FLAG_NO_BACKGROUND", "FLAG_SPREAD_UNKNOWN", "FLAG_TOO_CLOSE", "FLAG_UNCALIBRATED",
-           "K_BACKGROUND", "MIN_BACKGROUND_S", "campaign_background", "episode_psychoacoustics"]
+           "K_BACKGROUND", "MAX_BACKGROUND_S", "MIN_BACKGROUND_S", "campaign_background",
+           "episode_psychoacoustics"]
