@@ -224,3 +224,35 @@ def test_fit_json_has_the_psychoacoustic_keys(tmp_path):
     (bg,) = ac["background_stretches"]
     assert bg["loudness_n5_sone"] == pytest.approx(8.0, rel=0.03)
     assert ac["background_loudness_n5_sone"] == pytest.approx(8.0, rel=0.03)
+
+
+def test_real_clap_is_one_prominent_impulse():
+    # A real recording we did not make (../shared/realdata/clap: two wooden boards clapped in
+    # a room, 44.1 kHz, uncalibrated), placed after 0.8 s of steady noise 50 dB below its
+    # peak: one onset, where the clap starts (within one 10 ms step of L_AF), and a clap is
+    # impulsive (P > 5: an adjustment).  The units are full scale: P needs no calibration.
+    import warnings
+    from pathlib import Path
+
+    from rattle_lab.records import read
+
+    from test_realdata_ingest import realdata
+
+    root = Path(__file__).resolve().parents[1]
+    path = realdata("clap/rir_clap.wav")   # the existing helper (RATTLE_LAB_REALDATA)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rec = read(path, mapping=root / "data_schema" / "mappings" / "clap_wav.toml")
+    ch = rec.runs[0].channels[0]
+    fs = ch.sample_rate_hz
+    clap = ch.read()
+    lead = round(0.8 * fs)
+    noise = np.random.default_rng(3).normal(0.0, np.max(np.abs(clap)) * 10 ** (-50 / 20),
+                                            lead + clap.size)
+    x = noise + np.concatenate([np.zeros(lead), clap])
+    on = find_onsets(x, fs)
+    assert on.t_start_s.size >= 1
+    i = int(np.nanargmax(on.prominence))
+    assert on.t_start_s[i] == pytest.approx(0.8, abs=0.0101)
+    assert on.prominence[i] > 5.0 and adjustment_db(on.prominence[i]) > 0.0
+    assert find_onsets(x * 1e3, fs).prominence[i] == pytest.approx(on.prominence[i], abs=1e-9)
