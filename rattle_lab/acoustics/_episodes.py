@@ -166,8 +166,9 @@ def episode_psychoacoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: o
                 e.update(ecma418(use, fs_hz, field_type=field_type).to_dict())
                 e["ecma418_s"] = use.size / fs_hz
                 budget -= use.size / fs_hz
-            except RattleLabError:
-                pass
+            except (RattleLabError, ValueError, RuntimeError, FloatingPointError) as exc:
+                # the package's own checks: keep the run, say why this episode has none
+                flags.append(f"ecma418_failed: {type(exc).__name__}: {exc}"[:200])
         entries.append(e)
     backgrounds = []
     for i0, i1 in background:
