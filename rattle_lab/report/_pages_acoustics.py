@@ -115,8 +115,9 @@ def _psy_num(x: Any) -> float:
 
 
 def psychoacoustics_inset(ax: Any, rows: list[dict[str, Any]]) -> None:
-    """Impulse prominence and impacts per second (upper inset); loudness above background and
-    the ECMA-418-2 values (lower inset), against each run's RMS impact velocity."""
+    """Three insets at the right of ``ax`` against each run's RMS impact velocity: impulse
+    prominence and impacts per second; loudness above background and ECMA-418-2 loudness;
+    ECMA-418-2 roughness and tonality.  Draws nothing when no run has the metrics."""
     v = np.array([_psy_num(r.get("v_rms_m_s")) for r in rows])
     ac = [r.get("acoustics") or {} for r in rows]
     col = {k: np.array([_psy_num(a.get(k)) for a in ac]) for k in (
