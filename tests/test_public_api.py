@@ -56,6 +56,9 @@ PACKAGES: dict[str, list[str]] = {
         "apply_weighting", "band_edges_hz", "band_gain", "band_mean_squares",
         "channel_calibration", "fast_time_weighted", "loudness", "rattle_episodes",
         "run_acoustics", "sound_levels", "weighting_db", "weighting_response", "energy_mean_db",
+        # issue 26: impulsiveness, ECMA-418-2, episodes against the campaign's background
+        "Ecma418", "Onsets", "adjustment_db", "campaign_background", "ecma418", "ecma418_available",
+        "episode_psychoacoustics", "find_onsets", "laf_db", "prominence",
     ],
     "rattle_lab.exchange": ["UFF_TYPE_OF_QUANTITY", "export_uff", "uff_sets"],
     "rattle_lab.model.analysis": [

@@ -8,12 +8,13 @@ This is what ``rattle-lab fit --json`` reports per run as ``acoustics`` and
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from rattle_lab.exceptions import RattleLabError
+from ._episodes import episode_psychoacoustics
 from ._levels import P_REF_PA, SoundLevels, rattle_episodes, sound_levels
 from ._loudness import FieldType, Loudness, loudness
 
@@ -42,6 +43,11 @@ class RunAcoustics:
         ``sensitivity``, ``sensitivity_units``, ``source`` ("calibrator", "declared",
         "none"), ``drift_db`` (None without a pre- and a post-calibration), ``flags`` of the
         microphone channel.
+    psychoacoustics : dict
+        Issue 26's run-level keys (impacts per second, impulse prominence and adjustment,
+        ECMA-418-2 values, the rattle's loudness, flags) and ``background_stretches``
+        (:func:`~rattle_lab.acoustics._episodes.episode_psychoacoustics`); each episode's
+        dict holds its own.
     """
 
     levels: SoundLevels
@@ -50,6 +56,7 @@ class RunAcoustics:
     rattle_bands_db: dict[str, float]
     background_bands_db: dict[str, float]
     calibration: dict[str, Any]
+    psychoacoustics: dict[str, Any] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
         """``{"acoustics": {...}, "calibration": {...}}`` as ``fit --json`` prints them."""
@@ -65,6 +72,7 @@ class RunAcoustics:
             "episodes": [dict(e) for e in self.episodes],
             "rattle_third_octave_db": dict(self.rattle_bands_db),
             "background_third_octave_db": dict(self.background_bands_db),
+            **self.psychoacoustics,  # [issue 26]
         }
         return {"acoustics": acoustics, "calibration": dict(self.calibration)}
 
@@ -110,7 +118,7 @@ def _pooled_bands(pieces: list[np.ndarray], fs_hz: float) -> dict[str, float]:
 def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
                   start_time_s: float = 0.0, channel: Any = None,
                   field_type: FieldType = "free", with_loudness: bool = True,
-                  episode_gap_s: float = 0.5) -> RunAcoustics:
+                  episode_gap_s: float = 0.5, ecma418_s: float = 0.0) -> RunAcoustics:
     """Levels, loudness and band spectra of a run's sound pressure (Pa) and its episodes.
 
     Parameters
@@ -131,6 +139,9 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
         Compute ISO 532-1 loudness (the costly part: about 1 s per second of sound).
     episode_gap_s : float
         Impacts further apart than this start a new episode, s.
+    ecma418_s : float
+        Seconds of rattle episodes to rate with ECMA-418-2 (0, the default: none; it
+        costs about 7 s of CPU per second of sound, :mod:`._ecma418`).
     """
     p = np.asarray(pressure_pa, dtype=float)
     lv = sound_levels(p, fs_hz)
@@ -143,6 +154,7 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
     eps = rattle_episodes(impact_t_s, start_time_s=start_time_s, duration_s=p.size / fs_hz,
                           gap_s=episode_gap_s)
     episodes = []
+    kept = []
     inside = np.zeros(p.size, dtype=bool)
     rattle_pieces = []
     for a, b in eps:
@@ -152,16 +164,25 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
             continue
         inside[i0:i1] = True
         rattle_pieces.append(p[i0:i1])
+        kept.append((a, b))
         episodes.append({"t_start_s": a, "t_end_s": b,
                          **sound_levels(p[i0:i1], fs_hz).to_dict()})
     edges = np.flatnonzero(np.diff(np.concatenate([[1], inside.astype(int), [1]])))
-    background = [p[edges[i]:edges[i + 1]] for i in range(0, edges.size - 1, 2)
-                  if edges[i + 1] - edges[i] >= 2]
+    spans = [(int(edges[i]), int(edges[i + 1])) for i in range(0, edges.size - 1, 2)
+             if edges[i + 1] - edges[i] >= 2]
+    background = [p[i0:i1] for i0, i1 in spans]
     calib = channel_calibration(channel) if channel is not None else {
         "sensitivity": None, "sensitivity_units": None, "units": "Pa", "source": "declared",
         "drift_db": None, "flags": []}
+    # [issue 26] impacts per second, impulsiveness, loudness per episode, ECMA-418-2
+    run, per_episode, per_background = episode_psychoacoustics(
+        p, fs_hz, impact_t_s, kept, spans, start_time_s=start_time_s, field_type=field_type,
+        calibrated=calib.get("source") != "none", with_loudness=with_loudness,
+        ecma418_s=ecma418_s)
+    episodes = [{**e, **x} for e, x in zip(episodes, per_episode)]
+    run["background_stretches"] = per_background
     return RunAcoustics(lv, ld, tuple(episodes), _pooled_bands(rattle_pieces, fs_hz),
-                        _pooled_bands(background, fs_hz), calib)
+                        _pooled_bands(background, fs_hz), calib, run)
 
 
 __all__ = ["RunAcoustics", "channel_calibration", "run_acoustics"]

@@ -8,6 +8,7 @@ same tables of ``rattle-lab run``) are read and checked here; :data:`FIT_KEYS` a
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from collections.abc import Mapping
 from typing import Any
@@ -23,7 +24,8 @@ SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01, "chann
 FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0,
             "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3,
             "restitution_method": "ramp", "level_hold_periods": 1,
-            "sound_field": "free", "loudness": True}  # [issue 17] acoustics options
+            "sound_field": "free", "loudness": True,  # [issue 17] acoustics options
+            "ecma418_s": 0.0}  # [issue 26] seconds of rattle per run rated by ECMA-418-2
 
 
 def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, Any]]:
@@ -39,8 +41,10 @@ def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, An
     ``level_hold_periods`` (forcing periods the drive holds each level of a ramp: 1 for
     a continuous ramp, the default; the synthetic rig holds ``piece_periods``),
     ``sound_field`` (``"free"``, the default, or ``"diffuse"``: the loudness's sound field,
-    unless a run says ``x_sound_field``) and ``loudness`` (compute ISO 532-1 loudness,
-    default true).
+    unless a run says ``x_sound_field``), ``loudness`` (compute ISO 532-1 loudness,
+    default true) and ``ecma418_s`` (seconds of rattle episodes per run rated with
+    ECMA-418-2 loudness, tonality and roughness; default 0, none: about 7 s of CPU per
+    second of sound, and it needs the optional package sottek-hearing-model).
     Other tables are ignored (they belong to other stages); unknown keys in these two
     are errors.
 
@@ -77,6 +81,9 @@ def _check_fit_values(fit: Mapping[str, Any], where: str = "") -> None:
     if fit.get("sound_field", "free") not in ("free", "diffuse"):  # [issue 17]
         raise ParameterError(f"{where}`sound_field` must be 'free' or 'diffuse', "
                              f"was {fit.get('sound_field')!r}")
+    ecma = fit.get("ecma418_s", 0.0)  # [issue 26]
+    if isinstance(ecma, bool) or not isinstance(ecma, (int, float)) or not 0 <= ecma < math.inf:
+        raise ParameterError(f"{where}`ecma418_s` must be a number >= 0, was {ecma!r}")
     hold = fit.get("level_hold_periods", FIT_KEYS["level_hold_periods"])
     if isinstance(hold, bool) or not isinstance(hold, (int, np.integer)) or hold < 1:
         raise ParameterError(f"{where}`level_hold_periods` must be an integer >= 1, was {hold!r}")

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from rattle_lab._version import __version__
-from rattle_lab.acoustics import run_acoustics  # [issue 17]
+from rattle_lab.acoustics import campaign_background, run_acoustics  # [issue 17, 26]
 from rattle_lab.detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
                       impact_pattern, impulse_train, rms_spl_db, sound_peaks)
 from rattle_lab.exceptions import RattleLabError
@@ -147,7 +147,8 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
         acoustic = run_acoustics(p, fs_mic, log.t_s, start_time_s=t0_mic, channel=mic,
                                  field_type=run.extra.get("x_sound_field",
                                                           fit.get("sound_field", "free")),
-                                 with_loudness=bool(fit.get("loudness", True)))
+                                 with_loudness=bool(fit.get("loudness", True)),
+                                 ecma418_s=float(fit.get("ecma418_s", 0.0)))  # [issue 26]
     threshold = None
     if run.protocol in ("amplitude_ramp_up", "amplitude_ramp_down") and math.isfinite(freq):
         b = by_q.get("base_acceleration")
@@ -538,12 +539,15 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
             laws[f"spl_law_{name}"] = _spl_law_summary(fit_linear_law(v, pr), fit_db_law(v, pr))
         except RattleLabError as exc:
             missing[f"spl_law_{name}"] = str(exc)
+    # [issue 26] each run's rattle loudness against the background stretches of all runs
+    acoustic = campaign_background([r.acoustics.summary() if r.acoustics is not None else None
+                                    for r in ok])
     rows = [RunRow(r.input_key, r.run_id, r.protocol, r.freq_hz,
                    r.impacts.n_impacts if r.impacts else 0, r.pattern, r.acoustic_delay_s,
                    r.expected_delay_s, r.spl_rms_db, r.spl_rms_a_db,
                    r.threshold.accel_ms2 if r.threshold else None,
-                   **(r.acoustics.summary() if r.acoustics is not None else {}))  # [issue 17]
-            for r in ok]
+                   **(a or {}))  # [issue 17]
+            for r, a in zip(ok, acoustic)]
     return FitSummary(
         n_runs=len(runs), n_ok=len(ok), runs=tuple(rows),
         skipped=tuple(SkippedRun(r.input_key, r.run_id, r.reason)
