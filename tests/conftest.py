@@ -60,6 +60,7 @@ RATTLE_LAB = find_entry_point()
 NUMERICS_MODULES = frozenset({
     # plate and multi-mode models: eigensolvers, the modal integrator
     "test_plate", "test_modal", "test_modal_sound", "test_modal_cli", "test_rig_modal",
+    "test_modal_convergence",
     # the exact simulator, its flow and its references
     "test_sdf_flow", "test_sdf_properties", "test_sdf_simulate", "test_sdf_long_time",
     "test_sdf_kernel_below_stop", "test_sdf_kernel_memo", "test_sdf_kernel_work",
