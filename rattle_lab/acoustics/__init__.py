@@ -1,7 +1,7 @@
 """NVH acoustics: calibrated levels (IEC 61672-1), third-octave bands (IEC 61260-1), loudness
 (ISO 532-1) and sharpness (DIN 45692), calibration from calibrator records.
 
-It depends only on NumPy, SciPy and MoSQITo (loudness), not on the rest of the
+It depends only on NumPy, SciPy and numba (compiled loudness), not on the rest of the
 package apart from its exceptions, so that every stage after ``records`` may use it.
 """
 
