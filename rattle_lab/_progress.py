@@ -26,6 +26,9 @@ def progress(iterable: Iterable[T], *, total: int | None = None, desc: str = "",
 def progress_bar(total: int, *, desc: str = "", quiet: bool = False, unit: str = "it",
                  unit_scale: bool = False) -> tqdm:
     """A tqdm bar on stderr to :meth:`~tqdm.tqdm.update` by hand (a no-op unless
-    :func:`progress_enabled`); use it as a context manager so that it is closed."""
+    :func:`progress_enabled`); use it as a context manager so that it is closed.
+
+    The bar shows the count done of ``total``, the rate (``unit``/s, with k/M/G prefixes
+    when ``unit_scale``) and the time elapsed and left: ``[00:12<01:40, 21.3Msample/s]``."""
     return tqdm(total=total, desc=desc, unit=unit, unit_scale=unit_scale, file=sys.stderr,
                 disable=not progress_enabled(quiet), leave=False)

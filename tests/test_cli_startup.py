@@ -48,3 +48,16 @@ def test_version_prints_the_package_version() -> None:
                           timeout=120)
     assert proc.returncode == 0
     assert proc.stdout.strip() == f"rattle-lab {__version__}"
+
+
+def test_fit_start_up_imports_only_what_fit_runs(tmp_path) -> None:
+    # issue 29, item 5: `rattle-lab fit` pays for the modules it runs; the report, the
+    # model's analysis, the explorer, the rig and the Dask client are imported when used.
+    # (The store is missing here, so the command stops after its imports, with exit 2.)
+    proc, names = _imported_modules("fit", str(tmp_path / "missing.h5"))
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    assert "rattle_lab.fit" in names and "rattle_lab.workflow.pipeline" in names
+    lazy = ("rattle_lab.workflow._report", "rattle_lab.report", "rattle_lab.model.analysis",
+            "rattle_lab.explorer", "rattle_lab.rig", "distributed", "mosqito")
+    eager = sorted(n for n in names if n.startswith(lazy))
+    assert eager == [], f"`rattle-lab fit` imported {eager[:10]}"

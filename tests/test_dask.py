@@ -87,3 +87,134 @@ def test_unreachable_scheduler_is_a_parameter_error(monkeypatch: pytest.MonkeyPa
     monkeypatch.setattr(_dask, "CONNECT_TIMEOUT_S", 1)
     with pytest.raises(ParameterError, match="`scheduler` 'tcp://127.0.0.1:9': cannot connect"):
         run_chunks(np.sum, [np.ones(2)], scheduler="tcp://127.0.0.1:9")
+
+
+# --- issue 29: `fit` and `run` on a cluster ---------------------------------------------------
+
+def _small_campaign(tmp_path, n_runs: int = 4):  # type: ignore[no-untyped-def]
+    """A campaign from the independent generator (tests/independent_campaign.py), ingested."""
+    from independent_campaign import Chain, Plant, write_campaign
+
+    from rattle_lab.store import ingest
+
+    plant = Plant()
+    w = 2 * math.pi * plant.f_s_hz
+    runs = []
+    for k, f in enumerate((93.0, 99.0, 95.0, 97.0)[:n_runs]):
+        r = f / plant.f_s_hz
+        graze = plant.gap_m * w * w * math.sqrt((1 - r * r) ** 2 + (2 * plant.zeta * r) ** 2) \
+            / plant.q
+        runs.append({"run_id": f"dwell_{k}", "protocol": "sine_dwell", "freq_hz": f,
+                     "levels": np.full(40, 1.5 * graze)})
+    write_campaign(tmp_path / "c.h5", plant, Chain(fs_hz=12800.0), runs, seed=5)
+    store = tmp_path / "s.h5"
+    ingest([tmp_path / "c.h5"], store, quiet=True)
+    return store
+
+
+def _summary_json(result) -> str:  # type: ignore[no-untyped-def]
+    import json
+
+    return json.dumps(result.summary.to_dict(), sort_keys=True, default=str)
+
+
+def test_fit_store_on_local_cluster_equals_serial(cluster, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # Tasks open the store themselves on the worker processes; every fitted number and
+    # every run's result must equal the serial run's (the same code on the same bytes).
+    from rattle_lab.workflow import fit_store
+
+    store = _small_campaign(tmp_path)
+    serial = fit_store(store, write=False)
+    remote = fit_store(store, write=False, scheduler=cluster.scheduler_address)
+    assert serial.summary.n_ok == 4
+    assert _summary_json(remote) == _summary_json(serial)
+
+
+def test_a_worker_killed_mid_task_is_retried_nothing_lost_or_doubled(tmp_path) -> None:
+    # A worker process is killed (SIGKILL) while it runs a detection task: the nanny starts
+    # a new one, the scheduler runs the lost task again, and the result holds every run once,
+    # equal to the serial result.
+    import logging
+    import os
+    import signal
+    import threading
+    import time
+
+    from dask.distributed import Client, LocalCluster
+
+    from rattle_lab.workflow import fit_store
+
+    store = _small_campaign(tmp_path)
+    serial = fit_store(store, write=False)
+    killed: list[int] = []
+    with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0",
+                      silence_logs=logging.CRITICAL) as lc, Client(lc) as client:
+        pids = client.run(os.getpid)
+
+        def kill_one_busy_worker() -> None:
+            deadline = time.monotonic() + 120
+            while time.monotonic() < deadline and not killed:
+                busy = [addr for addr, keys in client.processing().items()
+                        if any("detect_run" in str(k) for k in keys)]
+                if busy and busy[0] in pids:
+                    time.sleep(0.2)          # well inside the task (seconds long)
+                    os.kill(pids[busy[0]], signal.SIGKILL)
+                    killed.append(pids[busy[0]])
+                time.sleep(0.02)
+
+        killer = threading.Thread(target=kill_one_busy_worker, daemon=True)
+        killer.start()
+        remote = fit_store(store, write=False, scheduler=client)
+        killer.join(timeout=5)
+        after = client.run(os.getpid)
+    assert killed, "no worker was seen running a detection task"
+    assert killed[0] not in after.values()           # that process is gone, replaced
+    assert remote.summary.n_ok == serial.summary.n_ok == 4
+    assert _summary_json(remote) == _summary_json(serial)
+
+
+def test_cli_fit_with_a_scheduler_that_does_not_answer_is_one_line_exit_2(tmp_path) -> None:
+    from record_factory import run_cli
+
+    store = _small_campaign(tmp_path, n_runs=1)
+    proc = run_cli("fit", str(store), "--scheduler", "tcp://127.0.0.1:9", "--quiet")
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in proc.stderr
+    assert "`scheduler` 'tcp://127.0.0.1:9': cannot connect" in lines[0]
+
+
+def test_cli_fit_and_run_accept_a_scheduler(cluster, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import json
+
+    from record_factory import run_cli
+
+    store = _small_campaign(tmp_path, n_runs=2)
+    proc = run_cli("fit", str(store), "--json", "--quiet", "--scheduler",
+                   cluster.scheduler_address)
+    assert proc.returncode == 0, proc.stderr
+    on_cluster = json.loads(proc.stdout)
+    proc = run_cli("fit", str(store), "--json", "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    serial = json.loads(proc.stdout)
+    for d in (on_cluster, serial):   # provenance: when and where it ran
+        d.pop("provenance", None)
+    assert on_cluster == serial
+
+
+def test_progress_shows_samples_per_second_and_time_left(monkeypatch, capsys) -> None:
+    # Long work (the detect stage) counts channel samples: the bar shows the rate in
+    # samples/s and the time left.
+    import time
+
+    from rattle_lab import _progress
+    from rattle_lab.workflow.pipeline import map_tasks
+
+    monkeypatch.setattr(_progress, "progress_enabled", lambda quiet=False: not quiet)
+    out = map_tasks(time.sleep, [(0.15,), (0.15,), (0.15,)], quiet=False, desc="detect",
+                    weights=[2_000_000, 2_000_000, 2_000_000])
+    assert out == [None, None, None]
+    err = capsys.readouterr().err
+    import re
+
+    assert re.search(r"detect: .*M/6\.00M \[\d\d:\d\d<\d\d:\d\d, +[\d.]+Msample/s\]", err), err

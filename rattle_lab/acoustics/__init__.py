@@ -3,7 +3,7 @@
 (ISO/PAS 1996-3), ECMA-418-2 loudness, tonality and roughness (optional package) and the
 rattle per episode against the campaign's background (issue 26).
 
-It depends only on NumPy, SciPy and MoSQITo (loudness), not on the rest of the
+It depends only on NumPy, SciPy and numba (compiled loudness), not on the rest of the
 package apart from its exceptions, so that every stage after ``records`` may use it.
 """
 

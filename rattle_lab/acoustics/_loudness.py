@@ -1,28 +1,25 @@
-"""Time-varying loudness (ISO 532-1:2017, Zwicker) and sharpness (DIN 45692), via MoSQITo.
+"""Time-varying loudness (ISO 532-1:2017, Zwicker) and sharpness (DIN 45692), compiled.
 
-MoSQITo (``mosqito.sq_metrics``) implements ISO 532-1 method 1 for time-varying
-sounds (third-octave levels every 0.5 ms, core loudness, nonlinear decay, slopes,
-temporal weighting; output every 2 ms) and the DIN 45692 weighting ``g(z)``.  It
-is validated here against the standard's anchors (1 kHz tone at 40 dB -> 1 sone,
-60 dB -> 4 sone) and the DIN 45692 reference sound (1 acum).
+:mod:`rattle_lab.acoustics._iso532` implements ISO 532-1 method 1 for time-varying sounds
+(third-octave levels every 0.5 ms, core loudness, nonlinear decay, slopes, temporal
+weighting; output every 2 ms) as one compiled pass over the samples.  MoSQITo
+(``mosqito.sq_metrics.loudness_zwtv``) is its test reference: ``tests/test_acoustics.py``
+checks ``N(t)`` against it to ISO 532-1 annex B's tolerances on synthetic annex-B-like
+signals, and the standard's anchors (1 kHz tone at 40 dB -> 1 sone, 60 dB -> 4 sone) and
+the DIN 45692 reference sound (1 acum).
 
 * ``N5``: the loudness exceeded 5 % of the time (the 95th percentile of ``N(t)``),
   ``Nmax`` its maximum, sone.
-* Sharpness: DIN 45692 applied to the time-averaged specific loudness ``N'(z)``
-  (one value for the stretch), acum.
+* Sharpness: DIN 45692 (``g(z)`` = 1 up to 15.8 Bark, then ``0.15 e^(0.42 (z - 15.8)) +
+  0.85``) applied to the time-averaged specific loudness ``N'(z)`` (one value for the
+  stretch), acum.
 
-The record is resampled to 48 kHz (MoSQITo's rate) with a polyphase filter when
-it is at another rate.  MoSQITo's nonlinear temporal decay (a Python loop over 48,000
-sub-steps per second, 90 % of its time) is replaced, for the duration of each call, by
-the compiled and bit-identical :func:`~rattle_lab.acoustics._nl_decay.nonlinear_decay`.
+The record is resampled to 48 kHz (the rate of the standard's filter coefficients) with
+a polyphase filter when it is at another rate.
 """
 
 from __future__ import annotations
 
-import contextlib
-import importlib
-import threading
-from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Literal
@@ -31,7 +28,7 @@ import numpy as np
 from scipy import signal
 
 from rattle_lab.exceptions import ParameterError
-from ._nl_decay import nonlinear_decay
+from ._iso532 import time_varying_loudness
 
 FieldType = Literal["free", "diffuse"]
 _FS_LOUDNESS_HZ = 48000
@@ -73,21 +70,14 @@ def _at_48k(p: np.ndarray, fs_hz: float) -> np.ndarray:
     return signal.resample_poly(p, ratio.numerator, ratio.denominator)
 
 
-_PATCH_LOCK = threading.Lock()
-
-
-@contextlib.contextmanager
-def _compiled_decay() -> Iterator[None]:
-    """MoSQITo's time-varying loudness with its nonlinear decay step compiled (same bits)."""
-    module: Any = importlib.import_module(
-        "mosqito.sq_metrics.loudness.loudness_zwtv.loudness_zwtv")
-    with _PATCH_LOCK:
-        original = module._nl_loudness
-        module._nl_loudness = nonlinear_decay
-        try:
-            yield
-        finally:
-            module._nl_loudness = original
+def _din45692_sharpness(spec_mean: np.ndarray) -> float:
+    """DIN 45692 sharpness, acum, of a specific loudness on the 0.1 Bark grid."""
+    z = np.arange(1, spec_mean.size + 1) * 0.1
+    g = np.where(z > 15.8, 0.15 * np.exp(0.42 * (z - 15.8)) + 0.85, 1.0)
+    n_total = float(np.sum(spec_mean) * 0.1)
+    if n_total <= 0:
+        return float("nan")
+    return float(0.11 * np.sum(spec_mean * g * z * 0.1) / n_total)
 
 
 def loudness(pressure_pa: object, fs_hz: float, *, field_type: FieldType = "free") -> Loudness:
@@ -112,17 +102,9 @@ def loudness(pressure_pa: object, fs_hz: float, *, field_type: FieldType = "free
     p = np.asarray(pressure_pa, dtype=float)
     if p.ndim != 1 or p.size < 0.1 * fs_hz or not np.all(np.isfinite(p)):
         raise ParameterError("`pressure_pa` must be a finite 1-D signal of at least 0.1 s")
-    from mosqito.sq_metrics import loudness_zwtv, sharpness_din_from_loudness
-
-    with _compiled_decay():
-        n_t, n_spec, _, _ = loudness_zwtv(_at_48k(p, fs_hz), _FS_LOUDNESS_HZ,
-                                          field_type=field_type)
-    n_t = np.asarray(n_t, dtype=float)
-    spec_mean = np.mean(np.asarray(n_spec, dtype=float), axis=1)
-    n_mean = float(np.sum(spec_mean) * 0.1)  # N' on a 0.1 Bark grid
-    sharp = (float(sharpness_din_from_loudness(n_mean, spec_mean, weighting="din"))
-             if n_mean > 0 else float("nan"))
-    return Loudness(float(np.percentile(n_t, 95.0)), float(np.max(n_t)), sharp, field_type)
+    n_t, spec_mean = time_varying_loudness(_at_48k(p, fs_hz), diffuse=field_type == "diffuse")
+    return Loudness(float(np.percentile(n_t, 95.0)), float(np.max(n_t)),
+                    _din45692_sharpness(spec_mean), field_type)
 
 
 __all__ = ["FieldType", "Loudness", "loudness"]

@@ -39,6 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                              "pipeline's [detect] channel and the records' detect_channel; by "
                              "default chosen by what each channel measures: a transient run's "
                              "cause is its force, else its base)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                        help="dask.distributed scheduler address (tcp://host:8786): detect the "
+                             "runs on that cluster's workers (default: serial, in this process)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_run)
@@ -56,7 +59,7 @@ def _run(args: argparse.Namespace) -> int:
         params["fit"]["participation"] = args.participation
         source = "command line"
     result = fit_store(args.store, detect=params["detect"], fit=params["fit"], quiet=args.quiet,
-                       participation_source=source)
+                       participation_source=source, scheduler=args.scheduler)
     if args.json:
         print(json.dumps(result.summary.to_dict(), indent=2, allow_nan=False))
     else:

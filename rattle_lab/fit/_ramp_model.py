@@ -37,7 +37,6 @@ from typing import Literal
 
 import numpy as np
 
-from rattle_lab.model.analysis import one_over_n_orbits
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 from rattle_lab.model.sdf._simulate import simulate_pieces
@@ -170,6 +169,8 @@ def _stable_orbit(F: float, omega: float, zeta: float, e: float) -> tuple[float,
     listed), None when there is no stable, existing one.  Cached: the replays of one
     threshold at different forcing phases start at the same level."""
     params = SDFParams(F=F, omega=omega, zeta=zeta, e=e)
+    from rattle_lab.model.analysis import one_over_n_orbits  # lazy: `rattle-lab fit` start-up
+
     stable = [o for o in one_over_n_orbits(params, 1) if o.exists and o.stable]
     if not stable:
         return None

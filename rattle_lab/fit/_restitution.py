@@ -39,7 +39,6 @@ import numpy as np
 from scipy import stats
 
 from rattle_lab.detect._impacts import RINGING_RESIDUAL_RATIO
-from rattle_lab.model.analysis import saddle_node_forcing
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.detect.thresholds import Threshold
 from ._common import ParamEstimate, check_positive
@@ -309,6 +308,8 @@ def saddle_node_threshold_ms2(freq_hz: np.ndarray, e: float, gap_m: float, f_s_h
     True
     """
     with np.errstate(invalid="ignore"):
+        from rattle_lab.model.analysis import saddle_node_forcing  # lazy: start-up
+
         F_sn, _ = saddle_node_forcing(1, np.asarray(freq_hz, dtype=float) / f_s_hz, zeta, e)
     return gap_m * (2 * np.pi * f_s_hz) ** 2 * F_sn / participation
 

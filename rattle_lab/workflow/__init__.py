@@ -7,12 +7,25 @@ the model pages' simulations) and drawn by :mod:`rattle_lab.report` (:func:`writ
 does both).
 """
 
+from typing import Any
+
 from rattle_lab.workflow._fit import fit_store
-from rattle_lab.workflow._report import (SECTIONS, ReportData, build_pages, build_report_content,
-                                         gather, write_report)
 from rattle_lab.workflow.pipeline import (STAGES, Pipeline, PipelineRun, detect_runs,
                                           load_pipeline_file, parse_pipeline, run_pipeline)
 
 __all__ = ["STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline",
            "run_pipeline", "detect_runs", "fit_store", "write_report", "build_report_content",
            "build_pages", "gather", "ReportData", "SECTIONS"]
+
+#: The report's names, imported on first use (they import matplotlib, which `rattle-lab fit`
+#: does not need: its start-up pays only for what it runs).
+_REPORT_NAMES = ("SECTIONS", "ReportData", "build_pages", "build_report_content", "gather",
+                 "write_report")
+
+
+def __getattr__(name: str) -> Any:
+    if name in _REPORT_NAMES:
+        from rattle_lab.workflow import _report
+
+        return getattr(_report, name)
+    raise AttributeError(f"module 'rattle_lab.workflow' has no attribute {name!r}")

@@ -66,7 +66,6 @@ from typing import Any
 import numpy as np
 
 from rattle_lab._atomic import atomic_path
-from rattle_lab._progress import progress
 from rattle_lab._resources import find_resource
 from rattle_lab._version import __version__
 from rattle_lab.exceptions import OutputError, ParameterError
@@ -252,7 +251,8 @@ def detect_runs(store: str | os.PathLike[str], detect: Mapping[str, Any],
     """Every stored run's detections (:func:`detect_run`), serially or on a Dask cluster.
 
     The detect stage of a pipeline and of :func:`fit_store`.  The inputs the store links
-    to are re-hashed first (they must be the bytes that were ingested).
+    to are re-hashed first (they must be the bytes that were ingested).  The progress bar
+    counts channel samples (rate in samples/s and the time left).
 
     Returns
     -------
@@ -265,36 +265,109 @@ def detect_runs(store: str | os.PathLike[str], detect: Mapping[str, Any],
     check_linked_inputs(store, dict.fromkeys(catalogue["input_key"]))
     jobs = [(str(store), str(k), str(r)) for k, r in zip(catalogue["input_key"],
                                                        catalogue["run_id"])]
-    results = _map_runs(jobs, detect, fit, scheduler=scheduler, quiet=quiet, desc="detect")
-    return _campaign_ringing(results, jobs, detect, fit, scheduler=scheduler, quiet=quiet)
+    channels = read_catalogue(store, level="channels")
+    samples: dict[tuple[str, str], int] = {}
+    for k, r, n in zip(channels["input_key"], channels["run_id"], channels["n_samples"]):
+        samples[(str(k), str(r))] = samples.get((str(k), str(r)), 0) + int(n)
+    weights = [samples.get((k, r), 0) for _, k, r in jobs]
+    results = _map_runs(jobs, detect, fit, scheduler=scheduler, quiet=quiet, desc="detect",
+                        weights=weights)
+    return _campaign_ringing(results, jobs, detect, fit, scheduler=scheduler, quiet=quiet,
+                             weights=weights)
+
+
+def map_tasks(func: Callable[..., Any], tasks: Sequence[tuple[Any, ...]], *,
+              scheduler: Any = None, quiet: bool = True, desc: str = "",
+              weights: Sequence[int] | None = None, unit: str = "sample",
+              **kwargs: Any) -> list[Any]:
+    """``[func(*task, **kwargs) for task in tasks]``, serially or on a Dask cluster, in order.
+
+    The cluster path of the pipeline: each task is submitted as one Dask task (``pure=False``:
+    two equal tasks both run); a task whose worker dies is run again by Dask on another
+    worker (the scheduler's ``allowed-failures``), and its result is taken once, from the
+    attempt that finished.  Tasks must open their own files (an h5py handle cannot be
+    pickled) and the workers should be processes (libhdf5 runs one call at a time per
+    process).
+
+    Parameters
+    ----------
+    func : callable
+        A module-level function (importable on the workers).
+    tasks : sequence of tuple
+        Positional arguments of each call.
+    scheduler : str or distributed.Client, optional
+        A ``dask.distributed`` scheduler address or client (default: serially here).
+    quiet : bool
+        No progress bar (one is drawn on a terminal otherwise).
+    desc : str
+        The progress bar's label.
+    weights : sequence of int, optional
+        Work per task (channel samples): the progress bar then shows samples/s and the
+        time left; without it, tasks.
+    unit : str
+        The unit of ``weights``.
+    **kwargs
+        Keyword arguments of every call.
+
+    Returns
+    -------
+    list
+        The results, in the order of ``tasks``.
+
+    Raises
+    ------
+    ParameterError
+        If the scheduler cannot be reached (one line, the address named).
+
+    Examples
+    --------
+    >>> map_tasks(divmod, [(7, 2), (9, 4)])
+    [(3, 1), (2, 1)]
+    """
+    from rattle_lab._progress import progress_bar
+
+    tasks = list(tasks)
+    if weights is None:
+        weights, unit = [1] * len(tasks), "task"
+    weights = [int(w) for w in weights]
+    results: list[Any] = [None] * len(tasks)
+    with progress_bar(sum(weights), desc=desc, quiet=quiet, unit=unit,
+                      unit_scale=unit != "task") as bar:
+        if scheduler is None:
+            for i, task in enumerate(tasks):
+                results[i] = func(*task, **kwargs)
+                bar.update(weights[i])
+            return results
+        from distributed import as_completed
+
+        client, owned = _connect(scheduler)
+        try:
+            futures = client.map(func, *zip(*tasks), pure=False, **kwargs) if tasks else []
+            position = {f.key: i for i, f in enumerate(futures)}
+            for fut in as_completed(futures):
+                i = position[fut.key]
+                results[i] = fut.result()
+                bar.update(weights[i])
+            return results
+        finally:
+            if owned:
+                client.close()
 
 
 def _map_runs(jobs: list[tuple[str, str, str]], detect: Mapping[str, Any],
-              fit: Mapping[str, Any], *, scheduler: Any, quiet: bool, desc: str) -> list[Any]:
+              fit: Mapping[str, Any], *, scheduler: Any, quiet: bool, desc: str,
+              weights: Sequence[int] | None = None) -> list[Any]:
     """:func:`detect_run` of every job, in order: serially or on a Dask cluster."""
     if scheduler is None:
-        return [detect_run(*job, detect, fit) for job in progress(
-            jobs, total=len(jobs), desc=desc, quiet=quiet, unit="run")]
-    from distributed import as_completed
-
-    client, owned = _connect(scheduler)
-    try:
-        futures = client.map(detect_run, *zip(*jobs), detect=dict(detect), fit=dict(fit),
-                             code=_FINGERPRINT, pure=False) if jobs else []
-        position = {f.key: i for i, f in enumerate(futures)}
-        results: list[Any] = [None] * len(futures)
-        for fut in progress(as_completed(futures), total=len(futures), desc=desc,
-                            quiet=quiet, unit="run"):
-            results[position[fut.key]] = fut.result()
-        return results
-    finally:
-        if owned:
-            client.close()
+        return map_tasks(detect_run, jobs, quiet=quiet, desc=desc, weights=weights,
+                         detect=detect, fit=fit)
+    return map_tasks(detect_run, jobs, scheduler=scheduler, quiet=quiet, desc=desc,
+                     weights=weights, detect=dict(detect), fit=dict(fit), code=_FINGERPRINT)
 
 
 def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
                       detect: Mapping[str, Any], fit: Mapping[str, Any], *, scheduler: Any,
-                      quiet: bool) -> list[Any]:
+                      quiet: bool, weights: Sequence[int] | None = None) -> list[Any]:
     """Lightly damped ringing, found across the campaign's runs and taken out of each.
 
     Where runs ring after their impacts and no run's own flight model measured the
@@ -325,8 +398,10 @@ def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
         # the tails are in the residual before an impact as well as after it, so the test
         # for ringing can pass a run by: the other shaker runs' flights join the search
         others = [i for i in redo if results[i].impacts.ringing_problem is None]
+        w = list(weights) if weights is not None else [1] * len(jobs)
         more = _map_runs([jobs[i] for i in others], {**detect, "velocity_model": "flights"},
-                         fit, scheduler=scheduler, quiet=quiet, desc="detect (flights)")
+                         fit, scheduler=scheduler, quiet=quiet, desc="detect (flights)",
+                         weights=[w[i] for i in others])
         problems += [r.impacts.ringing_problem for r in more
                      if getattr(r, "impacts", None) is not None
                      and r.impacts.ringing_problem is not None]
@@ -335,7 +410,8 @@ def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
             again = _map_runs([jobs[i] for i in redo],
                               {**detect, "ring_modes": [list(m) for m in modes],
                                "ring_modes_runs": len(problems)}, fit,
-                              scheduler=scheduler, quiet=quiet, desc="detect (ringing modes)")
+                              scheduler=scheduler, quiet=quiet, desc="detect (ringing modes)",
+                              weights=[w[i] for i in redo])
             if any(np.isfinite(r.impacts.v_in_m_s).any() for r in again
                    if getattr(r, "impacts", None) is not None):
                 results = list(results)
@@ -581,5 +657,4 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
 
 __all__ = ["Pipeline", "PipelineRun", "STAGES", "DEPENDS", "OUTPUTS", "load_pipeline_file",
            "parse_pipeline", "run_pipeline", "needed_stages", "read_detections", "detect_run",
-           "detect_runs",
-           "code_fingerprint"]
+           "detect_runs", "map_tasks", "code_fingerprint"]

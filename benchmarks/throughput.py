@@ -1,0 +1,340 @@
+"""Issue 29: throughput of ``rattle-lab fit`` and its parts, against what a user would use instead.
+
+One run, one machine, one table (machine, date and load average printed with it):
+
+* **end to end**: the installed ``rattle-lab fit STORE --json --quiet`` (default settings,
+  every stage) on a long campaign written by the independent generator
+  ``tests/independent_campaign.py`` (two files, 4 channels), in channel samples per second
+  of wall time, and its peak RSS (``wait4``);
+* **a plain h5py read** of the same samples (every channel of every run, read whole);
+* **ObsPy's** ``classic_sta_lta`` and ``recursive_sta_lta`` (C) on one channel of the
+  campaign (if ObsPy, the ``bench`` extra, is installed);
+* **loudness**: ``rattle_lab.acoustics.loudness`` (ISO 532-1, compiled) on a 51.2 kHz
+  microphone signal, as a multiple of real time per CPU second, beside MoSQITo's
+  ``loudness_zwtv`` on one second;
+* **imports**: what ``rattle-lab fit`` pays for imports (``PYTHONPROFILEIMPORTTIME``: the sum
+  of the top-level imports' cumulative times, a run on a small store);
+* **scale-out**: the same fit (detect stage on the cluster) serial and on a ``LocalCluster``
+  of 2 worker processes; the speed-up; a projection for a week of 4-channel 51.2 kHz data
+  (1.2e11 samples) from the measured per-worker rate and scaling, and the cluster size for
+  10 minutes;
+* **streaming**: an hour (by default) of synthetic 4-channel 51.2 kHz data generated chunk by
+  chunk on the workers (no file) through the pipeline's cluster path
+  (:func:`rattle_lab.workflow.pipeline.map_tasks`): levels of every channel, ISO 532-1
+  loudness of the microphone.
+
+Run: ``.venv/bin/python benchmarks/throughput.py`` (``--seconds`` sets the campaign's length
+per run; ``--stream-hours`` the synthetic stream).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests"))
+
+from independent_campaign import Chain, Plant, write_campaign  # noqa: E402
+
+WEEK_SAMPLES = 1.2e11      # 4 channels x 51.2 kHz x 7 days (1.24e11), as the issue rounds it
+TEN_MINUTES_S = 600.0
+
+
+def entry_point() -> str:
+    exe = Path(sys.executable).with_name("rattle-lab")
+    return str(exe) if exe.exists() else "rattle-lab"
+
+
+def machine() -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    load = os.getloadavg()
+    return (f"{cpu}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
+            f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC; load average "
+            f"{load[0]:.1f} at the start")
+
+
+def grazing_ms2(plant: Plant, f_hz: float) -> float:
+    w, r = 2 * math.pi * plant.f_s_hz, f_hz / plant.f_s_hz
+    return plant.gap_m * w * w * math.sqrt((1 - r * r) ** 2 + (2 * plant.zeta * r) ** 2) / plant.q
+
+
+def write_long_campaign(folder: Path, seconds: float, fs_hz: float) -> list[Path]:
+    """Two files of three dwell runs each, ``seconds`` long per run, above grazing."""
+    plant = Plant()
+    files = []
+    for k, freqs in enumerate(((93.0, 95.0, 97.0), (94.0, 96.0, 99.0))):
+        runs = [{"run_id": f"dwell_{f:g}", "protocol": "sine_dwell", "freq_hz": f,
+                 "levels": np.full(int(seconds * f), 1.5 * grazing_ms2(plant, f))}
+                for f in freqs]
+        path = folder / f"campaign_{k}.h5"
+        write_campaign(path, plant, Chain(fs_hz=fs_hz), runs, seed=11 + k)
+        files.append(path)
+    return files
+
+
+def channel_samples(files: list[Path]) -> int:
+    import h5py
+
+    n = 0
+    for path in files:
+        with h5py.File(path, "r") as fh:
+            for run in fh["runs"].values():
+                n += sum(d.size for d in run["channels"].values())
+    return n
+
+
+def h5py_read(files: list[Path]) -> tuple[float, int]:
+    import h5py
+
+    t0 = time.perf_counter()
+    n = 0
+    for path in files:
+        with h5py.File(path, "r") as fh:
+            for run in fh["runs"].values():
+                for d in run["channels"].values():
+                    n += d[...].size
+    return time.perf_counter() - t0, n
+
+
+def run_timed(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float, int, str, str]:
+    """Wall time, peak RSS (bytes, from wait4), stdout, stderr of a command."""
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env)
+    out, err = proc.communicate()
+    wall = time.perf_counter() - t0
+    # the child has been reaped by communicate(); its rusage is in RUSAGE_CHILDREN's maximum
+    import resource
+
+    rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed ({proc.returncode}): {err[-2000:]}")
+    return wall, rss, out, err
+
+
+def import_seconds(store: Path) -> float:
+    env = dict(os.environ, PYTHONPROFILEIMPORTTIME="1")
+    _, _, _, err = run_timed([entry_point(), "fit", str(store), "--json", "--quiet"], env=env)
+    total = 0
+    for line in err.splitlines():
+        if line.startswith("import time:") and line.count("|") == 2:
+            self_us, cum_us, name = line[len("import time:"):].split("|")
+            if name.strip() != "imported package" and name == " " + name.strip():
+                total += int(cum_us)  # a top-level import (no indentation)
+    return total / 1e6
+
+
+def obspy_rates(files: list[Path]) -> dict[str, float] | str:
+    try:
+        from obspy.signal.trigger import classic_sta_lta, recursive_sta_lta
+    except ImportError as exc:
+        return f"not installed ({exc.name}); pip install -e '.[bench]'"
+    import h5py
+
+    with h5py.File(files[0], "r") as fh:
+        d = fh["runs"]["dwell_93"]["channels"]["velocity"]
+        fs = float(d.attrs["sample_rate_hz"])
+        x = np.asarray(d[...], dtype=np.float64)
+    nsta, nlta = int(0.002 * fs), int(0.05 * fs)
+    out = {}
+    for name, fn in (("classic_sta_lta", classic_sta_lta), ("recursive_sta_lta",
+                                                           recursive_sta_lta)):
+        fn(x[:10000], nsta, nlta)
+        t0 = time.process_time()
+        fn(x, nsta, nlta)
+        out[name] = x.size / (time.process_time() - t0)
+    return out
+
+
+def loudness_rates(seconds: float = 30.0) -> tuple[float, float, float]:
+    """Compiled loudness at 51.2 kHz: x real time per CPU second and per wall second;
+    MoSQITo's x real time (one second of sound at 48 kHz)."""
+    from rattle_lab.acoustics import loudness
+
+    fs = 51200.0
+    rng = np.random.default_rng(1)
+    t = np.arange(int(seconds * fs)) / fs
+    p = 0.05 * rng.standard_normal(t.size) + 0.2 * np.sin(2 * np.pi * 1000 * t) \
+        * (np.sin(2 * np.pi * 3 * t) > 0.6)
+    loudness(p[:int(fs)], fs)  # load the compiled code
+    best_cpu, best_wall = math.inf, math.inf
+    for _ in range(3):
+        c0, w0 = time.process_time(), time.perf_counter()
+        loudness(p, fs)
+        best_cpu = min(best_cpu, time.process_time() - c0)
+        best_wall = min(best_wall, time.perf_counter() - w0)
+    from mosqito.sq_metrics import loudness_zwtv
+
+    c0 = time.process_time()
+    loudness_zwtv(p[:48000], 48000)
+    mosqito = 1.0 / (time.process_time() - c0)
+    return seconds / best_cpu, seconds / best_wall, mosqito
+
+
+def synthetic_chunk(seed: int, index: int, n: int, fs_hz: float) -> dict[str, float]:
+    """Chunk ``index`` of a synthetic 4-channel record, generated here (on the worker):
+    noise with decaying impacts every ~10 ms; its levels (sum of squares, peak) per channel
+    and the ISO 532-1 loudness of the microphone (N5, Nmax)."""
+    from rattle_lab.acoustics import loudness
+
+    rng = np.random.default_rng([seed, index])
+    x = 0.01 * rng.standard_normal((4, n)).astype(np.float32)
+    hits = np.flatnonzero(rng.random(n) < 100.0 / fs_hz)
+    ring = np.exp(-np.arange(256) / 40.0).astype(np.float32)
+    for i in hits[hits < n - ring.size]:
+        x[:, i:i + ring.size] += rng.standard_normal((4, 1)).astype(np.float32) * ring
+    ld = loudness(x[3].astype(np.float64), fs_hz)
+    return {"samples": float(x.size), "sumsq": float(np.sum(x.astype(np.float64) ** 2)),
+            "peak": float(np.max(np.abs(x))), "n5": ld.n5_sone, "nmax": ld.nmax_sone}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=50.0,
+                    help="record length of each of the campaign's 6 runs, s (default 50: "
+                         "6 x 50 s x 4 channels x 25.6 kHz = 30.7 M channel samples)")
+    ap.add_argument("--fs", type=float, default=25600.0, help="the campaign's rate, Hz")
+    ap.add_argument("--workers", type=int, default=2, help="LocalCluster worker processes")
+    ap.add_argument("--stream-hours", type=float, default=1.0,
+                    help="hours of synthetic 4-channel 51.2 kHz data through the cluster path")
+    ap.add_argument("--chunk-s", type=float, default=10.0, help="streaming chunk, s")
+    args = ap.parse_args()
+
+    import logging
+
+    from dask.distributed import Client, LocalCluster
+
+    from rattle_lab.store import ingest
+    from rattle_lab.workflow import fit_store
+    from rattle_lab.workflow.pipeline import map_tasks
+
+    print(f"# {machine()}", flush=True)
+    rows: list[tuple[str, str, str]] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        t0 = time.perf_counter()
+        files = write_long_campaign(folder, args.seconds, args.fs)
+        n_samples = channel_samples(files)
+        store = folder / "store.h5"
+        ingest(files, store, quiet=True)
+        print(f"# campaign: {len(files)} files from tests/independent_campaign.py, "
+              f"{n_samples / 1e6:.1f} M channel samples at {args.fs / 1e3:g} kHz "
+              f"(written and ingested in {time.perf_counter() - t0:.0f} s)", flush=True)
+
+        small = folder / "small"
+        small.mkdir()
+        write_campaign(small / "c.h5", Plant(), Chain(fs_hz=args.fs), [
+            {"run_id": "dwell_95", "protocol": "sine_dwell", "freq_hz": 95.0,
+             "levels": np.full(200, 1.5 * grazing_ms2(Plant(), 95.0))}], seed=3)
+        ingest([small / "c.h5"], small / "s.h5", quiet=True)
+        # compiled code into numba's cache first (a user's second run), then the imports
+        run_timed([entry_point(), "fit", str(small / "s.h5"), "--json", "--quiet"])
+        imp = import_seconds(small / "s.h5")
+        rows.append(("imports of `rattle-lab fit` (PYTHONPROFILEIMPORTTIME)", f"{imp:.2f} s",
+                     "goal <= 1 s"))
+        print(rows[-1], flush=True)
+
+        wall, rss, out, _ = run_timed([entry_point(), "fit", str(store), "--json", "--quiet"])
+        n_ok = json.loads(out).get("n_ok")
+        rows.append(("rattle-lab fit, end to end (default settings)",
+                     f"{n_samples / wall / 1e6:.2f} M samples/s",
+                     f"{wall:.1f} s wall, {n_ok} runs fitted; peak RSS {rss / 2**20:.0f} MiB"))
+        print(rows[-1], flush=True)
+        t_read, n_read = h5py_read(files)
+        rows.append(("plain h5py read of the same samples", f"{n_read / t_read / 1e6:.0f} M "
+                     "samples/s", f"{t_read:.2f} s; fit is {wall / t_read:.0f}x slower"))
+        sta = obspy_rates(files)
+        if isinstance(sta, str):
+            rows.append(("ObsPy STA/LTA", "-", sta))
+        else:
+            for name, rate in sta.items():
+                rows.append((f"ObsPy {name} (one channel, CPU time)",
+                             f"{rate / 1e6:.0f} M samples/s", "per core"))
+        print(rows[-1], flush=True)
+
+        cpu_x, wall_x, mosq_x = loudness_rates()
+        rows.append(("ISO 532-1 loudness, 51.2 kHz mic (compiled)",
+                     f"{cpu_x:.0f}x real time per CPU s",
+                     f"{wall_x:.0f}x per wall s; MoSQITo {mosq_x:.2f}x; goal >= 200x"))
+        print(rows[-1], flush=True)
+
+        # scale-out: the same fit, detect stage serial and on the cluster
+        t0 = time.perf_counter()
+        serial = fit_store(store, write=False)
+        t_serial = time.perf_counter() - t0
+        with LocalCluster(n_workers=args.workers, processes=True, threads_per_worker=1,
+                          dashboard_address=":0", silence_logs=logging.ERROR) as lc, \
+                Client(lc) as client:
+            client.run(lambda: __import__("rattle_lab.workflow.pipeline"))  # warm the workers
+            t0 = time.perf_counter()
+            remote = fit_store(store, write=False, scheduler=client)
+            t_cluster = time.perf_counter() - t0
+            same = (json.dumps(serial.summary.to_dict(), sort_keys=True, default=str)
+                    == json.dumps(remote.summary.to_dict(), sort_keys=True, default=str))
+            speedup = t_serial / t_cluster
+            per_worker = n_samples / t_cluster / args.workers
+            rows.append((f"fit_store serial / on a LocalCluster of {args.workers} workers",
+                         f"{speedup:.2f}x speed-up",
+                         f"{t_serial:.1f} s / {t_cluster:.1f} s; results identical: {same}; "
+                         "goal >= 1.8x"))
+            print(rows[-1], flush=True)
+            efficiency = speedup / args.workers
+            # the per-worker rate measured on the cluster (its scaling losses included)
+            need = math.ceil(WEEK_SAMPLES / TEN_MINUTES_S / per_worker)
+            rows.append(("projection: a week of 4-ch 51.2 kHz (1.2e11 samples), fit path",
+                         f"{WEEK_SAMPLES / per_worker / 3600:.1f} worker-hours",
+                         f"{per_worker / 1e6:.2f} M samples/s per worker at {efficiency:.0%} "
+                         f"scaling: {need} workers for 10 minutes"))
+            print(rows[-1], flush=True)
+
+            # streaming: synthetic data generated chunk by chunk on the workers
+            fs = 51200.0
+            n_chunk = int(args.chunk_s * fs)
+            n_chunks = math.ceil(args.stream_hours * 3600.0 / args.chunk_s)
+            tasks = [(29, k, n_chunk, fs) for k in range(n_chunks)]
+            t0 = time.perf_counter()
+            parts = map_tasks(synthetic_chunk, tasks, scheduler=client, quiet=True,
+                              weights=[4 * n_chunk] * n_chunks)
+            t_stream = time.perf_counter() - t0
+            total = sum(p["samples"] for p in parts)
+            leq = 10 * math.log10(sum(p["sumsq"] for p in parts) / total / 4e-10)
+            stream_rate = total / t_stream
+            need_s = math.ceil(WEEK_SAMPLES / TEN_MINUTES_S / (stream_rate / args.workers))
+            rows.append((f"stream: {args.stream_hours:g} h of synthetic 4-ch 51.2 kHz on "
+                         f"{args.workers} workers", f"{stream_rate / 1e6:.2f} M samples/s",
+                         f"{total / 1e9:.2f} G samples in {t_stream:.0f} s ({n_chunks} chunks "
+                         f"made on the workers, no file); levels + loudness: week in 10 min "
+                         f"needs {need_s} workers; max N {max(p['nmax'] for p in parts):.1f} "
+                         f"sone, Leq {leq:.1f} dB"))
+            print(rows[-1], flush=True)
+
+    width = max(len(r[0]) for r in rows)
+    print()
+    print(f"{'measure':<{width}}  {'rate':<32}  notes")
+    print(f"{'-' * width}  {'-' * 32}  -----")
+    for name, rate, note in rows:
+        print(f"{name:<{width}}  {rate:<32}  {note}")
+
+
+if __name__ == "__main__":
+    main()
