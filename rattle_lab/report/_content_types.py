@@ -71,6 +71,11 @@ class GrazingCurve:
     zeta: float
     outlier_freq_hz: np.ndarray | None  # None: the fit left no threshold out
     outlier_up_ms2: np.ndarray | None
+    #: measured onset less the curve, at the measured frequencies (None: not computed)
+    residual_freq_hz: np.ndarray | None = None
+    residual_ms2: np.ndarray | None = None
+    #: what the curve is ("eq. (3.4) fit", "eq. (3.4) at the ramp-corrected ...")
+    label: str = "eq. (3.4) fit"
 
 
 @dataclass(frozen=True)
@@ -86,6 +91,13 @@ class ThresholdContent:
     bar_width_hz: float
     curve: GrazingCurve | None
     missing: tuple[tuple[str, str], ...] = ()  # parts left out (name, why)
+    #: eq. (3.4) at the ramp-corrected parameters (None: no ramp-corrected fit); its
+    #: ``residual_ms2`` is this curve less the eq. (3.4) fit's, at the measured frequencies
+    corrected: GrazingCurve | None = None
+    #: index ranges ``(i, j)`` (``j`` exclusive) into the frequencies where both thresholds
+    #: are measured, over which the hysteresis is shaded: neighbours on the measured grid
+    #: only (no shading across a frequency without a run)
+    hysteresis_segments: tuple[tuple[int, int], ...] = ()
 
 
 # --- impact patterns -------------------------------------------------------------------------
@@ -120,6 +132,9 @@ class SplCurve:
     line_pa: np.ndarray               # the law on the grid
     band_pa: tuple[np.ndarray, np.ndarray] | None  # 95 % band of the mean (None: < 3 points
     #                                                or no spread in v)
+    #: per point: True where a later peak of the impact is larger than its first peak
+    #: (None: not known); the maximum-peak and RMS clouds split along it
+    later_max: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -60,8 +60,10 @@ def acoustics_page(c: AcousticsContent) -> list[Figure]:
                   label="N proportional to v^0.6 (SPL law with loudness doubling per 10 dB)")
     ax_n.set_xscale("log")
     ax_n.set_yscale("log")
-    for axis in (ax_l.xaxis, ax_n.xaxis, ax_n.yaxis):
-        _label_log_axis(axis)
+    finite_n = np.concatenate([n5[ok], nmax[ok]])
+    finite_n = finite_n[np.isfinite(finite_n) & (finite_n > 0)]
+    for axis, values in ((ax_l.xaxis, v[ok]), (ax_n.xaxis, v[ok]), (ax_n.yaxis, finite_n)):
+        _label_log_axis(axis, values)
     ax_n.set_xlabel("RMS impact velocity of the run (m/s)")
     ax_n.set_ylabel("ISO 532-1 loudness (sone)")
     ax_n.set_title(f"Loudness against impact velocity ({'/'.join(c.sound_fields)} field)",
@@ -79,27 +81,27 @@ def acoustics_page(c: AcousticsContent) -> list[Figure]:
                    fmt(r["acoustics"].get("sharpness_acum"), ".2f"),
                    str((r.get("calibration") or {}).get("source", "declared"))]
                   for r in rows[:14]]
-    table(ax_t, table_rows, cols, 7.0)
+    table(ax_t, table_rows, cols, 8.0, fill_width=True, row_scale=1.5)
     ax_t.set_title("Per run: levels in dB re 20 uPa, loudness in sone, sharpness (DIN 45692) "
                    "in acum", fontsize=9, loc="left")
     if len(rows) > 14:
         ax_t.text(0.0, 0.0, f"... and {len(rows) - 14} more runs", fontsize=7,
                   transform=ax_t.transAxes)
-    from matplotlib.ticker import LogFormatterSciNotation, ScalarFormatter
+    from matplotlib.ticker import LogFormatterSciNotation
 
-    for ax in (ax_l, ax_n):  # log axes over less than a decade: plain numbers, no minor labels
-        ax.xaxis.set_major_formatter(ScalarFormatter())
-        ax.xaxis.set_minor_formatter(NullFormatter())
-    ax_n.yaxis.set_major_formatter(ScalarFormatter())
-    ax_n.yaxis.set_minor_formatter(NullFormatter())
     ax_b.xaxis.set_major_formatter(LogFormatterSciNotation())
     fig.suptitle("Sound levels, third-octave bands and loudness\n" + c.calibration_note,
                  fontsize=11)
     return [fig]
 
 
-def _label_log_axis(axis: Any) -> None:
-    """Numbers at 1, 2 and 5 per decade: a log axis inside one decade still has labels."""
-    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+def _label_log_axis(axis: Any, values: np.ndarray) -> None:
+    """Plain numbers on a log axis, dense enough to read: 1, 2, 5 per decade over more
+    than a decade of data, every integer multiple (20, 30, 40, 50) inside one."""
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values) & (values > 0)]
+    decades = float(np.log10(values.max() / values.min())) if values.size > 1 else 0.0
+    subs = (1.0, 2.0, 5.0) if decades > 1.0 else tuple(float(k) for k in range(1, 10))
+    axis.set_major_locator(LogLocator(subs=subs))
     axis.set_major_formatter(FuncFormatter(lambda value, _pos: f"{value:g}"))
     axis.set_minor_formatter(NullFormatter())
