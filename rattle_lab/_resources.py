@@ -107,6 +107,8 @@ def not_found_hint(kind: str, name: str | os.PathLike[str]) -> str:
     """
     import difflib
 
+    if Path(name).parent != Path("."):  # a path, not a name: the file is what is missing
+        return "No such file or directory"
     what = _SINGULAR[kind]
     names = resource_names(kind)
     stem = Path(name).stem if Path(name).suffix == RESOURCE_KINDS[kind][1] else Path(name).name
@@ -132,7 +134,7 @@ def read_pipeline_toml(path: str | os.PathLike[str]) -> tuple[dict[str, Any], st
     if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
         found = find_resource("pipelines", str(path))
         if found is None:
-            raise ParameterError(f"{path}: cannot read the pipeline: "
+            raise ParameterError(f"{path}: cannot read pipeline TOML: "
                                  f"{not_found_hint('pipelines', path)}")
         path = found
     try:

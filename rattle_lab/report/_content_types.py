@@ -274,9 +274,53 @@ class ReportContent:
         ``*Content`` types of :data:`rattle_lab.report.PAGES`' section).
     missing : Mapping of str to str
         Sections (or parts) left out and why: the gathering's, then the sections'.
+    title : str
+        The summary page's title: what the report is (fitted rattle parameters, or the
+        shocks of transient records).
     """
 
     store_name: str
     summary_lines: tuple[str, ...]
     sections: tuple[tuple[str, Any], ...]
     missing: Mapping[str, str]
+    title: str = "rattle_lab report: fitted gap, zeta, f_s, e and SPL law"
+
+
+# --- transient records (shocks) --------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ShockTrace:
+    """One channel of a transient run around its shock, on its own clock.
+
+    ``t_ms``: time from the channel's own onset, ms by its own sample rate (NaN-free);
+    ``y``: the samples, in ``units``; ``peak_t_ms``: the peak on the same axis (None: no
+    shock found, the trace is then centred on the cause's onset sample).
+    """
+
+    channel: str
+    quantity: str
+    units: str
+    role: str
+    clock: str
+    fs_hz: float
+    found: bool
+    t_ms: np.ndarray
+    y: np.ndarray
+    peak_t_ms: float | None
+
+
+@dataclass(frozen=True)
+class ShockRun:
+    """A transient run: its rows as text (one per channel, then its clocks) and its traces."""
+
+    input_key: str
+    run_id: str
+    lines: tuple[str, ...]
+    traces: tuple[ShockTrace, ...]
+
+
+@dataclass(frozen=True)
+class ShockContent:
+    """The transient runs of the store (single shocks), each on its own page."""
+
+    runs: tuple[ShockRun, ...]

@@ -85,7 +85,7 @@ def threshold_page(c: ThresholdContent) -> list[Figure]:
         ax.plot(curve.grid_hz, curve.accel_ms2, color="k", lw=1.4,
                 label=f"{curve.label}: gap {1e3 * curve.gap_m:.4g} mm, f_s "
                       f"{curve.f_s_hz:.4g} Hz, zeta {curve.zeta:.3g}")
-        if curve.outlier_freq_hz is not None:
+        if curve.outlier_freq_hz is not None and curve.outlier_up_ms2 is not None:
             ax.plot(curve.outlier_freq_hz, curve.outlier_up_ms2, "o", ms=11, mfc="none",
                     color="k", label="left out of the fit (outlier)")
     if c.corrected is not None:
@@ -96,7 +96,7 @@ def threshold_page(c: ThresholdContent) -> list[Figure]:
     ok = c.both
     fo, do, uo = f[ok], down[ok], up[ok]
     for n, (i, j) in enumerate(c.hysteresis_segments):
-        label = "hysteresis (onset - disappearance)" if n == 0 else None
+        label = "hysteresis (onset - disappearance)" if n == 0 else "_nolegend_"
         if j - i > 1:
             ax.fill_between(fo[i:j], do[i:j], uo[i:j], where=(uo[i:j] >= do[i:j]),
                             interpolate=True, color="tab:orange", alpha=0.3, label=label)
@@ -120,7 +120,8 @@ def threshold_page(c: ThresholdContent) -> list[Figure]:
         if curve.residual_ms2 is not None and curve.residual_freq_hz is not None:
             ax_r.plot(curve.residual_freq_hz, curve.residual_ms2, "^", color="tab:red", ms=7,
                       label="onset less the fit")
-    if c.corrected is not None and c.corrected.residual_ms2 is not None:
+    if c.corrected is not None and c.corrected.residual_ms2 is not None \
+            and c.corrected.residual_freq_hz is not None:
         ax_r.plot(c.corrected.residual_freq_hz, c.corrected.residual_ms2, "s", mfc="none",
                   color="tab:green", ms=6, label="ramp-corrected curve less the fit")
     ax_r.set_xlabel("excitation frequency (Hz)")
@@ -208,18 +209,18 @@ def waveform_page(c: WaveformContent) -> list[Figure]:
             if quantity == "plate_velocity" and has_impacts:
                 ax.plot(trace.impact_t_s, trace.impact_y, "o", mfc="none", color="tab:red",
                         label="detected impact")
-                ax.legend(fontsize=7, loc="upper right")
+                ax.legend(fontsize=7, loc="best")
             elif quantity == "plate_acceleration" and has_impacts:
                 for i, ti in enumerate(trace.impact_t_s):
                     ax.axvline(ti, color="tab:red", lw=0.6, alpha=0.6,
                                label="detected impact" if i == 0 else None)
-                ax.legend(fontsize=7, loc="upper right")
+                ax.legend(fontsize=7, loc="best")
             elif quantity == "sound_pressure" and trace.peaks:
                 for which, tt, yy in trace.peaks:
                     mk, color, lab = _PEAK_STYLE[which]
                     ax.plot(tt, yy, mk, ms=7, mew=1.3, mfc="none", color=color, label=lab,
                             clip_on=False, zorder=4)
-                ax.legend(fontsize=7, loc="upper right")
+                ax.legend(fontsize=7, loc="best")
         axes[0, col].set_title(f"{column.run_id} ({column.protocol}, {column.freq_hz:g} Hz, "
                                f"pattern {column.pattern})", fontsize=9)
         axes[2, col].set_xlabel("time (s)")

@@ -143,8 +143,8 @@ def _corrected_curve(fits: Fits, g: GrazingSummary, grid: np.ndarray, f: np.ndar
     gc = dataclasses.replace(g, **params)
     y = grazing_band_ms2(grid, gc)[0]
     y_f = grazing_band_ms2(f, gc)[0]
-    return GrazingCurve(grid, y, None, None, float(rg.gap_m.value), float(rg.f_s_hz.value),
-                        float(rg.zeta.value), None, None, residual_freq_hz=f,
+    gap, f_s, zeta = (float(getattr(rg, n).value or np.nan) for n in ("gap_m", "f_s_hz", "zeta"))
+    return GrazingCurve(grid, y, None, None, gap, f_s, zeta, None, None, residual_freq_hz=f,
                         residual_ms2=y_f - at_f,
                         label="eq. (3.4) at the ramp-corrected gap, f_s, zeta (quasi-static "
                               "onset; the ramps' onsets lag it)")
@@ -283,7 +283,17 @@ def build_content(data: ReportData, builders: tuple[tuple[str, Callable[..., Any
     """
     missing = dict(data.missing)
     sections: list[tuple[str, Any]] = []
+    shocks_only = data.summary is not None and data.summary.shocks_only
+    transients = bool(data.summary is not None and data.summary.transients)
+    if shocks_only:
+        missing["rattle sections"] = ("transient records only (single shocks): the thresholds, "
+                                      "impact patterns, waveforms, SPL law, acoustics and model "
+                                      "need shaker runs")
     for name, build in builders:
+        if shocks_only and name not in ("rig and calibration", "shocks"):
+            continue
+        if name == "shocks" and not transients:
+            continue  # no transient run: nothing to say
         if name == "model predictions" and not model:
             missing[name] = "not requested (model=False)"
             continue
@@ -294,8 +304,10 @@ def build_content(data: ReportData, builders: tuple[tuple[str, Callable[..., Any
             continue
         sections.append((name, content))
         missing.update(getattr(content, "missing", ()))
+    title = ("rattle_lab report: transient records (shocks)" if shocks_only
+             else "rattle_lab report: fitted gap, zeta, f_s, e and SPL law")
     return ReportContent(data.store.name, tuple(summary_lines(data, version)),
-                         tuple(sections), missing)
+                         tuple(sections), missing, title)
 
 
 __all__ = ["Missing", "build_content", "report_negative_hysteresis"]

@@ -124,7 +124,7 @@ def _recommended_grazing(fits: Fits) -> list[str]:
                 ci = student_t_ci(est.value, est.stderr, max(len(rg.lag_rel) - 3, 0))
             note = "; ".join(est.notes)
             lines += _row(f"{label.split(' (')[0]} (ramp-corrected)" if key != "f_s_hz"
-                          else f"{label}, ramp-corrected", est.value, est.stderr, ci, unit,
+                          else "f_s, ramp-corrected", est.value, est.stderr, ci, unit,
                           note, scale=scale)
         elif key == "zeta" and damp is not None and damp.value is not None:
             ci = (damp.ci_low, damp.ci_high)
@@ -239,10 +239,20 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
         n_imp = sum(r.n_impacts for r in summ.runs)
         lines.append(f"runs: {summ.n_runs} ({summ.n_ok} analysed, "
                      f"{len(summ.skipped)} skipped), {n_imp} impacts detected")
-    lines += ["", "Recommended values (ramp-corrected gap and zeta where fitted; 95 % CI: as the "
-              "fit gives it, e.g. profile likelihood for eq. (3.4); else Student t from the "
-              "standard error; OLS t for the SPL laws)"]
-    lines += parameter_lines(data)
+    if data.summary is not None and data.summary.shocks_only:
+        from ._shocks import shock_lines
+
+        lines += ["", "Transient records (single shocks): no rattle fits (the grazing curve, "
+                  "restitution and SPL laws need shaker runs). The shock found in each channel, "
+                  "the cause (force or drive) first; sample numbers on each channel's own clock"]
+        for tr in data.summary.transients:
+            lines += ["", f"  {tr.input_key}/{tr.run_id}"]
+            lines += shock_lines(tr.channels, indent="    ")
+    else:
+        lines += ["", "Recommended values (ramp-corrected gap and zeta where fitted; 95 % CI: as "
+                  "the fit gives it, e.g. profile likelihood for eq. (3.4); else Student t from "
+                  "the standard error; OLS t for the SPL laws)"]
+        lines += parameter_lines(data)
     lines += ["", "Data-quality flags (catalogue)"]
     cat = data.catalogue
     flagged = cat[cat["flags"].astype(str) != ""]
