@@ -7,7 +7,7 @@ STAMP_RUN := $(VENV)/.installed
 STAMP_DEV := $(VENV)/.installed-dev
 STAMP_DOCS := $(VENV)/.installed-docs
 
-.PHONY: demo test lint docs bench install clean reference-images
+.PHONY: demo test test-fast test-foreign lint docs bench install clean reference-images
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -43,6 +43,18 @@ TEST_JOBS ?= 2
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -n $(TEST_JOBS)
 
+## make test-fast: the suite without the tests marked slow (over about 8 s each)
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -n $(TEST_JOBS) -m "not slow"
+
+## make test-foreign: the numerically sensitive tests (marker numerics) again as another
+## x86-64 machine computes them: OpenBLAS's Nehalem kernels (which every x86-64 CPU runs)
+## and numba code for a generic CPU, compiled into a numba cache folder of its own
+FOREIGN_ENV = OPENBLAS_CORETYPE=Nehalem NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=$(CURDIR)/.numba-generic
+test-foreign: $(STAMP)
+	$(FOREIGN_ENV) $(BIN)/python -m rattle_lab.model.sdf._compiled
+	$(FOREIGN_ENV) $(BIN)/python -m pytest -q -n $(TEST_JOBS) -m numerics -p no:cacheprovider
+
 ## make lint: ruff (style, bugs) and mypy (types of the package)
 lint: $(STAMP_DEV)
 	$(BIN)/ruff check .
@@ -57,7 +69,8 @@ bench: $(STAMP)
 	for b in benchmarks/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
 
 clean:
-	rm -rf $(VENV) build *.egg-info demo_out .pytest_cache .mypy_cache .ruff_cache docs/_build
+	rm -rf $(VENV) build *.egg-info demo_out .pytest_cache .mypy_cache .ruff_cache docs/_build \
+		.numba-generic
 
 ## make reference-images: rewrite the report tests' reference images (tests/data/report_pages)
 ## after an intended change to a report page; look at them before committing.  No test does it.

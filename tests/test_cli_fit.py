@@ -79,7 +79,8 @@ def test_cli_fit_table_and_results_in_store(campaign):
     res = read_results(store)
     assert res.provenance["function"] == "rattle_lab.workflow.fit_store"
     assert len(res.provenance["inputs"]) == 1
-    assert set(res.thresholds) == {"freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2"}
+    assert set(res.thresholds) == {"freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2", "up_se_ms2",
+                                   "down_se_ms2"}
     key = next(k for k in res.runs if k[1] == "ramp_up_96p0")
     run = res.runs[key]
     assert run["status"] == "ok" and run["pattern"] == "1/1"

@@ -99,7 +99,7 @@ PACKAGES: dict[str, list[str]] = {
         "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun",
         "ThresholdTable", "TransientRun", "ParticipationInfo",
         "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
-        "threshold_hysteresis", "negative_hysteresis"
+        "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K"
     ],
     "rattle_lab.model.modal": [
         "CONTACT_NAMES", "THESIS_HERTZ_N_M15", "THESIS_PLATE", "THESIS_STRIKER_STIFFNESS_N_M",

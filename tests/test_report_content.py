@@ -278,9 +278,16 @@ def test_linear_law_band_against_the_ols_covariance() -> None:
     assert linear_law_band(np.ones(5), p[:5], slope, icpt, grid) is None
 
 
-def test_negative_hysteresis_lists_only_negative_finite_values() -> None:
-    got = negative_hysteresis([90.0, 95.0, 100.0], [5.0, 4.0, np.nan], [4.0, 4.5, 3.0])
-    assert got == [(95.0, -0.5)]
+def test_negative_hysteresis_lists_only_significantly_negative_values() -> None:
+    f, up, down = [90.0, 95.0, 96.0, 100.0], [5.0, 4.0, 4.0, np.nan], [4.0, 4.5, 4.1, 3.0]
+    se = [0.1, 0.1, 0.1, 0.1]
+    # -0.5 is 3.5 standard uncertainties (hypot(0.1, 0.1)) below zero; -0.1 is 0.7: not flagged
+    assert negative_hysteresis(f, up, down, se, se) == [(95.0, -0.5)]
+    # a larger uncertainty (an irregular regime's cycle-to-cycle level change) clears it
+    assert negative_hysteresis(f, up, down, [0.2] * 4, [0.2] * 4) == []
+    # the sign alone decides nothing: unknown uncertainties flag nothing
+    assert negative_hysteresis(f, up, down) == []
+    assert negative_hysteresis(f, up, down, [np.nan] * 4, se) == []
 
 
 def test_guides_have_the_law_slopes() -> None:

@@ -9,7 +9,8 @@ from rattle_lab.detect import detect_impacts
 from rattle_lab.rig._handbuilt import ramp_impacts, synthetic_signals
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.detect.thresholds import (Threshold, fundamental_amplitude, ramp_line, ramp_threshold,
-                                   sustained_impact_time, tabulate_thresholds)
+                                   sustained_impact_time, tabulate_thresholds,
+                                   threshold_uncertainty_ms2)
 
 FS_HZ = 12800.0
 
@@ -132,4 +133,36 @@ def test_tabulate_hysteresis():
     np.testing.assert_array_equal(curve.freq_hz, [90.0, 100.0, 110.0])
     np.testing.assert_allclose(curve.up_ms2, [2.0, 1.1, np.nan])
     np.testing.assert_allclose(curve.hysteresis_ms2, [0.5, np.nan, np.nan])
+    # no measured ramp: no uncertainty of one run; two runs at 100 Hz: their scatter
+    np.testing.assert_allclose(curve.up_se_ms2, [np.nan, 0.1, np.nan])
     assert tabulate_thresholds([]).freq_hz.size == 0
+
+
+def test_threshold_uncertainty_is_a_cycle_of_ramp_and_the_envelope_scatter():
+    ramp = dict(ramp_start_ms2=4.0, ramp_end_ms2=16.0, ramp_duration_s=3.0, ramp_rms_ms2=0.03)
+    th = [Threshold("a", 100.0, "up", 10.0, 1.5, **ramp),
+          Threshold("b", 100.0, "up", 10.2, 1.55, **ramp),
+          Threshold("c", 100.0, "down", 9.0, 2.0, **ramp)]
+    one = float(np.hypot(4.0 / 100.0, 0.03))  # 4 m/s^3 over one 10 ms cycle, and the scatter
+    assert threshold_uncertainty_ms2(th[0]) == pytest.approx(one, rel=1e-12)
+    curve = tabulate_thresholds(th)
+    # two runs: the larger of their own combined (one / sqrt 2) and their scatter (0.1)
+    assert curve.up_se_ms2[0] == pytest.approx(max(one / np.sqrt(2.0), 0.1), rel=1e-12)
+    assert curve.down_se_ms2[0] == pytest.approx(one, rel=1e-12)
+    # intermittent impacts near the threshold (an irregular regime): the level change over
+    # their mean interval, here 5 cycles
+    loose = Threshold("e", 100.0, "down", 9.0, 2.0, **ramp, impact_gap_cycles=5.0)
+    assert threshold_uncertainty_ms2(loose) == pytest.approx(np.hypot(0.2, 0.03), rel=1e-12)
+
+
+def test_ramp_threshold_measures_the_impact_interval_at_the_threshold():
+    fs, f = 2000.0, 50.0
+    t = np.arange(int(6 * fs)) / fs
+    base = (2.0 + t) * np.sin(2 * np.pi * f * t)  # a ramp of 1 m/s^3
+    # impacts every cycle from 2 s, every 4th cycle from 4 s
+    hits = np.r_[np.arange(2.0, 4.0, 1 / f), np.arange(4.0, 5.9, 4 / f)]
+    up = ramp_threshold("u", base, fs, f, hits, "up")
+    down = ramp_threshold("d", base, fs, f, hits, "down")
+    assert up.impact_gap_cycles == pytest.approx(1.0, rel=1e-9)
+    assert down.impact_gap_cycles == pytest.approx(4.0, rel=1e-9)
+    assert threshold_uncertainty_ms2(down) > 3.5 * threshold_uncertainty_ms2(up)

@@ -26,7 +26,7 @@ false triggers, not to wait for impacts in every cycle: the default gap is 100 c
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
@@ -139,6 +139,11 @@ class Threshold:
         True when the threshold impact lies within ``edge_cycles`` forcing periods of the
         record's start (up) or end (down): the level where impact appears or disappears
         lies outside the ramp, and ``accel_ms2`` is NaN.
+    impact_gap_cycles : float
+        Mean interval between the impacts next to the threshold (up to
+        :data:`GAP_IMPACTS` of them, after the onset or before the disappearance), in
+        forcing periods: 1 where the motion impacts once a cycle, more where it is
+        intermittent (an irregular regime).  NaN when not measured.
     """
 
     run_id: str
@@ -151,6 +156,7 @@ class Threshold:
     ramp_duration_s: float = float("nan")
     ramp_rms_ms2: float = float("nan")
     censored: bool = False
+    impact_gap_cycles: float = float("nan")
 
     @property
     def ramp_rate_ms2_s(self) -> float:
@@ -247,7 +253,34 @@ def ramp_threshold(run_id: str, base_accel_ms2: object, fs_hz: float, freq_hz: f
                          censored=True, **ramp)
     x = (t_thr - start_time_s) * fs_hz
     value = float(np.interp(x, np.arange(amp.size), amp))
-    return Threshold(run_id, float(freq_hz), direction, value, t_thr, **ramp)
+    return Threshold(run_id, float(freq_hz), direction, value, t_thr, **ramp,
+                     impact_gap_cycles=impact_gap_cycles(impact_t_s, t_thr, freq_hz, direction))
+
+
+#: Impacts next to a threshold whose mean interval measures how regular the motion is there.
+GAP_IMPACTS = 10
+
+
+def impact_gap_cycles(impact_t_s: object, t_threshold_s: float, freq_hz: float,
+                      direction: Direction) -> float:
+    """Mean interval, in forcing periods, between the :data:`GAP_IMPACTS` impacts from the
+    threshold impact on (up) or up to it (down); NaN with fewer than two.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.r_[np.arange(1.0, 1.2, 0.01), np.arange(1.2, 2.0, 0.05)]   # 100 Hz: 1 then 5 cycles
+    >>> float(impact_gap_cycles(t, 1.0, 100.0, "up"))
+    1.0
+    >>> round(float(impact_gap_cycles(t, t[-1], 100.0, "down")), 6)
+    5.0
+    """
+    t = np.sort(np.atleast_1d(np.asarray(impact_t_s, dtype=float)))
+    side = t[t >= t_threshold_s][:GAP_IMPACTS] if direction == "up" \
+        else t[t <= t_threshold_s][-GAP_IMPACTS:]
+    if side.size < 2:
+        return float("nan")
+    return float((side[-1] - side[0]) / (side.size - 1) * freq_hz)
 
 
 @dataclass(frozen=True)
@@ -262,12 +295,49 @@ class ThresholdCurve:
         Appearance / disappearance thresholds (mean over runs at that frequency), m/s^2; NaN if none.
     hysteresis_ms2 : ndarray
         ``up_ms2 - down_ms2``, m/s^2.
+    up_se_ms2, down_se_ms2 : ndarray
+        Standard uncertainties of ``up_ms2`` and ``down_ms2``, m/s^2
+        (:func:`threshold_uncertainty_ms2`, combined over the runs at a frequency); NaN where
+        not known.  Empty when built without them.
     """
 
     freq_hz: np.ndarray
     up_ms2: np.ndarray
     down_ms2: np.ndarray
     hysteresis_ms2: np.ndarray
+    up_se_ms2: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    down_se_ms2: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+def threshold_uncertainty_ms2(th: Threshold) -> float:
+    """Standard uncertainty of one ramp's threshold level, m/s^2 (NaN without a measured ramp).
+
+    Two independent parts, added in quadrature:
+
+    * *which cycle*: impacts come at most once a forcing period, so the threshold impact
+      fixes the crossing only to within the interval to its neighbours, and near a
+      threshold in an irregular (chaotic) regime the first (up) or last (down) impact of
+      the sustained group moves by such intervals with last-bit differences of the
+      simulated or measured record (another libm, another BLAS).  The level change over
+      that interval, ``max(1, impact_gap_cycles) |rate| / f``, is taken as the standard
+      uncertainty (a uniform instant within one period alone would give
+      ``|rate| / (f sqrt 12)``);
+    * *the level*: the envelope's RMS scatter about the measured ramp line
+      (:attr:`Threshold.ramp_rms_ms2`).
+
+    Examples
+    --------
+    >>> th = Threshold("r", 100.0, "up", 10.0, 1.0, ramp_start_ms2=5.0, ramp_end_ms2=15.0,
+    ...                ramp_duration_s=2.0, ramp_rms_ms2=0.03)
+    >>> round(threshold_uncertainty_ms2(th), 6)   # hypot(5 m/s^3 / 100 Hz, 0.03)
+    0.05831
+    """
+    rate = th.ramp_rate_ms2_s
+    if not (np.isfinite(th.accel_ms2) and np.isfinite(rate) and th.freq_hz > 0):
+        return float("nan")
+    rms = th.ramp_rms_ms2 if np.isfinite(th.ramp_rms_ms2) else 0.0
+    gap = max(1.0, th.impact_gap_cycles) if np.isfinite(th.impact_gap_cycles) else 1.0
+    return float(np.hypot(gap * abs(rate) / th.freq_hz, rms))
 
 
 def crossing_level_ms2(th: Threshold) -> float:
@@ -290,13 +360,27 @@ def crossing_level_ms2(th: Threshold) -> float:
 
 
 def tabulate_thresholds(thresholds: Sequence[Threshold]) -> ThresholdCurve:
-    """Collect ramp thresholds into a curve against frequency."""
+    """Collect ramp thresholds into a curve against frequency.
+
+    Several runs at one frequency and direction are averaged; the mean's standard
+    uncertainty is the larger of the runs' own (:func:`threshold_uncertainty_ms2`, root sum
+    of squares over ``n``) and their scatter (sample standard deviation over ``sqrt(n)``),
+    either where the other is not known, NaN where neither is.
+    """
     freqs = np.unique([t.freq_hz for t in thresholds]) if thresholds else np.zeros(0)
     up, down = np.full(freqs.size, np.nan), np.full(freqs.size, np.nan)
+    up_se, down_se = np.full(freqs.size, np.nan), np.full(freqs.size, np.nan)
     for i, f in enumerate(freqs):
-        for arr, d in ((up, "up"), (down, "down")):
-            vals = [t.accel_ms2 for t in thresholds if t.freq_hz == f and t.direction == d
+        for arr, se, d in ((up, up_se, "up"), (down, down_se, "down")):
+            runs = [t for t in thresholds if t.freq_hz == f and t.direction == d
                     and np.isfinite(t.accel_ms2)]
-            if vals:
+            if runs:
+                vals = np.array([t.accel_ms2 for t in runs])
                 arr[i] = float(np.mean(vals))
-    return ThresholdCurve(freqs, up, down, up - down)
+                own = np.array([threshold_uncertainty_ms2(t) for t in runs])
+                parts = [float(np.sqrt(np.sum(own**2)) / vals.size),
+                         float(np.std(vals, ddof=1) / np.sqrt(vals.size)) if vals.size > 1
+                         else float("nan")]
+                known = [p for p in parts if np.isfinite(p)]
+                se[i] = max(known) if known else float("nan")
+    return ThresholdCurve(freqs, up, down, up - down, up_se, down_se)

@@ -5,8 +5,8 @@ saddle-node) or by replaying the measured ramp through the exact simulator
 (:func:`model_threshold`; :func:`fit_zeta_ramp`, ``fit_restitution_down(method="ramp")``).
 """
 
-from ._bands import (band_quantile, grazing_band_ms2, linear_law_band, negative_hysteresis,
-                     student_t_ci, threshold_hysteresis)
+from ._bands import (SIGNIFICANCE_K, band_quantile, grazing_band_ms2, hysteresis_uncertainty_ms2,
+                     linear_law_band, negative_hysteresis, student_t_ci, threshold_hysteresis)
 from ._common import ParamEstimate
 from ._damping import RampDampingFit, fit_zeta_ramp
 from ._grazing import GrazingFit, fit_grazing
@@ -40,5 +40,5 @@ __all__ = [
     "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun", "ThresholdTable",
     "TransientRun", "ParticipationInfo",
     "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
-    "threshold_hysteresis", "negative_hysteresis",
+    "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K",
 ]

@@ -19,7 +19,8 @@ import numpy.typing as npt
 from ._estimates import GrazingSummary
 
 __all__ = ["band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
-           "threshold_hysteresis", "negative_hysteresis"]
+           "threshold_hysteresis", "negative_hysteresis",
+           "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K"]
 
 
 def _pval(g: GrazingSummary, name: str, default: float = float("nan")) -> float:
@@ -154,9 +155,39 @@ def threshold_hysteresis(up_ms2: npt.ArrayLike, down_ms2: npt.ArrayLike) -> np.n
     return np.asarray(up_ms2, dtype=float) - np.asarray(down_ms2, dtype=float)
 
 
-def negative_hysteresis(freq_hz: npt.ArrayLike, up_ms2: npt.ArrayLike,
-                        down_ms2: npt.ArrayLike) -> list[tuple[float, float]]:
-    """``(freq_hz, onset - disappearance)`` where the disappearance lies above the onset."""
+#: A hysteresis is called negative only when it lies below zero by more than this many
+#: standard uncertainties (about the two-sided 95 % level of a normal error).
+SIGNIFICANCE_K = 2.0
+
+
+def hysteresis_uncertainty_ms2(up_se_ms2: npt.ArrayLike, down_se_ms2: npt.ArrayLike) -> np.ndarray:
+    """Standard uncertainty of ``up - down`` from the thresholds' own (independent ramps), m/s^2."""
+    return np.hypot(np.asarray(up_se_ms2, dtype=float), np.asarray(down_se_ms2, dtype=float))
+
+
+def negative_hysteresis(freq_hz: npt.ArrayLike, up_ms2: npt.ArrayLike, down_ms2: npt.ArrayLike,
+                        up_se_ms2: npt.ArrayLike | None = None,
+                        down_se_ms2: npt.ArrayLike | None = None) -> list[tuple[float, float]]:
+    """``(freq_hz, onset - disappearance)`` where the disappearance lies significantly above
+    the onset.
+
+    Significant: ``onset - disappearance < -SIGNIFICANCE_K * u`` with ``u`` the hysteresis's
+    standard uncertainty (:func:`hysteresis_uncertainty_ms2` of the thresholds' standard
+    uncertainties, :func:`rattle_lab.detect.thresholds.threshold_uncertainty_ms2`).  A
+    hysteresis within its uncertainty of zero is not flagged whatever its sign; where the
+    uncertainty is not known (NaN, or not given) nothing is flagged: the sign of a difference
+    alone decides nothing.
+
+    Examples
+    --------
+    >>> negative_hysteresis([95.0, 96.0], [10.0, 10.0], [10.3, 10.05], [0.1, 0.1], [0.1, 0.1])
+    [(95.0, -0.3...)]
+    """
     h = threshold_hysteresis(up_ms2, down_ms2)
-    return [(float(a), float(b)) for a, b in zip(np.asarray(freq_hz, dtype=float), h)
-            if math.isfinite(b) and b < 0]
+    if up_se_ms2 is None or down_se_ms2 is None:
+        return []
+    u = hysteresis_uncertainty_ms2(up_se_ms2, down_se_ms2)
+    if u.shape != h.shape:
+        return []
+    return [(float(a), float(b)) for a, b, s in zip(np.asarray(freq_hz, dtype=float), h, u)
+            if math.isfinite(b) and math.isfinite(s) and b < -SIGNIFICANCE_K * s]

@@ -549,7 +549,7 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         skipped=tuple(SkippedRun(r.input_key, r.run_id, r.reason)
                       for r in runs if r.status == "skipped"),
         thresholds=ThresholdTable(curve.freq_hz, curve.up_ms2, curve.down_ms2,
-                                  curve.hysteresis_ms2),
+                                  curve.hysteresis_ms2, curve.up_se_ms2, curve.down_se_ms2),
         fits=Fits(grazing=grazing, grazing_ramp=ramp_grazing, restitution_ratio=ratio,
                   damping_ramp=ramp,
                   restitution_down=down, **laws),

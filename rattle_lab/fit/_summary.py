@@ -19,7 +19,8 @@ The layout is the one ``rattle-lab fit --json`` printed before these classes exi
      "runs": [{"input_key", "run_id", "protocol", "freq_hz", "n_impacts", "pattern",
                "acoustic_delay_s", "expected_delay_s", "spl_rms_db", "spl_rms_a_db",
                "threshold_accel_ms2", ["acoustics": {...}, "calibration": {...}]}],
-     "thresholds": {"freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2": [float | null]},
+     "thresholds": {"freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2",
+                    ["up_se_ms2", "down_se_ms2"]: [float | null]},
      "fits": {"grazing": {"gap_m" | "f_s_hz" | "zeta" | "participation":
                               {"value", "stderr", "unit", "ci": [lo, hi], "vary",
                                ["bias_rel", "bias_note"]},
@@ -59,6 +60,7 @@ from typing import Any
 import numpy as np
 
 from rattle_lab.exceptions import SummaryFormatError, SummaryVersionError
+from ._bands import negative_hysteresis
 from ._estimates import Fits, _In, _json, _Normalised
 
 #: Layout version of :meth:`FitSummary.to_dict`; :meth:`FitSummary.from_dict` reads only this.
@@ -128,32 +130,51 @@ class SkippedRun(_Normalised):
 @dataclass(frozen=True)
 class ThresholdTable(_Normalised):
     """Onset (up) and disappearance (down) thresholds against frequency, m/s^2 and Hz
-    (:class:`~rattle_lab.detect.thresholds.ThresholdCurve`; None where not measured)."""
+    (:class:`~rattle_lab.detect.thresholds.ThresholdCurve`; None where not measured), with
+    their standard uncertainties (``up_se_ms2``, ``down_se_ms2``: empty in summaries written
+    before they were kept)."""
 
     freq_hz: tuple[float | None, ...] = ()
     up_ms2: tuple[float | None, ...] = ()
     down_ms2: tuple[float | None, ...] = ()
     hysteresis_ms2: tuple[float | None, ...] = ()
+    up_se_ms2: tuple[float | None, ...] = ()
+    down_se_ms2: tuple[float | None, ...] = ()
 
     _COLUMNS = ("freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2")
+    _OPTIONAL = ("up_se_ms2", "down_se_ms2")
 
     def __post_init__(self) -> None:
         super().__post_init__()
         sizes = {n: len(getattr(self, n)) for n in self._COLUMNS}
+        sizes.update({n: len(getattr(self, n)) for n in self._OPTIONAL if getattr(self, n)})
         if len(set(sizes.values())) > 1:
             raise SummaryFormatError(f"ThresholdTable: columns of unequal length {sizes}")
 
     def array(self, name: str) -> np.ndarray:
-        """Column ``name`` as a float array (NaN where None)."""
-        return np.array([np.nan if v is None else v for v in getattr(self, name)], dtype=float)
+        """Column ``name`` as a float array (NaN where None; an absent optional column is
+        all NaN)."""
+        col = getattr(self, name)
+        if not col and name in self._OPTIONAL:
+            return np.full(len(self.freq_hz), np.nan)
+        return np.array([np.nan if v is None else v for v in col], dtype=float)
+
+    def negative_hysteresis(self) -> list[tuple[float, float]]:
+        """``(freq_hz, onset - disappearance)`` where the hysteresis is significantly negative
+        (:func:`rattle_lab.fit.negative_hysteresis`)."""
+        return negative_hysteresis(*(self.array(n) for n in ("freq_hz", "up_ms2", "down_ms2",
+                                                               "up_se_ms2", "down_se_ms2")))
 
     def to_dict(self) -> dict[str, Any]:
-        return {n: list(getattr(self, n)) for n in self._COLUMNS}
+        d = {n: list(getattr(self, n)) for n in self._COLUMNS}
+        d.update({n: list(getattr(self, n)) for n in self._OPTIONAL if getattr(self, n)})
+        return d
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], path: str = "thresholds") -> ThresholdTable:
         r = _In(d, path)
-        return r.build(cls, **{n: r[n] for n in cls._COLUMNS})  # type: ignore[no-any-return]
+        return r.build(cls, **{n: r[n] for n in cls._COLUMNS},  # type: ignore[no-any-return]
+                       **{n: r.get(n) or () for n in cls._OPTIONAL})
 
 
 @dataclass(frozen=True)

@@ -86,7 +86,7 @@ class ThresholdContent:
     up_ms2: np.ndarray
     down_ms2: np.ndarray
     hysteresis_ms2: np.ndarray
-    negative: np.ndarray        # bool: disappearance above onset
+    negative: np.ndarray        # bool: disappearance above onset beyond its uncertainty
     both: np.ndarray            # bool: onset and disappearance measured
     bar_width_hz: float
     curve: GrazingCurve | None

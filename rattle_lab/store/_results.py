@@ -17,7 +17,8 @@ the writers' lock, on a copy renamed over the store; an error leaves the previou
                                        spl_rms_a_db, threshold_direction, threshold_accel_ms2,
                                        threshold_t_s, threshold_censored (0/1), the measured
                                        ramp threshold_ramp_start_ms2, threshold_ramp_end_ms2,
-                                       threshold_ramp_duration_s, threshold_ramp_rms_ms2
+                                       threshold_ramp_duration_s, threshold_ramp_rms_ms2,
+                                       threshold_impact_gap_cycles
                                        (NaN / "" where not applicable)
         datasets (status "ok"): t_s, onset_s, v_in_m_s, v_out_m_s, e, strength (impacts);
                                 t_first_s, p_first_pa, t_max_s, p_max_pa, p_rms_pa,
@@ -25,6 +26,7 @@ the writers' lock, on a copy renamed over the store; an error leaves the previou
                                 peaks and their levels in dB re 20 uPa, with a microphone);
                                 cycle_counts (impacts per forcing cycle)
     /results/thresholds         datasets freq_hz, up_ms2, down_ms2, hysteresis_ms2
+                                [, up_se_ms2, down_se_ms2: standard uncertainties]
 
 :func:`read_results` returns all of it as a :class:`StoredResults`.
 """
@@ -68,7 +70,7 @@ class StoredResults:
         Per-run attributes and arrays, keyed by ``(input_key, run_id)`` (keys as in the
         layout above).
     thresholds : dict of str to ndarray
-        ``freq_hz, up_ms2, down_ms2, hysteresis_ms2``.
+        ``freq_hz, up_ms2, down_ms2, hysteresis_ms2`` [, ``up_se_ms2, down_se_ms2``].
     created_iso, rattle_lab_version : str
     """
 
@@ -121,7 +123,8 @@ def _write(fh: h5py.File, fit: Any) -> None:
             "threshold_ramp_start_ms2": thr.ramp_start_ms2 if thr else np.nan,
             "threshold_ramp_end_ms2": thr.ramp_end_ms2 if thr else np.nan,
             "threshold_ramp_duration_s": thr.ramp_duration_s if thr else np.nan,
-            "threshold_ramp_rms_ms2": thr.ramp_rms_ms2 if thr else np.nan}.items()})
+            "threshold_ramp_rms_ms2": thr.ramp_rms_ms2 if thr else np.nan,
+            "threshold_impact_gap_cycles": thr.impact_gap_cycles if thr else np.nan}.items()})
         if r.impacts is not None:
             for name in _IMPACT_FIELDS:
                 g.create_dataset(name, data=np.asarray(getattr(r.impacts, name), dtype=np.float64))
@@ -130,8 +133,11 @@ def _write(fh: h5py.File, fit: Any) -> None:
             for name in _PEAK_FIELDS:
                 g.create_dataset(name, data=np.asarray(getattr(r.peaks, name), dtype=np.float64))
     th = root.create_group("thresholds")
-    for name in ("freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2"):
-        th.create_dataset(name, data=np.asarray(getattr(fit.thresholds, name), dtype=np.float64))
+    for name in ("freq_hz", "up_ms2", "down_ms2", "hysteresis_ms2", "up_se_ms2", "down_se_ms2"):
+        col = getattr(fit.thresholds, name, None)
+        if col is not None and (len(col) or name in ("freq_hz", "up_ms2", "down_ms2",
+                                                     "hysteresis_ms2")):
+            th.create_dataset(name, data=np.asarray(col, dtype=np.float64))
 
 
 def write_results(store: str | os.PathLike[str], fit: Any) -> None:

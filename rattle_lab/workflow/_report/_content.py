@@ -96,7 +96,8 @@ def threshold_content(data: ReportData) -> ThresholdContent:
     hyst = threshold_hysteresis(up, down)
     width = 0.6 * (float(np.min(np.diff(f))) if f.size > 1 else 1.0)
     both = np.isfinite(up) & np.isfinite(down)
-    return ThresholdContent(f, up, down, hyst, np.isfinite(hyst) & (hyst < 0), both, width,
+    negative = np.isin(f, [fx for fx, _ in report_negative_hysteresis(data)])
+    return ThresholdContent(f, up, down, hyst, negative, both, width,
                             curve, missing, corrected, hysteresis_segments(f, both))
 
 

@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from rattle_lab.fit import Estimate, Fits, GrazingSummary, RatioRestitution, negative_hysteresis
+from rattle_lab.fit import (SIGNIFICANCE_K, Estimate, Fits, GrazingSummary, RatioRestitution,
+                            negative_hysteresis)
 from rattle_lab.fit import student_t_ci
 from rattle_lab.report._common import TEXT_WIDTH, fmt, wrapped
 from ._gather import ReportData
@@ -261,7 +262,8 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
         lines.append("  none")
     for f_hz, h in negative:
         lines.append(f"  thresholds: NEGATIVE hysteresis at {f_hz:g} Hz ({h:.3g} m/s^2): the "
-                     "disappearance lies above the onset")
+                     f"disappearance lies above the onset by more than {SIGNIFICANCE_K:g} "
+                     "standard uncertainties")
     for _, row in flagged.head(12).iterrows():
         lines.append(f"  {row['input_key']}/{row['run_id']}/{row['channel']}: {row['flags']}")
     if len(flagged) > 12:
@@ -310,8 +312,18 @@ def threshold_arrays(data: ReportData) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return f, up, down
 
 
+def threshold_uncertainties(data: ReportData) -> tuple[np.ndarray, np.ndarray]:
+    """``up_se_ms2, down_se_ms2`` of ``/results/thresholds`` (NaN where a store from before
+    they were kept has none: then no hysteresis is called negative)."""
+    th = data.results.thresholds
+    n = np.asarray(th.get("freq_hz", []), dtype=float).size
+    return tuple(np.asarray(th.get(k, np.full(n, np.nan)), dtype=float)  # type: ignore[return-value]
+                 for k in ("up_se_ms2", "down_se_ms2"))
+
+
 def report_negative_hysteresis(data: ReportData) -> list[tuple[float, float]]:
-    """``(freq_hz, onset - disappearance)`` of the stored thresholds where it is negative."""
+    """``(freq_hz, onset - disappearance)`` of the stored thresholds where it is negative by
+    more than its uncertainty (:func:`rattle_lab.fit.negative_hysteresis`)."""
     if data.results is None:
         return []
-    return negative_hysteresis(*threshold_arrays(data))
+    return negative_hysteresis(*threshold_arrays(data), *threshold_uncertainties(data))
