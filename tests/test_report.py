@@ -55,7 +55,7 @@ def test_full_report_structure(stores: dict[str, Path], full_report: tuple[Repor
         assert f"Page {i} of {n}" in text
     summary = texts[0] + texts[1]
     for key in ("gap h (ramp-corrected)", "zeta (ramp-corrected)", "f_s, ramp-corrected",
-                "participation Q1/Q2", "gap, eq. (3.4)", "zeta, eq. (3.4)", "f_s, eq. (3.4)",
+                "participation Q1/Q2", "gap h, eq. (3.4)", "zeta, eq. (3.4)", "f_s, eq. (3.4)",
                 "e (velocity ratios)", "e (disappearance thresholds)", "95 % CI",
                 "SPL first peak: slope", "Pa/(m/s)", "dB re 20 uPa at 1 m/s", "mm", "Hz",
                 "Data-quality flags", "Provenance", "xxh3_128:", "rattle_lab 0.",
@@ -80,8 +80,8 @@ def test_summary_values_come_from_results(stores: dict[str, Path]) -> None:
     data = gather(stores["fitted"])
     g = data.results.summary["fits"]["grazing"]
     table = "\n".join(parameter_lines(data))
-    row = next(ln for ln in table.splitlines() if ln.startswith("  gap, eq. (3.4)"))
-    value = float(row.split()[3])
+    row = next(ln for ln in table.splitlines() if ln.startswith("  gap h, eq. (3.4)"))
+    value = float(row.split()[4])
     lo, hi = (float(x) for x in row[row.index("[") + 1:row.index("]")].split(", "))
     # printed with the digits the interval needs (at least 4 significant): within 1e-4
     assert value == pytest.approx(g["gap_m"]["value"] * 1e3, rel=1e-4)
@@ -305,7 +305,11 @@ def _page_of(result: ReportResult, path: Path, section: str) -> int:
 
 @pytest.fixture(scope="module")
 def variant_rasters(report_content, tmp_path_factory: pytest.TempPathFactory):
-    """Rasters of the same content drawn another way: ``name -> (pages, pdf path)``."""
+    """Rasters of the same content drawn another way: ``name -> pages``.
+
+    ``serif``: every page in another font family; the damaged ones: the summary and the one
+    damaged section only (its page is then the last), to keep the test short.
+    """
     import matplotlib
 
     from rattle_lab.report import write_pdf
@@ -316,27 +320,24 @@ def variant_rasters(report_content, tmp_path_factory: pytest.TempPathFactory):
     no_lines = dataclasses.replace(spl, curves=tuple(
         dataclasses.replace(c, line_pa=np.full_like(c.line_pa, np.nan)) for c in spl.curves))
     no_band = dataclasses.replace(th, curve=dataclasses.replace(th.curve, band_ms2=None))
-    out: dict[str, tuple[list[np.ndarray], Path]] = {}
-    cases = {"serif": ({"font.family": "DejaVu Serif"}, {}),
-             "larger font": ({"font.size": 11.0}, {}),
-             "no SPL lines": ({}, {"SPL law": no_lines}),
-             "no band": ({}, {"thresholds": no_band})}
-    for name, (rc, replace) in cases.items():
-        content = dataclasses.replace(report_content, sections=tuple(
-            (n, replace.get(n, c)) for n, c in report_content.sections))
+    cases = {"serif": ({"font.family": "DejaVu Serif"}, report_content.sections),
+             "no SPL lines": ({}, (("SPL law", no_lines),)),
+             "no band": ({}, (("thresholds", no_band),))}
+    out: dict[str, list[np.ndarray]] = {}
+    for name, (rc, chosen) in cases.items():
+        content = dataclasses.replace(report_content, sections=tuple(chosen))
         pdf = folder / f"{name.replace(' ', '_')}.pdf"
         with matplotlib.rc_context(rc):
             write_pdf(content, pdf)
-        out[name] = (structure_rasters(pdf), pdf)
+        out[name] = structure_rasters(pdf)
     return out
 
 
-@pytest.mark.parametrize("name", ["serif", "larger font"])
-def test_reference_comparison_survives_another_font(name: str, variant_rasters,
+def test_reference_comparison_survives_another_font(variant_rasters,
                                                     report_rasters: list[np.ndarray]) -> None:
-    # another font family (wider glyphs) or a 10 % larger font moves the drawing through the
-    # layout: every page stays within the tolerance
-    pages, _ = variant_rasters[name]
+    # another font family (wider glyphs) moves the drawing through the layout: every page
+    # stays within the tolerance
+    pages = variant_rasters["serif"]
     worst = [worst_tile(a, b) for a, b in zip(pages, report_rasters)]
     assert len(pages) == len(report_rasters)
     assert max(worst) <= TILE_TOLERANCE, worst
@@ -348,12 +349,12 @@ def test_image_comparison_catches_a_lost_curve_or_band(name: str, section: str,
                                                       variant_rasters, full_report,
                                                       report_rasters: list[np.ndarray]) -> None:
     # the guard can fail: the SPL-law page without its fitted lines, the threshold page
-    # without the fit's 95 % band, are each beyond the tolerance (and only that page)
-    pages, _ = variant_rasters[name]
+    # without the fit's 95 % band, are each beyond the tolerance; the summary page, drawn
+    # alike, is not
+    pages = variant_rasters[name]
     k = _page_of(*full_report, section)
-    worst = [worst_tile(a, b) for a, b in zip(pages, report_rasters)]
-    assert worst[k] > TILE_TOLERANCE, worst
-    assert max(w for i, w in enumerate(worst) if i != k) <= TILE_TOLERANCE, worst
+    assert worst_tile(pages[-1], report_rasters[k]) > TILE_TOLERANCE
+    assert worst_tile(pages[0], report_rasters[0]) <= TILE_TOLERANCE
 
 
 def test_negative_hysteresis_is_flagged(stores: dict[str, Path], tmp_path: Path) -> None:
@@ -460,7 +461,7 @@ def test_summary_leads_with_the_recommended_values(stores: dict[str, Path]) -> N
     eq34 = lines.index(next(ln for ln in lines if ln.startswith("Eq. (3.4) fit")))
     assert eq34 > lines.index(rows[4])
     after = "\n".join(lines[eq34:])
-    assert "gap, eq. (3.4)" in after and "zeta, eq. (3.4)" in after
+    assert "gap h, eq. (3.4)" in after and "zeta, eq. (3.4)" in after
     assert after.count("BIASED: ") == 2  # gap and zeta: the ramp lag
     for row in rows:  # every interval's bounds differ as printed
         if "[" in row:

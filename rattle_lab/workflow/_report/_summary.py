@@ -141,10 +141,10 @@ def _recommended_grazing(fits: Fits) -> list[str]:
     return lines
 
 
-def _eq34_lines(g: GrazingSummary) -> list[str]:
-    """The eq. (3.4) fit's gap, zeta and f_s with their bias notes, labelled as such."""
+def _eq34_lines(g: GrazingSummary, keys: tuple[str, ...]) -> list[str]:
+    """The eq. (3.4) fit's ``keys`` (of gap, zeta, f_s) with their bias notes, labelled."""
     lines: list[str] = []
-    for key in ("gap_m", "zeta", "f_s_hz"):
+    for key in keys:
         label, scale, unit = _GRAZING_NAMES[key]
         p = g.parameters()[key]
         name = f"{label.split(' (')[0]}, eq. (3.4)"
@@ -224,11 +224,18 @@ def parameter_lines(data: ReportData) -> list[str]:
                       "dB re 20 uPa at 1 m/s",
                       f"L = 20 log10(|v_in| / (1 m/s)) + C; free-slope check k = "
                       f"{fmt(db.k_db_per_decade, '.3g')} dB/decade (20 for a linear law)")
-    if g is not None:
+    # the eq. (3.4) values that a ramp-corrected one supersedes above, labelled, with their
+    # biases; without any ramp-corrected fit the eq. (3.4) values are the recommended ones
+    superseded: tuple[str, ...] = (
+        ("gap_m", "zeta", "f_s_hz") if fits.grazing_ramp is not None
+        else ("zeta",) if fits.damping_ramp is not None and fits.damping_ramp.value is not None
+        else ())
+    if g is not None and superseded:
         lines += ["", "Eq. (3.4) fit of the measured onsets (for reference: the ramp lag reads as "
-                  "gap and damping; recommended values above)" if fits.grazing_ramp is not None
-                  or fits.damping_ramp is not None else "Eq. (3.4) fit of the measured onsets"]
-        lines += _eq34_lines(g)
+                  "gap and damping; recommended values above)"]
+        lines += _eq34_lines(g, superseded)
+    elif g is not None and (g.unidentifiable or g.outliers_hz):
+        lines += _eq34_lines(g, ())
     return lines
 
 
