@@ -34,7 +34,7 @@ def rig_page(content: RigContent) -> list[Figure]:
     ax_rig = fig.add_axes((0.06, 0.62, 0.88, 0.3))
     ax_rig.axis("off")
     table(ax_rig, fact_rows, ["rig", *[f"{r.input_key} ({r.campaign_id}, {r.source})"
-                                       for r in recs]], 8.5)
+                                       for r in recs]], 8.5, fill_width=True)
     if len(records) > 2:
         fig.text(0.06, 0.605, f"... and {len(records) - 2} more records (not shown)",
                  fontsize=8)
@@ -49,7 +49,7 @@ def rig_page(content: RigContent) -> list[Figure]:
     fig.text(0.06, 0.585, "Channels", fontsize=11, weight="bold", va="top")
     ax = fig.add_axes((0.06, 0.36, 0.88, 0.21))
     ax.axis("off")
-    table(ax, rows, cols, 8.0)
+    table(ax, rows, cols, 8.0, fill_width=True)
     cols2 = ["channel", "sensor", "serial", "calibrated", "range (SI unit)", "position (m)"]
     rows2 = [[c.name, c.sensor_model or "-", c.sensor_serial or "-",
               c.calibration_date or "-", c.range_si or "-", c.position_m or "-"]
@@ -57,7 +57,7 @@ def rig_page(content: RigContent) -> list[Figure]:
     fig.text(0.06, 0.335, "Sensors and calibration", fontsize=11, weight="bold", va="top")
     ax2 = fig.add_axes((0.06, 0.06, 0.88, 0.26))
     ax2.axis("off")
-    table(ax2, rows2, cols2, 8.0)
+    table(ax2, rows2, cols2, 8.0, fill_width=True)
     if n_rows > len(channels):
         fig.text(0.06, 0.045, f"... and {n_rows - len(channels)} more channels (not shown)",
                  fontsize=8)
