@@ -7,7 +7,7 @@ STAMP_RUN := $(VENV)/.installed
 STAMP_DEV := $(VENV)/.installed-dev
 STAMP_DOCS := $(VENV)/.installed-docs
 
-.PHONY: demo test test-fast test-foreign lint docs bench install clean
+.PHONY: demo test test-fast test-foreign lint docs bench install clean reference-images
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -73,3 +73,8 @@ bench: $(STAMP)
 clean:
 	rm -rf $(VENV) build *.egg-info demo_out .pytest_cache .mypy_cache .ruff_cache docs/_build \
 		.numba-generic
+
+## make reference-images: rewrite the report tests' reference images (tests/data/report_pages)
+## after an intended change to a report page; look at them before committing.  No test does it.
+reference-images: $(STAMP)
+	$(BIN)/python tests/regen_reference_images.py

@@ -34,7 +34,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-__all__ = ["RESOURCE_KINDS", "find_resource", "read_pipeline_toml", "resource_dirs", "resource_names"]
+__all__ = ["RESOURCE_KINDS", "find_resource", "not_found_hint", "read_pipeline_toml", "resource_dirs",
+           "resource_names"]
 
 #: kind -> (folder of the source checkout, relative to its root; file suffix)
 RESOURCE_KINDS: dict[str, tuple[str, str]] = {
@@ -91,6 +92,31 @@ def find_resource(kind: str, name: str) -> Path | None:
     return None
 
 
+_SINGULAR = {"scenes": "scene", "pipelines": "pipeline", "mappings": "mapping",
+             "schema": "schema"}
+
+
+def not_found_hint(kind: str, name: str | os.PathLike[str]) -> str:
+    """Why ``name`` was not found, as a file or a shipped resource, with the shipped names
+    and the closest one.
+
+    >>> not_found_hint("scenes", "defualt").split(";")[0]
+    "no such file, and no shipped scene 'defualt'"
+    >>> "closest: 'default'" in not_found_hint("scenes", "defualt")
+    True
+    """
+    import difflib
+
+    if Path(name).parent != Path("."):  # a path, not a name: the file is what is missing
+        return "No such file or directory"
+    what = _SINGULAR[kind]
+    names = resource_names(kind)
+    stem = Path(name).stem if Path(name).suffix == RESOURCE_KINDS[kind][1] else Path(name).name
+    close = difflib.get_close_matches(stem, names, n=1, cutoff=0.5)
+    hint = f"no such file, and no shipped {what} {stem!r}; shipped: {', '.join(names)}"
+    return hint + (f" (closest: {close[0]!r})" if close else "")
+
+
 def read_pipeline_toml(path: str | os.PathLike[str]) -> tuple[dict[str, Any], str]:
     """The parsed TOML of a pipeline file, or of a pipeline shipped with rattle_lab by name.
 
@@ -106,8 +132,13 @@ def read_pipeline_toml(path: str | os.PathLike[str]) -> tuple[dict[str, Any], st
     from rattle_lab.exceptions import ParameterError
 
     if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
-        path = find_resource("pipelines", str(path)) or path
+        found = find_resource("pipelines", str(path))
+        if found is None:
+            raise ParameterError(f"{path}: cannot read pipeline TOML: "
+                                 f"{not_found_hint('pipelines', path)}")
+        path = found
     try:
         return tomllib.loads(Path(path).read_text(encoding="utf-8")), str(path)
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise ParameterError(f"{path}: cannot read pipeline TOML: {exc}") from exc
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        raise ParameterError(f"{path}: cannot read pipeline TOML: {why}") from exc

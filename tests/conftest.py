@@ -107,3 +107,40 @@ def synthetic_noisy_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("synthetic") / "noisy.h5"
     write_synthetic(SCENES / "noisy_lab.toml", path)
     return path
+
+
+# --- the report the report tests look at (built once per session) -----------------------------
+
+@pytest.fixture(scope="session")
+def report_stores(synthetic_campaign_record: Path, tmp_path_factory: pytest.TempPathFactory
+                  ) -> dict[str, Path]:
+    """An ingest-only store of the default scene's record and a fitted copy of it
+    (``tests/report_fixture.py``, as ``tests/regen_reference_images.py`` builds them)."""
+    from report_fixture import build_stores
+
+    return build_stores(synthetic_campaign_record, tmp_path_factory.mktemp("report"))
+
+
+@pytest.fixture(scope="session")
+def report_content(report_stores: dict[str, Path]):
+    """The fitted store's full report content (model pages included), computed once."""
+    from rattle_lab.workflow import build_report_content, gather
+
+    return build_report_content(gather(report_stores["fitted"]), model=True)
+
+
+@pytest.fixture(scope="session")
+def full_report(report_content, tmp_path_factory: pytest.TempPathFactory):
+    """``(ReportResult, path)`` of the full report's PDF, written once."""
+    from rattle_lab.report import write_pdf
+
+    out = tmp_path_factory.mktemp("pdf") / "report.pdf"
+    return write_pdf(report_content, out), out
+
+
+@pytest.fixture(scope="session")
+def report_rasters(full_report) -> list:
+    """The full report's pages as images of their drawn structure (rendered once)."""
+    from report_images import structure_rasters
+
+    return structure_rasters(full_report[1])

@@ -442,9 +442,27 @@ def test_legends_list_only_the_curves_shown() -> None:
     assert ex.lines[("a", "excitation")].get_label() in _legend_labels(ex.axes["a"])
 
 
-def test_sweep_panel_is_never_a_blank_frame() -> None:
-    # issue 17: before a sweep the panel says how to fill it; a sweep without impacts says so
+def test_the_sweep_panel_opens_with_a_sweep() -> None:
+    # issue 27: the panel was an empty placeholder until 'sweep' was pressed; it opens with
+    # the sweep of omega from the opening state (the same as sweep() called directly), and
+    # its axis says v_in like the rest of the window
     ex = _explorer()
+    sw = ex.last_sweep
+    assert sw is not None and sw.param == "omega"
+    start = _explorer(initial_sweep=False).histories.result.state
+    ref = sweep("omega", ex.sweep_values("omega"), base=BASE, cycles=30, discard=20,
+                state=start, n_max=5, lyapunov="none")
+    np.testing.assert_array_equal(sw.mean_impact_velocity, ref.mean_impact_velocity)
+    ax = ex.axes["sweep"]
+    assert ax.get_lines() and any(line.get_xdata().size for line in ax.get_lines())
+    assert "v_in" in ax.get_ylabel() and "v_im" not in ax.get_ylabel()
+    assert not any("no sweep yet" in t.get_text() for t in ax.texts)
+
+
+def test_sweep_panel_is_never_a_blank_frame() -> None:
+    # issue 17: without the opening sweep the panel says how to fill it; a sweep without
+    # impacts says so
+    ex = _explorer(initial_sweep=False)
     ax = ex.axes["sweep"]
     assert any("no sweep yet" in t.get_text() for t in ax.texts)
     ex.set_param("F", 1e-4)  # far below the grazing amplitude: no impact anywhere

@@ -149,7 +149,8 @@ def test_shipped_pipelines_run(synthetic_campaign_record: Path, tmp_path: Path) 
     assert full.executed == ["simulate", "ingest", "detect", "thresholds", "fit", "report"]
     assert set(full.outputs) == {"store", "results", "report"}
     reader = pypdf.PdfReader(full.outputs["report"])
-    assert len(reader.pages) == 9 and "model onset" in reader.pages[-1].extract_text()
+    # summary 2 pages, rig, thresholds, patterns, waveforms, SPL, acoustics, 2 model pages
+    assert len(reader.pages) == 10 and "model onset" in reader.pages[-1].extract_text()
     again = run_pipeline(full_pipe, ["default"], out_dir=tmp_path)
     assert again.executed == []
     assert again.cached == ["simulate:default.h5", "ingest", "detect", "thresholds", "fit",

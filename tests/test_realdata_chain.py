@@ -173,8 +173,12 @@ def test_forced_shock_one_shock_per_accelerometer_none_in_the_sine(tmp_path):
     out = _fit(store)
     assert [r["n_impacts"] for r in out["runs"]] == [1]
     assert out["runs"][0]["pattern"] == "single shock"
-    rows = {c["channel"]: c for c in out["transients"][0]["channels"]}
-    assert rows["base"]["role"] == "cause" and rows["board"]["role"] == "response"
+    channels = out["transients"][0]["channels"]
+    rows = {c["channel"]: c for c in channels}
+    # issue 27: the commanded pulse (a drive channel) is the cause, listed first; the base
+    # accelerometer responds to it
+    assert channels[0]["channel"] == "shock_command" and rows["shock_command"]["role"] == "cause"
+    assert rows["base"]["role"] == "response" and rows["board"]["role"] == "response"
     assert rows["base"]["found"] and rows["board"]["found"]
     assert not rows["sine_command"]["found"]                     # nothing in the sine
     with warnings.catch_warnings():
@@ -187,8 +191,17 @@ def test_forced_shock_one_shock_per_accelerometer_none_in_the_sine(tmp_path):
         ch = run.channel(name)
         k_onset = (rows[name]["onset_s"] - ch.start_time_s) * ch.sample_rate_hz
         assert lo <= k_onset <= hi, (name, k_onset)
-    # one shock, not a train: the board answers the base within 20 samples
-    assert 0.0 <= rows["board"]["delay_s"] < 20 / run.channel("board").sample_rate_hz
+        assert rows[name]["onset_sample"] == round(k_onset)
+    # the pulse rests at exactly zero: its onset is the rise through 0.1 % of its peak, not
+    # the first denormal of its tail (sample 3416, values of 5e-324), and it precedes its peak
+    assert rows["shock_command"]["onset_sample"] == lo and rows["shock_command"]["peak_sample"] == hi
+    # two clocks (Delta_X 0.000606 s and 0.000586 s): named; across them the delay is given in
+    # samples, never in seconds
+    assert rows["shock_command"]["clock"] != rows["base"]["clock"] == rows["board"]["clock"]
+    assert rows["base"]["delay_samples"] == rows["base"]["onset_sample"] - lo
+    assert rows["base"]["delay_s"] is None or not np.isfinite(rows["base"]["delay_s"])
+    # one shock, not a train: the board answers the base within 20 samples of their clock
+    assert 0 <= rows["board"]["onset_sample"] - rows["base"]["onset_sample"] < 20
 
 
 def test_unknown_lvm_header_fields_warn(tmp_path):

@@ -19,42 +19,29 @@ import pytest
 from rattle_lab.exceptions import OutputError, ParameterError, RattleLabError
 from rattle_lab.fit import (DownRestitution, FitSummary, Fits, GrazingParameter, GrazingSummary,
                             RatioRestitution)
-from rattle_lab.workflow import fit_store
-from rattle_lab.store import ingest, read_results
+from rattle_lab.store import read_results
 from rattle_lab.records._errors import StoreError
 from rattle_lab.report import ReportResult
 from rattle_lab.workflow import build_pages, gather, write_report
 from rattle_lab.fit import band_quantile, grazing_band_ms2
 from rattle_lab.report._common import TEXT_WIDTH
 from rattle_lab.workflow._report._summary import parameter_lines, summary_lines
+from report_images import (TILE_TOLERANCE, load_reference, reference_paths, structure_rasters,
+                           worst_tile)
 
 
 @pytest.fixture(scope="module")
-def stores(synthetic_campaign_record: Path, tmp_path_factory: pytest.TempPathFactory
-           ) -> dict[str, Path]:
-    """An ingest-only store and a fitted copy of it."""
-    d = tmp_path_factory.mktemp("report")
-    bare = d / "bare.h5"
-    ingest([synthetic_campaign_record], bare)
-    fitted = d / "fitted.h5"
-    shutil.copyfile(bare, fitted)
-    fit_store(fitted)
-    return {"bare": bare, "fitted": fitted}
-
-
-@pytest.fixture(scope="module")
-def full_report(stores: dict[str, Path], tmp_path_factory: pytest.TempPathFactory
-                ) -> tuple[ReportResult, Path]:
-    out = tmp_path_factory.mktemp("pdf") / "report.pdf"
-    return write_report(stores["fitted"], out), out
+def stores(report_stores: dict[str, Path]) -> dict[str, Path]:
+    """An ingest-only store and a fitted copy of it (the session's, ``conftest.py``)."""
+    return report_stores
 
 
 def _texts(path: Path) -> list[str]:
     return [page.extract_text() for page in pypdf.PdfReader(path).pages]
 
 
-def test_full_report_structure(full_report: tuple[ReportResult, Path],
-                               stores: dict[str, Path]) -> None:
+def test_full_report_structure(stores: dict[str, Path], full_report: tuple[ReportResult, Path]
+                               ) -> None:
     result, path = full_report
     assert result.path == path and path.is_file()
     assert result.sections == ("summary", "rig and calibration", "thresholds", "impact patterns",
@@ -62,12 +49,13 @@ def test_full_report_structure(full_report: tuple[ReportResult, Path],
     assert result.missing == {}
     texts = _texts(path)
     n = result.n_pages
-    assert len(texts) == n == 9  # summary, rig, thresholds, patterns, waveforms, SPL, acoustics,
-    # 2 model
+    assert len(texts) == n == 10  # summary 2, rig, thresholds, patterns, waveforms, SPL,
+    # acoustics, 2 model
     for i, text in enumerate(texts, start=1):
         assert f"Page {i} of {n}" in text
-    summary = texts[0]
-    for key in ("gap h", "zeta (damping ratio)", "f_s (modal frequency)", "participation Q1/Q2",
+    summary = texts[0] + texts[1]
+    for key in ("gap h (ramp-corrected)", "zeta (ramp-corrected)", "f_s, ramp-corrected",
+                "participation Q1/Q2", "gap h, eq. (3.4)", "zeta, eq. (3.4)", "f_s, eq. (3.4)",
                 "e (velocity ratios)", "e (disappearance thresholds)", "95 % CI",
                 "SPL first peak: slope", "Pa/(m/s)", "dB re 20 uPa at 1 m/s", "mm", "Hz",
                 "Data-quality flags", "Provenance", "xxh3_128:", "rattle_lab 0.",
@@ -92,11 +80,14 @@ def test_summary_values_come_from_results(stores: dict[str, Path]) -> None:
     data = gather(stores["fitted"])
     g = data.results.summary["fits"]["grazing"]
     table = "\n".join(parameter_lines(data))
-    gap_mm = g["gap_m"]["value"] * 1e3
-    lo, hi = (1e3 * x for x in g["gap_m"]["ci"])
-    assert f"{gap_mm:.5g}" in table and f"[{lo:.4g}, {hi:.4g}]" in table
+    row = next(ln for ln in table.splitlines() if ln.startswith("  gap h, eq. (3.4)"))
+    value = float(row.split()[4])
+    lo, hi = (float(x) for x in row[row.index("[") + 1:row.index("]")].split(", "))
+    # printed with the digits the interval needs (at least 4 significant): within 1e-4
+    assert value == pytest.approx(g["gap_m"]["value"] * 1e3, rel=1e-4)
+    assert (lo, hi) == pytest.approx(tuple(1e3 * x for x in g["gap_m"]["ci"]), rel=1e-4)
     e = data.results.summary["fits"]["restitution_ratio"]
-    assert f"{e['value']:.5g}" in table and f"from {e['n']} impacts" in table
+    assert f"{e['value']:.4g}"[:5] in table and f"from {e['n']} impacts" in table
     # every line fits the page (the text is monospaced, TEXT_WIDTH characters wide)
     assert max(len(line) for line in summary_lines(data, "0")) <= TEXT_WIDTH
 
@@ -124,23 +115,33 @@ def test_every_figure_page_has_labelled_axes_and_drawings(full_report: tuple[Rep
     _, path = full_report
     reader = pypdf.PdfReader(path)
     texts = [p.extract_text() for p in reader.pages]
-    expected = {2: ["channel", "sensitivity", "PCB 352C33", "mV/g"],
-                3: ["excitation frequency (Hz)", "(m/s^2)", "eq. (3.4) fit", "hysteresis"],
-                4: ["excitation frequency (Hz)", "amplitude (m/s^2)", "1 impact per cycle"],
-                5: ["time (s)", "plate acceleration (m/s^2)", "plate velocity (m/s)",
-                    "sound pressure (Pa)", "first peak", "maximum peak"],
-                6: ["impact velocity |v_in| (m/s)", "sound pressure (Pa)", "95 % bands"],
-                7: ["third-octave band centre frequency (Hz)", "band level (dB re 20 uPa)",
-                    "LAeq", "LAFmax", "LCpeak", "ISO 532-1 loudness (sone)", "N5",
-                    "RMS impact velocity of the run (m/s)",
-                    "no calibrator record: the declared microphone sensitivity is used"],
-                8: ["omega = f / f_s (nondimensional)", "F = Q A / (omega_s^2 h) (nondimensional)",
-                    "measured onset", "saddle-node"],
-                9: ["excitation frequency (Hz)", "(m/s^2)", "model onset"]}
-    for page, keys in expected.items():
+    expected = {"rig and calibration": ["channel", "sensitivity", "PCB 352C33", "mV/g",
+                                        "Sensors and calibration"],
+                "thresholds": ["excitation frequency (Hz)", "(m/s^2)", "eq. (3.4) fit",
+                               "ramp-corrected", "hysteresis", "95 % confidence band",
+                               "less the fit (m/s^2)"],
+                "impact patterns": ["excitation frequency (Hz)", "amplitude (m/s^2)",
+                                    "1 impact per cycle"],
+                "waveforms": ["time (s)", "plate acceleration (m/s^2)", "plate velocity (m/s)",
+                              "sound pressure (Pa)", "first peak", "maximum peak"],
+                "SPL law": ["impact velocity |v_in| (m/s)", "sound pressure (Pa)",
+                            "95 % bands", "a later peak is larger than the first",
+                            "one line through both branches"],
+                "acoustics": ["third-octave band centre frequency (Hz)",
+                              "band level (dB re 20 uPa)", "LAeq", "LAFmax", "LCpeak",
+                              "ISO 532-1 loudness (sone)", "N5",
+                              "RMS impact velocity of the run (m/s)",
+                              "no calibrator record: the declared microphone sensitivity is "
+                              "used"],
+                "model predictions": ["omega = f / f_s (nondimensional)",
+                                      "F = Q A / (omega_s^2 h) (nondimensional)",
+                                      "measured onset", "saddle-node", "model onset"]}
+    for section, keys in expected.items():
+        pages = [t for t in texts if f" - {section} - " in " ".join(t.split())]
+        assert pages, section
         for key in keys:
-            assert key in texts[page - 1], (page, key)
-    for page in reader.pages[1:]:  # vector drawings: path operators in the content stream
+            assert any(key in " ".join(t.split()) for t in pages), (section, key)
+    for page in reader.pages[2:]:  # vector drawings: path operators in the content stream
         content = page.get_contents().get_data()
         assert b" l\n" in content or b" l " in content or b" re" in content
 
@@ -149,7 +150,7 @@ def test_no_text_overlaps_the_page_footer(stores: dict[str, Path]) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     pages, sections = build_pages(gather(stores["fitted"]), model=False)
-    assert sections[0] == "summary" and len(pages) == 7
+    assert sections[0] == "summary" and len(pages) == 8
     for name, fig in pages:
         canvas = FigureCanvasAgg(fig)
         canvas.draw()
@@ -179,7 +180,7 @@ def test_every_axis_is_labelled_with_its_unit(stores: dict[str, Path]) -> None:
                 assert unit.search(ax.get_xlabel()), (name, ax.get_xlabel())
             else:  # a shared time axis: labelled on the bottom plot of its column
                 assert any(o.get_xlabel() and o.get_xlim() == ax.get_xlim() for o in plots), name
-    assert n_axes == 15  # thresholds 2, patterns 1, waveforms 3 x 2, SPL 1, acoustics 3,
+    assert n_axes == 16  # thresholds 3, patterns 1, waveforms 3 x 2, SPL 1, acoustics 3,
     # model pages 2
 
 
@@ -260,71 +261,105 @@ def test_errors(stores: dict[str, Path], tmp_path: Path) -> None:
     assert not (tmp_path / "r.pdf").exists()
 
 
-# --- pages read back as images, and the figure guards (issue 17) ---------------------------
+# --- pages read back as images, and the figure guards (issue 17, 23, 27) ---------------------
 #
-# Each page of the PDF is rasterised by PDFium (pypdfium2: its own renderer, independent of
-# matplotlib; poppler's pdftoppm is not on every CI machine) at 30 dpi in grey levels and
-# compared with a reference image in tests/data/report_pages/ tile by tile (16 x 16 px
-# tiles): a mean absolute difference above 12 grey levels in any tile fails.  Glyph
-# anti-aliasing of another FreeType shifts edges by under a pixel at 30 dpi (a few grey
-# levels over a tile); a lost curve, legend, panel or fill changes a tile by tens.  To
-# regenerate the references after an intended change: RATTLE_LAB_REGEN_REFS=1 pytest -k
-# reference_images, and look at them.
-
-REF_DIR = Path(__file__).resolve().parent / "data" / "report_pages"
-RASTER_DPI = 30
-TILE_PX = 16
-TILE_TOLERANCE = 12.0
+# The drawn structure of each page (text removed, rasterised by PDFium, blurred) is compared
+# with the reference images in tests/data/report_pages/ tile by tile (tests/report_images.py
+# says how and why it survives other fonts and FreeType builds).  The tests only compare:
+# after an intended change, `make reference-images` (tests/regen_reference_images.py)
+# rewrites the references, to be looked at before they are committed.
 
 
-def _raster_pages(path: Path) -> list[np.ndarray]:
-    import pypdfium2 as pdfium
-
-    pdf = pdfium.PdfDocument(str(path))
-    try:
-        return [np.asarray(pdf[i].render(scale=RASTER_DPI / 72, grayscale=True).to_numpy(),
-                           dtype=float).squeeze() for i in range(len(pdf))]
-    finally:
-        pdf.close()
-
-
-def _worst_tile(a: np.ndarray, b: np.ndarray) -> float:
-    ny, nx = a.shape[0] // TILE_PX, a.shape[1] // TILE_PX
-    d = np.abs(a[:ny * TILE_PX, :nx * TILE_PX] - b[:ny * TILE_PX, :nx * TILE_PX])
-    return float(d.reshape(ny, TILE_PX, nx, TILE_PX).mean(axis=(1, 3)).max())
-
-
-def test_report_pages_match_reference_images(full_report: tuple[ReportResult, Path]) -> None:
-    import os
-
-    from PIL import Image
-
-    result, path = full_report
-    pages = _raster_pages(path)
-    assert len(pages) == result.n_pages
-    if os.environ.get("RATTLE_LAB_REGEN_REFS"):
-        REF_DIR.mkdir(parents=True, exist_ok=True)
-        for i, img in enumerate(pages, start=1):
-            Image.fromarray(img.astype(np.uint8)).save(REF_DIR / f"page_{i:02d}.png")
-    refs = sorted(REF_DIR.glob("page_*.png"))
-    assert len(refs) == len(pages), "reference images out of date: see the comment above"
-    for i, (img, ref_path) in enumerate(zip(pages, refs), start=1):
-        ref = np.asarray(Image.open(ref_path), dtype=float)
+def test_report_pages_match_reference_images(full_report: tuple[ReportResult, Path],
+                                             report_rasters: list[np.ndarray]) -> None:
+    result, _ = full_report
+    assert len(report_rasters) == result.n_pages
+    refs = reference_paths()
+    assert len(refs) == len(report_rasters), \
+        "reference images out of date: run `make reference-images` and look at them"
+    for i, (img, ref_path) in enumerate(zip(report_rasters, refs), start=1):
+        ref = load_reference(ref_path)
         assert img.shape == ref.shape, (i, img.shape, ref.shape)
-        assert _worst_tile(img, ref) <= TILE_TOLERANCE, (i, _worst_tile(img, ref))
-        assert img.std() > 5.0  # not a blank page
+        assert worst_tile(img, ref) <= TILE_TOLERANCE, (i, worst_tile(img, ref))
+        assert (img.std() > 5.0) == (ref.std() > 5.0)  # a drawing where the reference has
+        # one (the summary pages are text only: blank here)
 
 
-def test_image_comparison_catches_a_lost_curve(full_report: tuple[ReportResult, Path]) -> None:
-    # The guard must be able to fail: the SPL-law page without its fitted lines (white
-    # pixels drawn over the plot area's middle, 40 x 40 px) is beyond the tolerance.
-    _, path = full_report
-    page = _raster_pages(path)[5]
-    broken = page.copy()
-    h, w = broken.shape
-    broken[h // 2 - 20:h // 2 + 20, w // 2 - 20:w // 2 + 20] = 255.0
-    assert _worst_tile(page, page) == 0.0
-    assert _worst_tile(broken, page) > TILE_TOLERANCE
+def test_no_test_writes_a_reference_image() -> None:
+    # issue 23: regenerating is an explicit command, never a side effect of a test; the
+    # names are built here so that this file does not hold them
+    here = Path(__file__).resolve().parent
+    writer, switch = "save_" + "references", "RATTLE_LAB_" + "REGEN_REFS"
+    for path in here.glob("test_*.py"):
+        text = path.read_text(encoding="utf-8")
+        assert writer not in text and switch not in text, path
+
+
+def _page_of(result: ReportResult, path: Path, section: str) -> int:
+    """0-based index of the first page of ``section``."""
+    reader = pypdf.PdfReader(path)
+    for i, page in enumerate(reader.pages):
+        if f" - {section} - " in " ".join(page.extract_text().split()):
+            return i
+    raise AssertionError(section)
+
+
+@pytest.fixture(scope="module")
+def variant_rasters(report_content, tmp_path_factory: pytest.TempPathFactory):
+    """Rasters of the same content drawn another way: ``name -> pages``.
+
+    ``serif``: every page in another font family; the damaged ones: the summary and the one
+    damaged section only (its page is then the last), to keep the test short.
+    """
+    import matplotlib
+
+    from rattle_lab.report import write_pdf
+
+    folder = tmp_path_factory.mktemp("variants")
+    sections = dict(report_content.sections)
+    spl, th = sections["SPL law"], sections["thresholds"]
+    no_lines = dataclasses.replace(spl, curves=tuple(
+        dataclasses.replace(c, line_pa=np.full_like(c.line_pa, np.nan)) for c in spl.curves))
+    no_band = dataclasses.replace(th, curve=dataclasses.replace(th.curve, band_ms2=None))
+    cases = {"serif": ({"font.family": "DejaVu Serif"}, report_content.sections),
+             "no SPL lines": ({}, (("SPL law", no_lines),)),
+             "no band": ({}, (("thresholds", no_band),))}
+    out: dict[str, list[np.ndarray]] = {}
+    for name, (rc, chosen) in cases.items():
+        content = dataclasses.replace(report_content, sections=tuple(chosen))
+        pdf = folder / f"{name.replace(' ', '_')}.pdf"
+        with matplotlib.rc_context(rc):
+            write_pdf(content, pdf)
+        out[name] = structure_rasters(pdf)
+    return out
+
+
+@pytest.mark.xfail(reason="NOT DONE (issue 23 item 4): in DejaVu Serif pages 1-6 stay within "
+                          "0-2.1 grey levels, but one of pages 7-10 moves by 16.0 (measured "
+                          "2026-11-27), likely the model page, whose legend outside the axes "
+                          "sets the plot's width by the glyphs", strict=True)
+def test_reference_comparison_survives_another_font(variant_rasters,
+                                                    report_rasters: list[np.ndarray]) -> None:
+    # another font family (wider glyphs) moves the drawing through the layout: every page
+    # stays within the tolerance
+    pages = variant_rasters["serif"]
+    worst = [worst_tile(a, b) for a, b in zip(pages, report_rasters)]
+    assert len(pages) == len(report_rasters)
+    assert max(worst) <= TILE_TOLERANCE, worst
+
+
+@pytest.mark.parametrize("name, section", [("no SPL lines", "SPL law"),
+                                           ("no band", "thresholds")])
+def test_image_comparison_catches_a_lost_curve_or_band(name: str, section: str,
+                                                      variant_rasters, full_report,
+                                                      report_rasters: list[np.ndarray]) -> None:
+    # the guard can fail: the SPL-law page without its fitted lines, the threshold page
+    # without the fit's 95 % band, are each beyond the tolerance; the summary page, drawn
+    # alike, is not
+    pages = variant_rasters[name]
+    k = _page_of(*full_report, section)
+    assert worst_tile(pages[-1], report_rasters[k]) > TILE_TOLERANCE
+    assert worst_tile(pages[0], report_rasters[0]) <= TILE_TOLERANCE
 
 
 def test_negative_hysteresis_is_flagged(stores: dict[str, Path], tmp_path: Path) -> None:
@@ -335,7 +370,8 @@ def test_negative_hysteresis_is_flagged(stores: dict[str, Path], tmp_path: Path)
         # best-measured frequency; at the 95 Hz ramps' irregular regime 0.5 is within 2 u)
         up = fh["results/thresholds/up_ms2"][()]
         down = fh["results/thresholds/down_ms2"][()]
-        u = np.hypot(fh["results/thresholds/up_se_ms2"][()], fh["results/thresholds/down_se_ms2"][()])
+        u = np.hypot(fh["results/thresholds/up_se_ms2"][()],
+                     fh["results/thresholds/down_se_ms2"][()])
         k = int(np.nanargmin(np.where(np.isfinite(up) & np.isfinite(down), u, np.nan)))
         assert 0.5 > 4.0 * u[k]
         down[k] = up[k] + 0.5
@@ -344,8 +380,9 @@ def test_negative_hysteresis_is_flagged(stores: dict[str, Path], tmp_path: Path)
     out = tmp_path / "negative.pdf"
     write_report(store, out, model=False)
     texts = _texts(out)
-    assert f"NEGATIVE hysteresis at {f_k:g} Hz (-0.5 m/s^2)" in texts[0]
-    assert "NEGATIVE: disappearance above onset" in texts[2]
+    assert f"NEGATIVE hysteresis at {f_k:g} Hz (-0.5 m/s^2)" in texts[0] + texts[1]
+    threshold_page = next(t for t in texts if " - thresholds - " in " ".join(t.split()))
+    assert "NEGATIVE: disappearance above onset" in threshold_page
 
 
 def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -> None:
@@ -413,3 +450,56 @@ def test_building_the_content_leaves_the_gathered_data_alone(stores: dict[str, P
     pages, sections = render_pages(content)
     assert sections == ("summary", "rig and calibration") and len(pages) == 2
     assert data.missing == before
+
+
+def test_summary_leads_with_the_recommended_values(stores: dict[str, Path]) -> None:
+    # issue 27: the ramp-corrected gap and zeta first, intervals with the digits to differ,
+    # the SPL rows with a standard error; the eq. (3.4) values after, labelled, with the
+    # biases the fit names
+    from scipy import stats
+
+    data = gather(stores["fitted"])
+    fits = data.summary.fits
+    assert fits.grazing_ramp is not None
+    lines = parameter_lines(data)
+    rows = [ln for ln in lines if ln.startswith("  ") and not ln.startswith("      ")]
+    assert rows[2].startswith("  gap h (ramp-corrected)")
+    assert rows[3].startswith("  zeta (ramp-corrected)")
+    assert rows[4].startswith("  f_s, ramp-corrected")
+    cells = rows[2].split()
+    assert float(cells[3]) == pytest.approx(1e3 * fits.grazing_ramp.gap_m.value, rel=1e-4)
+    eq34 = lines.index(next(ln for ln in lines if ln.startswith("Eq. (3.4) fit")))
+    assert eq34 > lines.index(rows[4])
+    after = "\n".join(lines[eq34:])
+    assert "gap h, eq. (3.4)" in after and "zeta, eq. (3.4)" in after
+    assert after.count("BIASED: ") == 2  # gap and zeta: the ramp lag
+    for row in rows:  # every interval's bounds differ as printed
+        if "[" in row:
+            lo, hi = row[row.index("[") + 1:row.index("]")].split(", ")
+            assert lo != hi, row
+    law = fits.spl_law("first").linear
+    t = stats.t.ppf(0.975, law.n - 2)
+    se = (law.slope_ci_high - law.slope_ci_low) / (2 * t)
+    slope_row = next(r for r in rows if r.startswith("  SPL first peak: slope"))
+    assert slope_row.split()[5] == format(se, ".3g")
+
+
+def test_waveform_windows_do_not_end_on_an_impact(report_content) -> None:
+    # issue 27: an impact at a window's edge was drawn unmarked; the windows are centred on
+    # an impact, so that the edges fall between impacts
+    waveforms = dict(report_content.sections)["waveforms"]
+    for column in waveforms.columns:
+        vel = column.traces[1]
+        period = 1.0 / column.freq_hz
+        assert vel.impact_t_s.size >= 3
+        assert vel.impact_t_s.min() - vel.t_s[0] > 0.2 * period
+        assert vel.t_s[-1] - vel.impact_t_s.max() > 0.2 * period
+
+
+def test_hysteresis_is_not_shaded_across_a_frequency_without_a_run(report_content) -> None:
+    th = dict(report_content.sections)["thresholds"]
+    f = th.freq_hz[th.both]
+    for i, j in th.hysteresis_segments:
+        steps = np.diff(f[i:j])
+        assert steps.size == 0 or steps.max() <= 1.5 * np.min(np.diff(np.unique(th.freq_hz)))
+    assert sum(j - i for i, j in th.hysteresis_segments) == f.size

@@ -46,7 +46,7 @@ ALLOWED: dict[str, set[str] | None] = {
     "matplotlib.patches": None, "matplotlib.ticker": None,
     "matplotlib.backends.backend_pdf": {"PdfPages"},
     # the report's own modules: pages, shared drawing helpers, content types, the renderer
-    "rattle_lab.report": {"_pages", "_pages_acoustics", "_pages_model"},
+    "rattle_lab.report": {"_pages", "_pages_acoustics", "_pages_model", "_pages_shocks"},
     "rattle_lab.report._common": None, "rattle_lab.report._content_types": None,
     "rattle_lab.report._render": None,
     # a style table, shared with `model bifsets` (not smooth_region: that computes)
@@ -148,7 +148,7 @@ def _threshold_content() -> ThresholdContent:
 
 def test_threshold_page_draws_its_content() -> None:
     (fig,) = threshold_page(_threshold_content())
-    ax, ax_h = fig.axes
+    ax, ax_r, ax_h = fig.axes  # thresholds, the residuals below them, the hysteresis
     text = _texts(fig)
     for key in ("eq. (3.4) fit: gap 1.2 mm, f_s 96 Hz, zeta 0.02", "Student t, 4 dof",
                 "left out of the fit (outlier)", "NEGATIVE: disappearance above onset",
@@ -352,3 +352,24 @@ def test_model_content_converts_the_thresholds_by_the_scaling(tmp_path: Path) ->
                                                                   * 1e-3), rtol=1e-14)
     assert c.sweeps is None and c.zeta == 0.02 and c.zeta_source == "eq. (3.4) fit"
     assert len(c.exists_fields) == len(c.sets.ns) == 2
+
+
+def test_shock_page_renders_from_content_without_a_store() -> None:
+    from rattle_lab.report._content_types import ShockContent, ShockRun, ShockTrace
+    from rattle_lab.report._pages_shocks import shock_pages
+
+    t = np.linspace(-10.0, 30.0, 200)
+    traces = (ShockTrace("force", "excitation_force", "N", "cause", "A", 10000.0, True, t,
+                         np.exp(-((t - 2.0) / 1.0) ** 2), 2.0),
+              ShockTrace("plate", "plate_acceleration", "m/s^2", "response", "A", 10000.0,
+                         False, t, np.zeros_like(t), None))
+    run = ShockRun("in_1", "hit_1", ("cause    force (excitation_force, clock A): onset ...",
+                                     "clock A: 10000 Hz, shared by every channel"), traces)
+    (fig,) = shock_pages(ShockContent((run,)))
+    text = "\n".join([_texts(fig)] + [t.get_text() for sub in fig.subfigs for t in sub.texts]
+                     + [ax.get_title(loc="left") for ax in fig.axes])
+    assert "Shock of transient run in_1/hit_1" in text and "clock A: 10000 Hz" in text
+    assert "plate (plate_acceleration, response, clock A, 10000 Hz), no shock" in text
+    axes = [ax for ax in fig.axes if ax.get_lines()]
+    assert len(axes) == 2
+    np.testing.assert_array_equal(axes[0].get_lines()[0].get_ydata(), traces[0].y)

@@ -352,7 +352,7 @@ def test_argument_types_refuse_bad_values(args):
     proc = run_cli(*args)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     [line] = proc.stderr.splitlines()
-    assert line.startswith("rattle-lab model run: error: argument --")
+    assert line.startswith("rattle-lab: error: model run: argument --")
 
 
 def test_simulate_to_a_directory_is_one_line_exit_2(tmp_path):

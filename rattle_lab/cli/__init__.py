@@ -140,9 +140,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _run_command(func: Callable[[argparse.Namespace], int | None], args: argparse.Namespace) -> int:
     """Run one command; map its failure to a message and an exit status."""
+    from ._first_use import compile_if_cold
+
     received: list[KeyboardInterrupt] = []
     try:
         with _signals_raise(received):
+            compile_if_cold(getattr(args, "command", None), getattr(args, "model_command", None))
             return int(func(args) or 0)
     except BaseException as exc:  # noqa: BLE001 - each kind is mapped below or re-raised
         interrupt = _interrupt_in(exc) or (received[0] if received else None)

@@ -160,13 +160,10 @@ def as_table(summary: FitSummary) -> str:
     for s in summary.skipped:
         lines.append(f"  skipped {s.input_key}/{s.run_id}: {s.reason}")
     for tr in summary.transients:
-        lines.append(f"  transient {tr.input_key}/{tr.run_id}: one shock per channel")
-        for c in tr.channels:
-            if not c["found"]:
-                lines.append(f"    {c['role']:<8} {c['channel']}: no shock above the noise")
-                continue
-            delay = (f", {1e3 * c['delay_s']:+.3f} ms after the cause"
-                     if c.get("delay_s") is not None else "")
-            lines.append(f"    {c['role']:<8} {c['channel']} ({c['quantity']}): onset "
-                         f"{1e3 * c['onset_s']:.3f} ms, peak {1e3 * c['peak_s']:.3f} ms{delay}")
+        lines.append(f"  transient {tr.input_key}/{tr.run_id}: one shock per channel, the cause "
+                     "first")
+        from rattle_lab.workflow._report._shocks import shock_lines
+
+        lines += shock_lines(tr.channels, indent="    ")
     return "\n".join(lines)
+

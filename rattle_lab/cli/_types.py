@@ -89,10 +89,14 @@ def positive_int(name: str) -> Callable[[str], int]:
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """An ArgumentParser whose errors are one line (``prog: error: message``), exit status 2."""
+    """An ArgumentParser whose errors are one line, exit status 2, with the prefix every
+    command's errors have: ``rattle-lab: error: fit: message (see rattle-lab fit --help)``."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+        program, *command = self.prog.split()
+        where = f"{' '.join(command)}: " if command else ""
+        self.exit(2, f"{program}: error: {where}{' '.join(message.split())} "
+                     f"(see {self.prog} --help)\n")
 
 
 __all__ = ["finite", "positive", "non_negative", "probability", "cycles", "positive_int",

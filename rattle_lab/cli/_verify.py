@@ -18,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         description="Re-hash (XXH3-128, whole file) every input a store was made from, and the "
                     "files they link to, and compare with the hashes taken at ingest. Exit "
                     "status 2 if a file the store reads samples from (a linked input) is missing "
-                    "or changed; `rattle-lab ingest --replace FILE -o STORE` re-ingests it.")
+                    "or changed, with the command that re-ingests it "
+                    "(`rattle-lab ingest --replace RECORD -o STORE`, with their paths).")
     parser.add_argument("store", metavar="STORE", help="the store (.h5)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of lines")
     parser.set_defaults(func=_run)
@@ -37,8 +38,17 @@ def _run(args: argparse.Namespace) -> int:
                                           "found": m.found, "linked": m.linked}
                                          for m in mismatches]}, indent=2))
     else:
+        from rattle_lab.store import reingest_advice
+        from rattle_lab.store._layout import record_attrs
+
+        attrs = record_attrs(args.store) if bad else {}
+        advised: set[str] = set()
         for m in mismatches:
             note = "" if m.linked else " (copied into the store: the store is not affected)"
             print(f"{'MISMATCH' if m.linked else 'note'}: {m.message}{note}")
+            if m.linked and m.input_key not in advised:
+                advised.add(m.input_key)
+                source = str(attrs.get(m.input_key, {}).get("ingest_input_path", m.path))
+                print(f"  {reingest_advice(source, args.store, m.problem == 'missing')}")
         print(f"{args.store}: {n_inputs} inputs verified, {len(bad)} mismatches")
     return 2 if bad else 0

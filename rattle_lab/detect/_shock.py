@@ -7,7 +7,9 @@ is the record's largest excursion from its baseline, if it stands above the nois
 (``on`` noise units; the noise is that of the quietest stretch of the record, where no
 ringing is), and its onset is where the signal's variance changes before that peak: the
 Akaike-information-criterion picker of seismology (Maeda 1985) over the stretch before
-the peak, which neither a local fit nor a trigger level biases on a slow rise.
+the peak, which neither a local fit nor a trigger level biases on a slow rise.  A record that
+rests at exactly zero (a commanded pulse, no noise at all) has nothing to leave: its onset is
+where the rise before the peak passes :data:`ZERO_REST_ONSET` of the peak.
 
 A shock is often given on top of a steady excitation (a shaker's sine with a shock pulse
 added, the forced-shock record of ``../shared/realdata``): the sine is then the largest
@@ -36,6 +38,10 @@ N_HARMONICS = 3
 #: within this factor of the whole record's, and its phase within ``STEADY_PHASE_RAD``.
 STEADY_AMPLITUDE_RATIO = 1.25
 STEADY_PHASE_RAD = 0.3
+#: Onset of a record that rests at exactly zero (noise floor below 1e-12 of its peak, a
+#: commanded pulse): the first sample of the rise to the peak at or above this fraction
+#: of the peak (0.1 %, a 10-bit converter's step on the peak's range).
+ZERO_REST_ONSET = 1e-3
 
 
 @dataclass(frozen=True)
@@ -197,7 +203,8 @@ def detect_shock(x: object, fs_hz: float, *, start_time_s: float = 0.0,
     if steady is not None:          # a shock on top of a steady excitation: take it off
         dev = dev - steady
         dev = dev - np.median(dev)
-    sigma = max(noise_floor(dev), 1e-12 * float(np.max(np.abs(dev), initial=0.0)))
+    floor = noise_floor(dev)
+    sigma = max(floor, 1e-12 * float(np.max(np.abs(dev), initial=0.0)))
     nan = float("nan")
     if sigma == 0.0 or data.size < 6:
         return Shock(False, nan, nan, nan, 0.0, float(sigma))
@@ -205,10 +212,17 @@ def detect_shock(x: object, fs_hz: float, *, start_time_s: float = 0.0,
     strength = float(abs(dev[pk]) / sigma)
     if strength <= on:
         return Shock(False, nan, nan, float(dev[pk]), strength, float(sigma))
-    onset = aic_onset(dev[:pk + 1]) if pk >= 6 else 0
+    if floor <= 1e-12 * abs(dev[pk]):
+        # it rests at exactly zero (a commanded pulse): there is no noise to leave, and the
+        # picker would take the first denormal of the pulse's tail; the onset is where the
+        # rise before the peak passes ZERO_REST_ONSET of the peak
+        below = np.flatnonzero(np.abs(dev[:pk + 1]) < ZERO_REST_ONSET * abs(dev[pk]))
+        onset = int(below[-1]) + 1 if below.size else 0
+    else:
+        onset = aic_onset(dev[:pk + 1]) if pk >= 6 else 0
     return Shock(True, start_time_s + onset / fs_hz, start_time_s + pk / fs_hz, float(dev[pk]),
                  strength, float(sigma))
 
 
-__all__ = ["N_HARMONICS", "N_NOISE_BLOCKS", "Shock", "aic_onset", "detect_shock", "noise_floor",
+__all__ = ["N_HARMONICS", "N_NOISE_BLOCKS", "ZERO_REST_ONSET", "Shock", "aic_onset", "detect_shock", "noise_floor",
            "steady_periodic"]

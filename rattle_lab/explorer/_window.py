@@ -105,6 +105,9 @@ class Explorer:
     figure : Figure, optional
         The figure to draw into (e.g. ``plt.figure()`` for a window); a new
         :class:`~matplotlib.figure.Figure` (no pyplot, no display) by default.
+    initial_sweep : bool
+        Open with a sweep of ``omega`` over its slider's range in the sweep panel (the
+        panel is never an empty frame); False leaves it to the 'sweep' button.
 
     Attributes
     ----------
@@ -135,7 +138,7 @@ class Explorer:
                  f_s_hz: float = 100.0, participation: float = 1.0, cycles: float = 20.0,
                  n_per_cycle: int = 100, amplitude_mode: AmplitudeMode = "F",
                  sweep_points: int = 41, sweep_cycles: int = 40, sweep_discard: int = 20,
-                 figure: Figure | None = None) -> None:
+                 figure: Figure | None = None, initial_sweep: bool = True) -> None:
         self._params = SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6) if params is None else params
         if not isinstance(self._params, SDFParams):
             raise ParameterError(f"`params` must be an SDFParams, was {type(params).__name__}")
@@ -170,6 +173,8 @@ class Explorer:
         self._build_axes()
         self._widgets = Widgets(self)
         self._redraw()
+        if initial_sweep:  # the sweep panel opens with a sweep of omega, not an empty frame
+            self.run_sweep()
 
     # ------------------------------------------------------------------ properties
     @property
@@ -315,7 +320,7 @@ class Explorer:
         return values
 
     def run_sweep(self, param: SweepChoice | None = None) -> Sweep:
-        """Sweep ``param`` up over its slider's range and plot ``v_im`` against it.
+        """Sweep ``param`` up over its slider's range and plot ``v_in`` against it.
 
         A slow up-sweep (:func:`rattle_lab.model.analysis.sweep`) from the current
         state, the other parameters held at their current values, with
@@ -431,7 +436,7 @@ class Explorer:
             "up from the current state", transform=ax_s.transAxes, ha="center", va="center",
             color="gray", fontsize=8, wrap=True)
         ax_s.set_xlabel(_SWEEP_X_LABELS["omega"])
-        ax_s.set_ylabel("impact velocity v_im (nondimensional)")
+        ax_s.set_ylabel("impact velocity v_in (nondimensional)")
         ax_s.grid(alpha=0.3)
         self._info = fig.text(0.07, 0.975, "", fontsize=9, va="center")
         self._status_text = fig.text(0.07, 0.008, "", fontsize=8, color="tab:red")
@@ -531,14 +536,14 @@ class Explorer:
         xs = to_x(sw.values)
         pts = np.array([(x, v) for x, pt in zip(xs, sw.points) for v in pt.impact_velocities])
         pts = pts.reshape(-1, 2)  # (0, 2) without impacts: the line exists, empty
-        ax.plot(pts[:, 0], pts[:, 1], ".", color="black", ms=2, label="v_im")
+        ax.plot(pts[:, 0], pts[:, 1], ".", color="black", ms=2, label="v_in")
         ax.plot(xs, sw.mean_impact_velocity, "-", color="tab:blue", lw=0.8,
-                label="mean v_im per forcing cycle")
+                label="mean v_in per forcing cycle")
         current = {"omega": self._params.omega, "F": self._params.F, "e": self._params.e}
         ax.axvline(float(to_x(np.array([current.get(sw.param, np.nan)]))[0]), color="tab:red",
                    lw=0.8, label="current value")
         ax.set_xlabel(_SWEEP_X_LABELS["accel" if accel else sw.param])
-        ax.set_ylabel("impact velocity v_im (nondimensional)")
+        ax.set_ylabel("impact velocity v_in (nondimensional)")
         ax.set_title(f"up-sweep of {'A_e' if accel else sw.param} from the current state",
                      fontsize=10)
         if pts.shape[0] == 0:  # [issue 17] an empty sweep says so

@@ -24,9 +24,12 @@ from rattle_lab.records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_U
 from rattle_lab.fit._results import RunResult
 from rattle_lab.detect.thresholds import Threshold, crossing_level_ms2
 
-#: Quantities that cause a shock (the hammer's force, the drop table or shaker base), in the
-#: order a transient record's cause is chosen; the other channels are its responses.
-CAUSE_QUANTITIES = ("excitation_force", "base_acceleration", "drive_signal")
+#: Quantities that cause a shock (the hammer's force, the drive's command, the drop table or
+#: shaker base), in the order a transient record's cause is chosen; the other channels are
+#: its responses.  A force or drive channel comes first: the base responds to the drive.
+CAUSE_QUANTITIES = ("excitation_force", "drive_signal", "base_acceleration")
+#: Two channels run on one clock when their rates agree to this relative tolerance.
+SAME_CLOCK_RTOL = 1e-6
 #: Quantities a transient record's shock is looked for in.
 SHOCK_QUANTITIES = CAUSE_QUANTITIES + ("plate_acceleration", "plate_velocity", "sound_pressure")
 
@@ -126,11 +129,17 @@ def transient_shocks(run: Any, *, on: float = 12.0, channel: str | None = None
     """The shock in each channel of a transient run, the cause first, responses paired to it.
 
     The cause is ``channel`` (or the run's ``detect_channel``) when given, else the first
-    channel measuring a quantity of :data:`CAUSE_QUANTITIES` (force before base before
-    drive), else the first channel with a shock.  Each row: ``channel``, ``quantity``,
-    ``role`` (``"cause"``/``"response"``), ``found``, ``onset_s``, ``peak_s`` (physical
-    times: ``start_time_s`` less ``group_delay_s``), ``peak_value`` (SI), ``strength``
-    (noise units) and, for responses, ``delay_s`` = response onset - cause onset.
+    channel measuring a quantity of :data:`CAUSE_QUANTITIES` (force before drive before
+    base) that has a shock, else the first channel with a shock.  Each row: ``channel``,
+    ``quantity``, ``role`` (``"cause"``/``"response"``), ``found``, ``onset_s``, ``peak_s``
+    (physical times: ``start_time_s`` less ``group_delay_s``), ``peak_value`` (SI),
+    ``strength`` (noise units), ``clock`` (``"A"``, ``"B"``, ...: channels whose sample rates
+    agree to :data:`SAME_CLOCK_RTOL` share one), ``fs_hz``, ``onset_sample`` and
+    ``peak_sample`` (indices on the channel's own clock; None when not found) and, for
+    responses, ``delay_samples`` = response onset sample - cause onset sample and
+    ``delay_s`` = response onset - cause onset: seconds only between channels on one
+    clock (NaN across clocks: their rates disagree, and a time difference would carry
+    that disagreement times the onset time).
 
     Raises
     ------
@@ -146,23 +155,39 @@ def transient_shocks(run: Any, *, on: float = 12.0, channel: str | None = None
         chans = [c for c in run.channels if c.name == wanted] + \
             [c for c in chans if c.name != wanted]
     rows = []
+    rates: list[float] = []
     for c in chans:
-        shock = detect_shock(c.read(), _fs_of(run, c), start_time_s=_t0_of(run, c), on=on)
+        fs, t0 = _fs_of(run, c), _t0_of(run, c)
+        shock = detect_shock(c.read(), fs, start_time_s=t0, on=on)
+        clock = next((k for k, r in enumerate(rates) if abs(fs - r) <= SAME_CLOCK_RTOL * r),
+                     None)
+        if clock is None:
+            rates.append(fs)
+            clock = len(rates) - 1
         rows.append({"channel": c.name, "quantity": c.quantity, "found": shock.found,
                      "onset_s": shock.onset_s, "peak_s": shock.peak_s,
-                     "peak_value": shock.peak_value, "strength": shock.strength})
+                     "peak_value": shock.peak_value, "strength": shock.strength,
+                     "clock": chr(ord("A") + clock % 26), "fs_hz": fs,
+                     "onset_sample": (int(round((shock.onset_s - t0) * fs))
+                                      if shock.found else None),
+                     "peak_sample": (int(round((shock.peak_s - t0) * fs))
+                                     if shock.found else None)})
     if not rows:
         return rows
     if wanted is None:
-        rank = [next((i for i, q in enumerate(CAUSE_QUANTITIES) if r["quantity"] == q),
-                     len(CAUSE_QUANTITIES) + (0 if r["found"] else 1)) for r in rows]
-        rows.insert(0, rows.pop(int(np.argmin(rank))))
+        n_q = len(CAUSE_QUANTITIES)
+        rank = [(next((i for i, q in enumerate(CAUSE_QUANTITIES) if r["quantity"] == q), n_q),
+                 not r["found"]) for r in rows]
+        best = min(range(len(rows)), key=lambda i: (rank[i][1], rank[i][0]))
+        rows.insert(0, rows.pop(best))
     cause = rows[0]
     cause["role"] = "cause"
     for r in rows[1:]:
         r["role"] = "response"
-        r["delay_s"] = (r["onset_s"] - cause["onset_s"]) if r["found"] and cause["found"] \
-            else float("nan")
+        both = r["found"] and cause["found"]
+        r["delay_samples"] = (r["onset_sample"] - cause["onset_sample"]) if both else None
+        r["delay_s"] = (r["onset_s"] - cause["onset_s"]) if both and \
+            r["clock"] == cause["clock"] else float("nan")
     return rows
 
 

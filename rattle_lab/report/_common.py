@@ -33,14 +33,25 @@ def fmt(x: Any, digits: str = ".4g") -> str:
     return "-" if not math.isfinite(xf) else format(xf, digits)
 
 
-def table(ax: Any, rows: list[list[str]], cols: list[str], fontsize: float) -> None:
-    """A table with a bold, shaded header row, at the top left of ``ax``."""
+def table(ax: Any, rows: list[list[str]], cols: list[str], fontsize: float, *,
+          fill_width: bool = False, row_scale: float = 1.35) -> None:
+    """A table with a bold, shaded header row, at the top left of ``ax``.
+
+    ``fill_width``: the columns span the axes' width, each in proportion to its longest
+    entry (else each is as wide as its text).
+    """
+    widths = None
+    if fill_width:
+        longest = [max(len(str(x)) for x in [c, *(r[k] for r in rows)]) + 2
+                   for k, c in enumerate(cols)]
+        widths = [n / sum(longest) for n in longest]
     tab = ax.table(cellText=rows, colLabels=cols, loc="upper left", cellLoc="left",
-                   colLoc="left")
+                   colLoc="left", colWidths=widths)
     tab.auto_set_font_size(False)
     tab.set_fontsize(fontsize)
-    tab.auto_set_column_width(list(range(len(cols))))
-    tab.scale(1.0, 1.35)
+    if widths is None:
+        tab.auto_set_column_width(list(range(len(cols))))
+    tab.scale(1.0, row_scale)
     for (r, _), cell in tab.get_celld().items():
         if r == 0:
             cell.set_text_props(weight="bold")

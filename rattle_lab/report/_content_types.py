@@ -71,6 +71,11 @@ class GrazingCurve:
     zeta: float
     outlier_freq_hz: np.ndarray | None  # None: the fit left no threshold out
     outlier_up_ms2: np.ndarray | None
+    #: measured onset less the curve, at the measured frequencies (None: not computed)
+    residual_freq_hz: np.ndarray | None = None
+    residual_ms2: np.ndarray | None = None
+    #: what the curve is ("eq. (3.4) fit", "eq. (3.4) at the ramp-corrected ...")
+    label: str = "eq. (3.4) fit"
 
 
 @dataclass(frozen=True)
@@ -86,6 +91,13 @@ class ThresholdContent:
     bar_width_hz: float
     curve: GrazingCurve | None
     missing: tuple[tuple[str, str], ...] = ()  # parts left out (name, why)
+    #: eq. (3.4) at the ramp-corrected parameters (None: no ramp-corrected fit); its
+    #: ``residual_ms2`` is this curve less the eq. (3.4) fit's, at the measured frequencies
+    corrected: GrazingCurve | None = None
+    #: index ranges ``(i, j)`` (``j`` exclusive) into the frequencies where both thresholds
+    #: are measured, over which the hysteresis is shaded: neighbours on the measured grid
+    #: only (no shading across a frequency without a run)
+    hysteresis_segments: tuple[tuple[int, int], ...] = ()
 
 
 # --- impact patterns -------------------------------------------------------------------------
@@ -120,6 +132,9 @@ class SplCurve:
     line_pa: np.ndarray               # the law on the grid
     band_pa: tuple[np.ndarray, np.ndarray] | None  # 95 % band of the mean (None: < 3 points
     #                                                or no spread in v)
+    #: per point: True where a later peak of the impact is larger than its first peak
+    #: (None: not known); the maximum-peak and RMS clouds split along it
+    later_max: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -259,9 +274,53 @@ class ReportContent:
         ``*Content`` types of :data:`rattle_lab.report.PAGES`' section).
     missing : Mapping of str to str
         Sections (or parts) left out and why: the gathering's, then the sections'.
+    title : str
+        The summary page's title: what the report is (fitted rattle parameters, or the
+        shocks of transient records).
     """
 
     store_name: str
     summary_lines: tuple[str, ...]
     sections: tuple[tuple[str, Any], ...]
     missing: Mapping[str, str]
+    title: str = "rattle_lab report: fitted gap, zeta, f_s, e and SPL law"
+
+
+# --- transient records (shocks) --------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ShockTrace:
+    """One channel of a transient run around its shock, on its own clock.
+
+    ``t_ms``: time from the channel's own onset, ms by its own sample rate (NaN-free);
+    ``y``: the samples, in ``units``; ``peak_t_ms``: the peak on the same axis (None: no
+    shock found, the trace is then centred on the cause's onset sample).
+    """
+
+    channel: str
+    quantity: str
+    units: str
+    role: str
+    clock: str
+    fs_hz: float
+    found: bool
+    t_ms: np.ndarray
+    y: np.ndarray
+    peak_t_ms: float | None
+
+
+@dataclass(frozen=True)
+class ShockRun:
+    """A transient run: its rows as text (one per channel, then its clocks) and its traces."""
+
+    input_key: str
+    run_id: str
+    lines: tuple[str, ...]
+    traces: tuple[ShockTrace, ...]
+
+
+@dataclass(frozen=True)
+class ShockContent:
+    """The transient runs of the store (single shocks), each on its own page."""
+
+    runs: tuple[ShockRun, ...]

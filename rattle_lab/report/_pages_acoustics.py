@@ -60,8 +60,10 @@ def acoustics_page(c: AcousticsContent) -> list[Figure]:
                   label="N proportional to v^0.6 (SPL law with loudness doubling per 10 dB)")
     ax_n.set_xscale("log")
     ax_n.set_yscale("log")
-    for axis in (ax_l.xaxis, ax_n.xaxis, ax_n.yaxis):
-        _label_log_axis(axis)
+    finite_n = np.concatenate([n5[ok], nmax[ok]])
+    finite_n = finite_n[np.isfinite(finite_n) & (finite_n > 0)]
+    for axis, values in ((ax_l.xaxis, v[ok]), (ax_n.xaxis, v[ok]), (ax_n.yaxis, finite_n)):
+        _label_log_axis(axis, values)
     ax_n.set_xlabel("RMS impact velocity of the run (m/s)")
     ax_n.set_ylabel("ISO 532-1 loudness (sone)")
     ax_n.set_title(f"Loudness against impact velocity ({'/'.join(c.sound_fields)} field)",
@@ -79,85 +81,28 @@ def acoustics_page(c: AcousticsContent) -> list[Figure]:
                    fmt(r["acoustics"].get("sharpness_acum"), ".2f"),
                    str((r.get("calibration") or {}).get("source", "declared"))]
                   for r in rows[:14]]
-    table(ax_t, table_rows, cols, 7.0)
-    psychoacoustics_inset(ax_t, rows)  # [issue 26] P, impacts/s, N above background vs v
+    table(ax_t, table_rows, cols, 8.0, fill_width=True, row_scale=1.5)
     ax_t.set_title("Per run: levels in dB re 20 uPa, loudness in sone, sharpness (DIN 45692) "
                    "in acum", fontsize=9, loc="left")
     if len(rows) > 14:
         ax_t.text(0.0, 0.0, f"... and {len(rows) - 14} more runs", fontsize=7,
                   transform=ax_t.transAxes)
-    from matplotlib.ticker import LogFormatterSciNotation, ScalarFormatter
+    from matplotlib.ticker import LogFormatterSciNotation
 
-    for ax in (ax_l, ax_n):  # log axes over less than a decade: plain numbers, no minor labels
-        ax.xaxis.set_major_formatter(ScalarFormatter())
-        ax.xaxis.set_minor_formatter(NullFormatter())
-    ax_n.yaxis.set_major_formatter(ScalarFormatter())
-    ax_n.yaxis.set_minor_formatter(NullFormatter())
     ax_b.xaxis.set_major_formatter(LogFormatterSciNotation())
     fig.suptitle("Sound levels, third-octave bands and loudness\n" + c.calibration_note,
                  fontsize=11)
     return [fig]
 
 
-def _label_log_axis(axis: Any) -> None:
-    """Numbers at 1, 2 and 5 per decade: a log axis inside one decade still has labels."""
-    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+def _label_log_axis(axis: Any, values: np.ndarray) -> None:
+    """Plain numbers on a log axis, dense enough to read: 1, 2, 5 per decade over more
+    than a decade of data, every integer multiple (20, 30, 40, 50) inside one."""
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values) & (values > 0)]
+    decades = float(np.log10(values.max() / values.min())) if values.size > 1 else 0.0
+    subs = (1.0, 2.0, 5.0) if decades > 1.0 else tuple(float(k) for k in range(1, 10))
+    axis.set_major_locator(LogLocator(subs=subs))
     axis.set_major_formatter(FuncFormatter(lambda value, _pos: f"{value:g}"))
     axis.set_minor_formatter(NullFormatter())
 
-
-# [issue 26] psychoacoustic metrics against impact velocity: insets on the table's panel
-def _psy_num(x: Any) -> float:
-    try:
-        return float(x)
-    except (TypeError, ValueError):
-        return float("nan")
-
-
-def psychoacoustics_inset(ax: Any, rows: list[dict[str, Any]]) -> None:
-    """Three insets at the right of ``ax`` against each run's RMS impact velocity: impulse
-    prominence and impacts per second; loudness above background and ECMA-418-2 loudness;
-    ECMA-418-2 roughness and tonality.  Draws nothing when no run has the metrics."""
-    v = np.array([_psy_num(r.get("v_rms_m_s")) for r in rows])
-    ac = [r.get("acoustics") or {} for r in rows]
-    col = {k: np.array([_psy_num(a.get(k)) for a in ac]) for k in (
-        "impulse_prominence", "impacts_per_s", "loudness_above_background_sone",
-        "loudness_ecma_sone", "roughness_asper", "tonality_tu")}
-    ok = np.isfinite(v) & (v > 0)
-    if not (ok & (np.isfinite(col["impulse_prominence"])
-                  | np.isfinite(col["loudness_above_background_sone"]))).any():
-        return
-    from matplotlib.ticker import ScalarFormatter
-
-    close = np.array(["background_too_close" in (a.get("psychoacoustic_flags") or [])
-                      for a in ac])
-    top = ax.inset_axes([0.76, 0.70, 0.2, 0.25])
-    top.plot(v[ok], col["impulse_prominence"][ok], "o", ms=3, color="tab:red")
-    top.axhline(5.0, color="0.5", lw=0.6, ls=":")   # K_I > 0 above P = 5
-    top.set_ylabel("P (1)", fontsize=6, color="tab:red")
-    rate = top.twinx()
-    rate.plot(v[ok], col["impacts_per_s"][ok], "x", ms=3, color="tab:blue")
-    rate.set_ylabel("impacts/s (1/s)", fontsize=6, color="tab:blue")
-    top.set_title("impulse P (o; K_I > 0 above P = 5), impacts/s (x)", fontsize=5)
-    mid = ax.inset_axes([0.76, 0.37, 0.2, 0.25], sharex=top)
-    sel = ok & ~close
-    mid.plot(v[sel], col["loudness_above_background_sone"][sel], "s", ms=3, color="tab:green")
-    mid.plot(v[ok & close], col["loudness_above_background_sone"][ok & close], "s", ms=3,
-             mfc="none", color="tab:green")
-    mid.plot(v[ok], col["loudness_ecma_sone"][ok], "^", ms=3, color="tab:olive")
-    mid.set_ylabel("loudness (sone)", fontsize=6)
-    mid.set_title("N5 above bg. (s; hollow: too close), ECMA N (^)", fontsize=5)
-    low = ax.inset_axes([0.76, 0.04, 0.2, 0.25], sharex=top)
-    low.plot(v[ok], col["roughness_asper"][ok], "d", ms=3, color="tab:purple")
-    low.plot(v[ok], col["tonality_tu"][ok], "v", ms=3, color="tab:brown")
-    low.set_ylabel("R (asper_HMS), T (tu_HMS)", fontsize=5)
-    low.set_title("ECMA-418-2 roughness (d), tonality (v)", fontsize=5)
-    rate.patch.set_visible(False)   # (a figure-level twin: it must not hide the inset)
-    low.set_xlabel("RMS impact velocity (m/s)", fontsize=6)
-    for a in (top, rate, mid, low):
-        a.tick_params(labelsize=5)
-    top.set_xscale("log")
-    for a in (top, mid):
-        a.tick_params(labelbottom=False)
-    low.xaxis.set_major_formatter(ScalarFormatter())
-    low.xaxis.set_minor_formatter(NullFormatter())

@@ -49,7 +49,7 @@ def _bifurcation_page(c: ModelContent) -> Figure:
     if c.both_field is not None:  # where the two shadings blend: named in the legend, hatched
         ax.contourf(*c.both_field, levels=[0.5, 1.5], colors="none", hatches=["xx"])
         handles.append(Patch(facecolor="none", edgecolor="0.3", hatch="xx",
-                             label=f"1/{sets.ns[0]} and 1/{sets.ns[1]} both exist "
+                             label=f"1/{sets.ns[0]} and 1/{sets.ns[1]} both exist\n"
                                    "(overlap of the shadings: coexisting orbits)"))
     for kind in ("saddle-node", "period-doubling", "secondary-grazing"):
         if any(curve.kind == kind for n in sets.ns for curve in sets.curves_of(n)):
@@ -66,7 +66,9 @@ def _bifurcation_page(c: ModelContent) -> Figure:
     ax.set_title(f"Model bifurcation sets at the fitted zeta = {c.zeta:.3g} ({c.zeta_source}), "
                  f"e = {c.e:.3g}, with the measured thresholds\n(region edges smoothed within "
                  f"one cell of the {sets.omega.size} x {sets.F.size} grid)")
-    ax.legend(handles=[*handles, graze, on, off], fontsize=8, loc="upper left")
+    # outside the plot, right of it: the regions (the hatched coexistence first) stay visible
+    ax.legend(handles=[*handles, graze, on, off], fontsize=8.5, loc="upper left",
+              bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax.grid(alpha=0.3)
     return fig
 

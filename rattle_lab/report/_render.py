@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 
 from rattle_lab._atomic import atomic_path
 from rattle_lab.exceptions import ParameterError
-from . import _pages, _pages_acoustics, _pages_model
+from . import _pages, _pages_acoustics, _pages_model, _pages_shocks
 from ._common import text_pages, wrapped
 from ._content_types import ReportContent
 
@@ -20,6 +20,7 @@ from ._content_types import ReportContent
 #: section's content (:mod:`._content_types`) and returns its figures; it only draws.
 PAGES: tuple[tuple[str, Callable[[Any], list[Figure]]], ...] = (
     ("rig and calibration", _pages.rig_page),
+    ("shocks", _pages_shocks.shock_pages),
     ("thresholds", _pages.threshold_page),
     ("impact patterns", _pages.pattern_page),
     ("waveforms", _pages.waveform_page),
@@ -86,7 +87,7 @@ def render_pages(content: ReportContent) -> tuple[list[tuple[str, Figure]], tupl
     lines += wrapped("  included: summary, " + ", ".join(sections))
     for name, why in content.missing.items():
         lines += wrapped(f"  missing: {name}: {why}")
-    summary = text_pages("rattle_lab report: fitted gap, zeta, f_s, e and SPL law", lines)
+    summary = text_pages(content.title, lines)
     all_pages = [*(("summary", fig) for fig in summary), *pages]
     n = len(all_pages)
     for i, (name, fig) in enumerate(all_pages, start=1):

@@ -17,7 +17,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
-from rattle_lab._resources import find_resource
+from rattle_lab._resources import find_resource, not_found_hint
 from rattle_lab.exceptions import ParameterError
 
 __all__ = ["SceneError", "Scene", "PlateSpec", "ModelSpec", "AcousticSpec", "SensorSpec",
@@ -495,7 +495,11 @@ def load_scene(scene: str | os.PathLike[str]) -> Scene:
     else:
         path = Path(scene)
         if not path.exists():  # a scene shipped with rattle_lab, by name
-            path = find_resource("scenes", str(scene)) or path
+            found = find_resource("scenes", str(scene))
+            if found is None:
+                raise SceneError(f"{scene}: cannot read the scene: "
+                                 f"{not_found_hint('scenes', scene)}")
+            path = found
         source = str(path)
         try:
             text = path.read_text("utf-8")

@@ -21,7 +21,7 @@ from ._cache import (
                      write_cached,
 )
 from ._catalogue import open_stored_record, read_catalogue
-from ._index import REINGEST_ADVICE
+from ._index import REINGEST_ADVICE, reingest_advice
 from ._ingest import MappingIgnoredWarning, ingest
 from ._ingest_types import CATALOGUE_COLUMNS, IngestReport, InputResult, file_hash, input_key
 from ._layout import (
@@ -42,4 +42,5 @@ __all__ = ["ingest", "read_catalogue", "open_stored_record", "IngestReport", "In
            "store_lock", "has_path", "read_results", "write_results", "StoredResults",
            "CACHE_GROUP", "read_cache_keys", "record_cache_keys", "read_cached", "write_cached",
            "output_digest", "input_hashes", "provenance_log", "verify_store",
-           "check_linked_inputs", "Mismatch", "record_attrs_count", "REINGEST_ADVICE"]
+           "check_linked_inputs", "Mismatch", "record_attrs_count", "REINGEST_ADVICE",
+           "reingest_advice"]

@@ -17,7 +17,7 @@ from rattle_lab.records._model import Record
 from rattle_lab.records._readers.native import load_group
 from rattle_lab.records._schema import validate_tree
 
-from ._index import REINGEST_ADVICE, _link_problem, _open_store, _read_columns_from, _text
+from ._index import _link_problem, _open_store, _read_columns_from, _text, reingest_advice
 from ._ingest_types import CATALOGUE_COLUMNS
 
 if TYPE_CHECKING:  # pandas is imported when a catalogue is built, not at import time
@@ -108,7 +108,9 @@ def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
             problem = _link_problem(group.attrs)
             if problem is not None:
                 raise StoreError(f"{store}: /records/{input_key}: attribute 'ingest_input_path': "
-                                 f"{problem}; {REINGEST_ADVICE}")
+                                 f"{problem}; " + reingest_advice(
+                                     _text(group.attrs["ingest_input_path"]), store,
+                                     "missing" in problem))
     with link_policy(LinkPolicy(trusted=True)):  # the store's own links, to ingested inputs
         raw = load_group(store, f"/records/{input_key}")
     label = f"{store}: /records/{input_key}"

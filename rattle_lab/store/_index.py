@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -56,11 +58,11 @@ def _read_columns(fh: h5py.File, store: Path) -> dict[str, np.ndarray]:
     return out
 
 
-def _read_index(store: Path) -> _StoreIndex:
+def _read_index(store: Path, *, writing: bool = False) -> _StoreIndex:
     index = _StoreIndex()
     if not store.exists():
         return index
-    with _open_store(store) as fh:
+    with open_store(store, writing=writing) as fh:
         records = fh.get("records", {})
         for key in records:
             attrs = records[key].attrs
@@ -79,9 +81,22 @@ def _read_index(store: Path) -> _StoreIndex:
 _text = text
 
 
-#: What a message about a changed or moved input advises.
+#: What a message about a changed or moved input advises (the general form; messages that
+#: know the paths give :func:`reingest_advice`).
 REINGEST_ADVICE = ("ingest it again to re-link it (`rattle-lab ingest --replace FILE -o STORE`; "
                    "or ingest with --copy for a store that stands alone)")
+
+
+def reingest_advice(input_path: str | os.PathLike[str], store: str | os.PathLike[str],
+                    missing: bool = False) -> str:
+    """The re-ingest command for one input of one store, with their paths.
+
+    >>> reingest_advice("run2.h5", "store.h5").split(": ", 1)[1]
+    '`rattle-lab ingest --replace run2.h5 -o store.h5` (or with --copy, for a store that stands alone)'
+    """
+    where = " (at the file's new path, if it moved)" if missing else ""
+    return (f"ingest it again to re-link it: `rattle-lab ingest --replace {input_path} -o "
+            f"{store}`{where} (or with --copy, for a store that stands alone)")
 
 
 def _link_problem(attrs: Any) -> str | None:

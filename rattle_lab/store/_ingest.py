@@ -236,7 +236,7 @@ def _ingest_locked(store: Path, items: list[_Input], spec: MappingSpec | None, *
                    n_chunk_samples: int, on_warning: Callable[[Finding], None] | None,
                    replace: bool, allow_links: bool) -> IngestReport:
     """:func:`ingest` once the store's lock is held: read the store, add, write."""
-    index = _read_index(store)
+    index = _read_index(store, writing=True)
 
     def key_of(item: _Input) -> str:
         return input_key(item.digest(), spec.sha256 if (item.foreign and spec) else None)

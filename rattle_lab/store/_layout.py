@@ -52,14 +52,48 @@ def text(value: Any) -> str:
     return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
 
 
-def check_store(fh: h5py.File, store: Path) -> int:
+#: File suffixes of the records ``rattle-lab ingest`` reads (not stores).
+RECORD_SUFFIXES = (".lvm", ".tdms", ".uff", ".unv", ".csv", ".txt")
+
+
+def not_a_store(store: Path, why: str, *, writing: bool = False,
+                record: bool = False) -> StoreError:
+    """The error for a file that is not an ingest store: what is wrong and what to do.
+
+    ``writing``: the command would write a new store there (ingest), and will not;
+    ``record``: the file is a record (``ingest`` reads it), given where a store belongs.
+    """
+    if writing:
+        what = ("a readable HDF5 ingest store" if why.startswith("not an HDF5")
+                else "a rattle_lab ingest store")
+        return StoreError(f"{store}: exists and is not {what} ({why}); "
+                          "refusing to overwrite it: give another output name, or move that "
+                          "file away")
+    if record or store.suffix.lower() in RECORD_SUFFIXES:
+        from rattle_lab._resources import resource_names
+
+        suffix = store.suffix.lower().lstrip(".")
+        maps = [m for m in resource_names("mappings") if suffix and m.endswith("_" + suffix)]
+        mapping = (f" --mapping {maps[0] if len(maps) == 1 else 'NAME'}" if maps else "")
+        shipped = (f"; shipped mappings for .{suffix}: {', '.join(maps)}" if len(maps) > 1
+                   else "")
+        return StoreError(f"{store}: is a record, not an ingest store: ingest it first "
+                          f"(`rattle-lab ingest {store}{mapping} -o store.h5`{shipped}), then "
+                          "give store.h5")
+    return StoreError(f"{store}: is not a rattle_lab ingest store ({why}): it is damaged or "
+                      "another kind of file; give the store that `rattle-lab ingest` wrote, "
+                      "or ingest the records again into a new one")
+
+
+def check_store(fh: h5py.File, store: Path, *, writing: bool = False) -> int:
     """The layout version of an open store; StoreError if it is not a store this code reads."""
     fmt = fh.attrs.get("store_format")
     if isinstance(fmt, bytes):
         fmt = fmt.decode("utf-8", "replace")
     if fmt != STORE_FORMAT:
-        raise StoreError(f"{store}: exists and is not a rattle_lab ingest store (root attribute "
-                         f"'store_format' is {fmt!r}); refusing to overwrite it")
+        record = "schema" in fh.attrs and "runs" in fh
+        raise not_a_store(store, f"root attribute 'store_format' is {fmt!r}", writing=writing,
+                          record=record)
     version = fh.attrs.get("store_version")
     shown = version.item() if isinstance(version, np.generic) else version
     if not isinstance(shown, int) or shown not in READABLE_VERSIONS:
@@ -68,9 +102,11 @@ def check_store(fh: h5py.File, store: Path) -> int:
     return shown
 
 
-def open_store(store: str | os.PathLike[str], *, check: bool = True) -> h5py.File:
+def open_store(store: str | os.PathLike[str], *, check: bool = True,
+               writing: bool = False) -> h5py.File:
     """Open an existing store read-only (``check=False``: any HDF5 file, for callers that look
-    for their own group first and check the store after).
+    for their own group first and check the store after; ``writing``: the caller would write
+    a new store in its place, which the error then refuses).
 
     Raises
     ------
@@ -85,11 +121,11 @@ def open_store(store: str | os.PathLike[str], *, check: bool = True) -> h5py.Fil
     try:
         fh = h5py.File(store, "r")
     except OSError as exc:
-        raise StoreError(f"{store}: exists and is not a readable HDF5 ingest store; refusing to "
-                         f"overwrite it ({' '.join(str(exc).split())})") from exc
+        raise not_a_store(store, "not an HDF5 file: " + " ".join(str(exc).split()),
+                          writing=writing) from exc
     try:
         if check:
-            check_store(fh, store)
+            check_store(fh, store, writing=writing)
     except BaseException:
         fh.close()
         raise
@@ -196,7 +232,8 @@ def edit_store(store: str | os.PathLike[str], *, create: str | None = None,
     with store_lock(store):
         exists = store.exists()
         if exists:
-            open_store(store).close()  # a StoreError for anything but a readable store
+            # a StoreError for anything but a readable store
+            open_store(store, writing=create is not None).close()
         elif create is None:
             raise StoreError(f"{store}: no such store")
         try:

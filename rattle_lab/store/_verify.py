@@ -19,7 +19,7 @@ from typing import Literal
 
 from rattle_lab.records._errors import StoreError
 
-from ._index import REINGEST_ADVICE
+from ._index import reingest_advice
 from ._ingest_types import file_hash
 from ._layout import record_attrs
 
@@ -119,4 +119,7 @@ def check_linked_inputs(store: str | os.PathLike[str], keys: Iterable[str] | Non
     bad = verify_store(store, keys, linked_only=True)
     if bad:
         more = f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
-        raise StoreError(f"{store}: {bad[0].message}{more}; {REINGEST_ADVICE}")
+        first = bad[0]
+        source = str(record_attrs(store)[first.input_key].get("ingest_input_path", first.path))
+        advice = reingest_advice(source, store, first.problem == "missing" and first.path == source)
+        raise StoreError(f"{store}: {bad[0].message}{more}; {advice}")

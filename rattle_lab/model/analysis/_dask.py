@@ -136,11 +136,41 @@ def _run_pool(func: Callable[[T], Any], chunks: Sequence[T], workers: int, desc:
 
     warm_cache()  # load the compiled kernels here, so that forked workers inherit them
     method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-    with ProcessPoolExecutor(max_workers=min(workers, len(chunks)),
-                             mp_context=mp.get_context(method)) as pool:
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(chunks)),
+                               mp_context=mp.get_context(method), initializer=_worker_signals)
+    try:
         futures = {pool.submit(func, c): i for i, c in enumerate(chunks)}
         results: list[Any] = [None] * len(chunks)
         for fut in progress(as_completed(futures), total=len(futures), desc=desc, quiet=quiet,
                             unit="chunk"):
             results[futures[fut]] = fut.result()
+    except BaseException:
+        # Ctrl-C, SIGTERM or a failed chunk: drop the pending chunks and stop the workers
+        # now (they hold no output; a chunk is pure computation) instead of waiting for
+        # every queued chunk to finish, as leaving the pool's `with` block would.
+        _stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)
     return results
+
+
+def _worker_signals() -> None:
+    """In a pool worker: Ctrl-C is the parent's to handle (it stops the pool); SIGTERM ends it."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _stop_pool(pool: Any) -> None:
+    """Cancel a pool's pending work and end its worker processes at once."""
+    processes = list(getattr(pool, "_processes", {}).values())  # CPython's executor
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in processes:
+        proc.join(timeout=1.0)
+        if proc.is_alive():
+            proc.kill()
+            proc.join(timeout=1.0)

@@ -17,7 +17,7 @@ import importlib.util
 import signal
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from types import ModuleType
 
 from . import _kernel as python_kernel
@@ -47,7 +47,7 @@ def _load_jit() -> ModuleType:
 
 jit_kernel = _load_jit()
 
-__all__ = ["python_kernel", "jit_kernel", "signals_deferred"]
+__all__ = ["python_kernel", "jit_kernel", "signals_deferred", "cold_kernels", "warm_cache"]
 
 _DEFERRED = (signal.SIGINT, signal.SIGTERM)
 
@@ -82,23 +82,53 @@ def signals_deferred() -> Iterator[None]:
             signal.raise_signal(came[0])
 
 
-def warm_cache() -> float:
+#: The compiled kernels :func:`warm_cache` compiles, in its order.
+KERNELS = ("run", "run_packed", "run_pieces")
+
+
+def cold_kernels() -> list[str]:
+    """The kernels of :data:`KERNELS` that numba's on-disk cache does not hold (or holds for
+    another version of their source): a call to one of them compiles it first.
+
+    Empty where it cannot tell (a numba without this cache layout): no notice is better
+    than a wrong one.
+    """
+    cold = []
+    for name in KERNELS:
+        try:
+            index = getattr(jit_kernel, name)._cache._cache_file._load_index()
+        except Exception:  # noqa: BLE001 - numba internals: unknown means "do not say"
+            return []
+        if not index:
+            cold.append(name)
+    return cold
+
+
+def warm_cache(on_kernel: Callable[[int, str], None] | None = None) -> float:
     """Compile the kernels' signatures now and write numba's on-disk cache.
 
     Run once after installing (``python -m rattle_lab.model.sdf._compiled``), so that
     the first simulation of a fresh install loads the cache (about 1-2 s) instead
-    of compiling (about 20 s).  Returns the seconds it took.
+    of compiling (about 20 s).  ``on_kernel(i, name)`` is called before each kernel of
+    :data:`KERNELS` (a progress line).  Returns the seconds it took.
     """
     import time
 
-    t0 = time.perf_counter()
-    # each kernel has one signature (floats, booleans, ints, arrays): one call compiles it
-    jit_kernel.run(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
-    # what simulate() calls (run, its result packed in one buffer)
-    jit_kernel.run_packed(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
-    # the ramp replays' piece runner (rattle_lab.model.sdf._simulate.simulate_pieces)
     import numpy as np
 
+    def step(i: int) -> None:
+        if on_kernel is not None:
+            on_kernel(i, KERNELS[i])
+
+    t0 = time.perf_counter()
+    # each kernel has one signature (floats, booleans, ints, arrays): one call compiles it
+    step(0)
+    jit_kernel.run(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
+    # what simulate() calls (run, its result packed in one buffer)
+    step(1)
+    jit_kernel.run_packed(0.2, 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False, 1.0, True, True, 1000)
+    # the ramp replays' piece runner (rattle_lab.model.sdf._simulate.simulate_pieces)
+    step(2)
     jit_kernel.run_pieces(np.array([0.2]), 1.1, 0.05, 0.6, 0.0, 0.0, 0.0, 0.0, False,
                           np.array([1.0]), -1.0, 4, -1.0, np.ones(1, dtype=np.bool_), np.nan)
     return time.perf_counter() - t0

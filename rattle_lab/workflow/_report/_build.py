@@ -11,12 +11,13 @@ from matplotlib.figure import Figure
 from rattle_lab._version import __version__
 from rattle_lab.report import PAGES, ReportContent, ReportResult, render_pages, write_pdf
 from rattle_lab.report._render import pdf_output
-from . import _content, _content_model, _content_runs
+from . import _content, _content_model, _content_runs, _shocks
 from ._content import build_content
 from ._gather import ReportData, gather
 
 _BUILDERS: dict[str, Callable[..., Any]] = {
     "rig and calibration": _content.rig_content,
+    "shocks": _shocks.shock_content,
     "thresholds": _content.threshold_content,
     "impact patterns": _content.pattern_content,
     "waveforms": _content_runs.waveform_content,

@@ -72,8 +72,10 @@ def threshold_content(data: ReportData) -> ThresholdContent:
     if f.size == 0 or not (np.isfinite(up).any() or np.isfinite(down).any()):
         raise Missing("no ramp thresholds in /results/thresholds (needs amplitude_ramp_up/down "
                       "runs with a base accelerometer)")
-    g = fits_of(data).grazing
+    fits = fits_of(data)
+    g = fits.grazing
     curve: GrazingCurve | None = None
+    corrected: GrazingCurve | None = None
     missing: tuple[tuple[str, str], ...] = ()
     if g is not None:
         lo_f = min(f.min(), pval(g, "f_s_hz", f.min())) - 2.0
@@ -83,16 +85,70 @@ def threshold_content(data: ReportData) -> ThresholdContent:
         out = np.array([np.nan if x is None else x for x in g.outliers_hz], dtype=float)
         sel = np.isin(f, out)
         band = (y - half, y + half) if np.isfinite(half).any() else None
+        at_f = grazing_band_ms2(f, g)[0]
         curve = GrazingCurve(grid, y, band, band_quantile(g)[1], pval(g, "gap_m"),
                              pval(g, "f_s_hz"), pval(g, "zeta"),
-                             f[sel] if out.size else None, up[sel] if out.size else None)
+                             f[sel] if out.size else None, up[sel] if out.size else None,
+                             residual_freq_hz=f, residual_ms2=up - at_f)
+        corrected = _corrected_curve(fits, g, grid, f, at_f)
     else:
         missing = (("eq. 3.4 fit curve", not_fitted(data, "grazing", "grazing fit absent")),)
     hyst = threshold_hysteresis(up, down)
     width = 0.6 * (float(np.min(np.diff(f))) if f.size > 1 else 1.0)
+    both = np.isfinite(up) & np.isfinite(down)
     negative = np.isin(f, [fx for fx, _ in report_negative_hysteresis(data)])
-    return ThresholdContent(f, up, down, hyst, negative,
-                            np.isfinite(up) & np.isfinite(down), width, curve, missing)
+    return ThresholdContent(f, up, down, hyst, negative, both, width,
+                            curve, missing, corrected, hysteresis_segments(f, both))
+
+
+def hysteresis_segments(freq_hz: np.ndarray, both: np.ndarray) -> tuple[tuple[int, int], ...]:
+    """Runs of neighbouring frequencies (on the measured grid) where both thresholds exist.
+
+    Index ranges ``(i, j)`` into ``freq_hz[both]`` (``j`` exclusive).  Two measured
+    frequencies are neighbours when no frequency of the grid lies between them and their
+    spacing is at most 1.5 times the grid's smallest step: a frequency without a run, or
+    without one of the two thresholds, breaks the shading.
+
+    >>> f = np.array([95.0, 96.0, 97.0, 98.0, 100.0])
+    >>> hysteresis_segments(f, np.ones(5, bool))
+    ((0, 4), (4, 5))
+    >>> hysteresis_segments(f, np.array([True, True, False, True, True]))
+    ((0, 2), (2, 3), (3, 4))
+    """
+    f_all = np.unique(freq_hz[np.isfinite(freq_hz)])
+    step = float(np.min(np.diff(f_all))) if f_all.size > 1 else np.inf
+    idx = np.flatnonzero(both)
+    segments: list[tuple[int, int]] = []
+    start = 0
+    for k in range(1, idx.size + 1):
+        if k < idx.size:
+            a, b = freq_hz[idx[k - 1]], freq_hz[idx[k]]
+            between = (f_all > a) & (f_all < b)
+            if b - a <= 1.5 * step and not between.any() and idx[k] == idx[k - 1] + 1:
+                continue
+        segments.append((start, k))
+        start = k
+    return tuple(segments)
+
+
+def _corrected_curve(fits: Fits, g: GrazingSummary, grid: np.ndarray, f: np.ndarray,
+                     at_f: np.ndarray) -> GrazingCurve | None:
+    """Eq. (3.4) at the ramp-corrected gap, f_s and zeta (the quasi-static grazing onset)."""
+    import dataclasses
+
+    rg = fits.grazing_ramp
+    if rg is None or any(getattr(rg, n).value is None for n in ("gap_m", "f_s_hz", "zeta")):
+        return None
+    params = {n: dataclasses.replace(getattr(g, n), value=getattr(rg, n).value, stderr=None)
+              for n in ("gap_m", "f_s_hz", "zeta")}
+    gc = dataclasses.replace(g, **params)
+    y = grazing_band_ms2(grid, gc)[0]
+    y_f = grazing_band_ms2(f, gc)[0]
+    gap, f_s, zeta = (float(getattr(rg, n).value or np.nan) for n in ("gap_m", "f_s_hz", "zeta"))
+    return GrazingCurve(grid, y, None, None, gap, f_s, zeta, None, None, residual_freq_hz=f,
+                        residual_ms2=y_f - at_f,
+                        label="eq. (3.4) at the ramp-corrected gap, f_s, zeta (quasi-static "
+                              "onset; the ramps' onsets lag it)")
 
 
 # --- impact patterns -------------------------------------------------------------------------
@@ -164,29 +220,46 @@ def spl_content(data: ReportData) -> SplContent:
                       f"({not_fitted(data, 'spl_law_first', 'not fitted')})")
     v_all: dict[str, list[np.ndarray]] = {"first": [], "max": [], "rms": []}
     p_all: dict[str, list[np.ndarray]] = {"first": [], "max": [], "rms": []}
+    l_all: dict[str, list[np.ndarray]] = {"first": [], "max": [], "rms": []}
     for r in data.results.runs.values():
         if r.get("status") != "ok" or "v_in_m_s" not in r or "p_first_pa" not in r:
             continue
         v = np.abs(np.asarray(r["v_in_m_s"], dtype=float))
+        later = _later_max(r, v.shape)
         for n, key in (("first", "p_first_pa"), ("max", "p_max_pa"), ("rms", "p_rms_pa")):
             if key in r and np.asarray(r[key]).shape == v.shape:
                 v_all[n].append(v)
                 p_all[n].append(np.abs(np.asarray(r[key], dtype=float)))
+                l_all[n].append(later)
     curves = []
     for n in ("rms", "max", "first"):  # the first-peak law (the thesis's) drawn on top
         law = laws[n]
         if law is None or not v_all[n]:
             continue
         v, p = np.concatenate(v_all[n]), np.concatenate(p_all[n])
+        later = np.concatenate(l_all[n])
         ok = np.isfinite(v) & np.isfinite(p) & (v > 0) & (p > 0)
-        v, p = v[ok], p[ok]
+        v, p, later = v[ok], p[ok], later[ok]
         slope, icpt = _num(law.linear.slope), _num(law.linear.intercept)
         grid = np.linspace(0.0, float(v.max()) * 1.05 if v.size else 1.0, 100)
         line = slope * grid + icpt
         half = linear_law_band(v, p, slope, icpt, grid)
         curves.append(SplCurve(n, v, p, slope, icpt, _num(law.linear.r2), grid, line,
-                               None if half is None else (line - half, line + half)))
+                               None if half is None else (line - half, line + half),
+                               later_max=later))
     return SplContent(tuple(curves))
+
+
+def _later_max(r: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """Per impact: True where the largest sound peak comes after the first one."""
+    if "t_first_s" not in r or "t_max_s" not in r:
+        return np.zeros(shape, dtype=bool)
+    t1 = np.asarray(r["t_first_s"], dtype=float)
+    tm = np.asarray(r["t_max_s"], dtype=float)
+    if t1.shape != shape or tm.shape != shape:
+        return np.zeros(shape, dtype=bool)
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(t1) & np.isfinite(tm) & (tm > t1)
 
 
 # --- the whole report ------------------------------------------------------------------------
@@ -211,7 +284,17 @@ def build_content(data: ReportData, builders: tuple[tuple[str, Callable[..., Any
     """
     missing = dict(data.missing)
     sections: list[tuple[str, Any]] = []
+    shocks_only = data.summary is not None and data.summary.shocks_only
+    transients = bool(data.summary is not None and data.summary.transients)
+    if shocks_only:
+        missing["rattle sections"] = ("transient records only (single shocks): the thresholds, "
+                                      "impact patterns, waveforms, SPL law, acoustics and model "
+                                      "need shaker runs")
     for name, build in builders:
+        if shocks_only and name not in ("rig and calibration", "shocks"):
+            continue
+        if name == "shocks" and not transients:
+            continue  # no transient run: nothing to say
         if name == "model predictions" and not model:
             missing[name] = "not requested (model=False)"
             continue
@@ -222,8 +305,10 @@ def build_content(data: ReportData, builders: tuple[tuple[str, Callable[..., Any
             continue
         sections.append((name, content))
         missing.update(getattr(content, "missing", ()))
+    title = ("rattle_lab report: transient records (shocks)" if shocks_only
+             else "rattle_lab report: fitted gap, zeta, f_s, e and SPL law")
     return ReportContent(data.store.name, tuple(summary_lines(data, version)),
-                         tuple(sections), missing)
+                         tuple(sections), missing, title)
 
 
 __all__ = ["Missing", "build_content", "report_negative_hysteresis"]

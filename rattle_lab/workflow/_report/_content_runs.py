@@ -49,8 +49,8 @@ def _trace(quantity: str, t: np.ndarray, x: np.ndarray, t_imp: np.ndarray,
 
 def waveform_content(data: ReportData, *, n_examples: int = 2, n_cycles: int = 5
                      ) -> WaveformContent:
-    """Windows of ``n_cycles`` forcing periods around the middle impact of up to ``n_examples``
-    runs with impacts (read from the store)."""
+    """Windows of ``n_cycles`` forcing periods centred on the middle impact of up to
+    ``n_examples`` runs with impacts (read from the store)."""
     from rattle_lab.store import open_stored_record
 
     require_results(data)
@@ -66,7 +66,9 @@ def waveform_content(data: ReportData, *, n_examples: int = 2, n_cycles: int = 5
     for (key, run_id), r in chosen:
         f = float(r["freq_hz"])
         t_imp = np.asarray(r.get("t_s", []), dtype=float)
-        t_mid = float(np.median(t_imp))
+        # centred on the impact nearest the run's middle: a window of n_cycles periods then
+        # ends half a period from the impacts of a 1/1 pattern, never on one
+        t_mid = float(t_imp[np.argmin(np.abs(t_imp - np.median(t_imp)))])
         traces: list[Trace | None] = []
         with open_stored_record(data.store, key) as record:
             by_q: dict[str, Any] = {}

@@ -8,6 +8,7 @@ the report as given.
 
 from __future__ import annotations
 
+import math
 import textwrap
 from collections.abc import Mapping
 from typing import Any
@@ -20,7 +21,7 @@ from rattle_lab.fit import student_t_ci
 from rattle_lab.report._common import TEXT_WIDTH, fmt, wrapped
 from ._gather import ReportData
 
-_COLS = (("quantity", 34), ("value", 11), ("std. error", 11), ("95 % CI", 25), ("unit", 0))
+_COLS = (("quantity", 34), ("value", 11), ("std. error", 11), ("95 % CI", 27), ("unit", 0))
 
 
 def _fits(data: ReportData) -> Fits:
@@ -31,16 +32,48 @@ def _grazing(data: ReportData) -> GrazingSummary | None:
     return _fits(data).grazing
 
 
+def _finite(x: Any) -> float | None:
+    try:
+        xf = float(x)
+    except (TypeError, ValueError):
+        return None
+    return xf if math.isfinite(xf) else None
+
+
+def _digits(value: Any, ci: tuple[Any, Any] | None, stderr: Any) -> int:
+    """Significant digits that show the interval's half width (or the error) to two digits.
+
+    At least 4; e.g. ``96.0123 +/- 0.0051`` needs 6, so that the bounds differ.
+    """
+    vals = [abs(v) for v in (_finite(value), *(ci or ())) if _finite(v) is not None]
+    if ci is not None and _finite(ci[0]) is not None and _finite(ci[1]) is not None:
+        spread = abs(float(ci[1]) - float(ci[0])) / 2
+    else:
+        spread = abs(_finite(stderr) or 0.0)
+    vals = [abs(float(v)) for v in vals if _finite(v) is not None]
+    if not vals or spread <= 0 or max(vals) == 0:
+        return 4
+    return int(min(10, max(4, math.floor(math.log10(max(vals))) -
+                               math.floor(math.log10(spread)) + 2)))
+
+
 def _row(quantity: str, value: Any = None, stderr: Any = None,
          ci: tuple[Any, Any] | None = None, unit: str = "", note: str = "",
          scale: float = 1.0) -> list[str]:
-    """One aligned row of the parameter table (and its note, wrapped, below it)."""
+    """One aligned row of the parameter table (and its note, wrapped, below it).
+
+    Value and interval bounds carry the digits their interval needs (:func:`_digits`);
+    the standard error two or three significant digits.
+    """
     def sc(x: Any) -> Any:
         return None if x is None else float(x) * scale
 
-    ci_txt = "-" if ci is None or None in ci else f"[{fmt(sc(ci[0]))}, {fmt(sc(ci[1]))}]"
-    err_txt = stderr if isinstance(stderr, str) else fmt(sc(stderr))
-    cells = (quantity, fmt(sc(value), ".5g"), err_txt, ci_txt, unit)
+    ci_s = None if ci is None or None in ci else (sc(ci[0]), sc(ci[1]))
+    err_s = None if isinstance(stderr, str) else sc(stderr)
+    d = f".{_digits(sc(value), ci_s, err_s)}g"
+    ci_txt = "-" if ci_s is None else f"[{fmt(ci_s[0], d)}, {fmt(ci_s[1], d)}]"
+    err_txt = stderr if isinstance(stderr, str) else fmt(err_s, ".3g")
+    cells = (quantity, fmt(sc(value), d), err_txt, ci_txt, unit)
     line = "  " + " ".join(c.ljust(w) if w else c for c, (_, w) in zip(cells, _COLS))
     out = [line.rstrip()]
     if note:
@@ -55,36 +88,103 @@ def _not_fitted(data: ReportData, key: str) -> str:
     return " ".join(data.summary.not_fitted.get(key, "not fitted").split())
 
 
+def _t_stderr(ci: tuple[Any, Any], dof: int) -> float | None:
+    """The standard error behind a Student t 95 % interval with ``dof`` degrees of freedom."""
+    from scipy import stats
+
+    lo, hi = _finite(ci[0]), _finite(ci[1])
+    if lo is None or hi is None or dof < 1:
+        return None
+    return (hi - lo) / (2.0 * float(stats.t.ppf(0.975, dof)))
+
+
+_GRAZING_NAMES = {"gap_m": ("gap h", 1e3, "mm"), "f_s_hz": ("f_s (modal frequency)", 1.0, "Hz"),
+                  "zeta": ("zeta (damping ratio)", 1.0, "1"),
+                  "participation": ("participation Q1/Q2", 1.0, "1")}
+
+
+def _recommended_grazing(fits: Fits) -> list[str]:
+    """Gap, zeta, f_s as recommended: ramp-corrected where that fit exists, else eq. (3.4)."""
+    g, rg, damp = fits.grazing, fits.grazing_ramp, fits.damping_ramp
+    lines: list[str] = []
+    if g is None:
+        return lines
+    for key in ("gap_m", "zeta", "f_s_hz", "participation"):
+        label, scale, unit = _GRAZING_NAMES[key]
+        p = g.parameters()[key]
+        if key == "participation":
+            if not p.vary:
+                lines += _row(label, p.value, "fixed", None, unit, scale=scale)
+            else:
+                lines += _row(label, p.value, p.stderr, (p.ci_low, p.ci_high), unit, scale=scale)
+            continue
+        if rg is not None and getattr(rg, key).value is not None:
+            est = getattr(rg, key)
+            ci = (est.ci_low, est.ci_high)
+            if None in ci:
+                ci = student_t_ci(est.value, est.stderr, max(len(rg.lag_rel) - 3, 0))
+            note = "; ".join(est.notes)
+            lines += _row(f"{label.split(' (')[0]} (ramp-corrected)" if key != "f_s_hz"
+                          else "f_s, ramp-corrected", est.value, est.stderr, ci, unit,
+                          note, scale=scale)
+        elif key == "zeta" and damp is not None and damp.value is not None:
+            ci = (damp.ci_low, damp.ci_high)
+            if None in ci:
+                ci = student_t_ci(damp.value, damp.stderr, damp.n - 1)
+            lines += _row("zeta (ramp replay)", damp.value, damp.stderr, ci, unit,
+                          "; ".join(damp.notes), scale=scale)
+        elif p.vary:
+            lines += _row(f"{label}, eq. (3.4)", p.value, p.stderr, (p.ci_low, p.ci_high), unit,
+                          p.bias_note, scale=scale)
+        else:
+            lines += _row(f"{label}, eq. (3.4)", p.value, "fixed", None, unit, scale=scale)
+    return lines
+
+
+def _eq34_lines(g: GrazingSummary, keys: tuple[str, ...]) -> list[str]:
+    """The eq. (3.4) fit's ``keys`` (of gap, zeta, f_s) with their bias notes, labelled."""
+    lines: list[str] = []
+    for key in keys:
+        label, scale, unit = _GRAZING_NAMES[key]
+        p = g.parameters()[key]
+        name = f"{label.split(' (')[0]}, eq. (3.4)"
+        if not p.vary:
+            lines += _row(name, p.value, "fixed", None, unit, scale=scale)
+            continue
+        lines += _row(name, p.value, p.stderr, (p.ci_low, p.ci_high), unit,
+                      ("BIASED: " + p.bias_note) if p.bias_note else "", scale=scale)
+    notes = list(g.unidentifiable)
+    if g.outliers_hz:
+        notes.append("thresholds left out as outliers at " + ", ".join(
+            f"{fmt(f)} Hz" for f in g.outliers_hz))
+    for note in notes:
+        lines += textwrap.wrap("note: " + note, TEXT_WIDTH, initial_indent="      ",
+                               subsequent_indent="      ")
+    return lines
+
+
 def parameter_lines(data: ReportData) -> list[str]:
-    """The table of fitted parameters: value, standard error, 95 % interval, unit."""
+    """The table of fitted parameters: value, standard error, 95 % interval, unit.
+
+    The recommended value of each quantity comes first (gap and zeta ramp-corrected where
+    that fit exists, with its notes); the eq. (3.4) fit of the measured onsets follows,
+    labelled as such, with the biases the fit names.
+    """
     header = "  " + " ".join(n.ljust(w) if w else n for n, w in _COLS)
     lines = [header, "  " + "-" * (len(header) - 2)]
     fits = _fits(data)
     g = _grazing(data)
-    names = {"gap_m": ("gap h", 1e3, "mm"), "f_s_hz": ("f_s (modal frequency)", 1.0, "Hz"),
-             "zeta": ("zeta (damping ratio)", 1.0, "1"),
-             "participation": ("participation Q1/Q2", 1.0, "1")}
     if g is not None:
-        for key, (label, scale, unit) in names.items():
-            p = g.parameters()[key]
-            if not p.vary:
-                lines += _row(label, p.value, "fixed", None, unit, scale=scale)
-                continue
-            lines += _row(label, p.value, p.stderr, (p.ci_low, p.ci_high), unit, scale=scale)
-        notes = list(g.unidentifiable)
-        if g.outliers_hz:
-            notes.append("thresholds left out as outliers at " + ", ".join(
-                f"{fmt(f)} Hz" for f in g.outliers_hz))
-        for note in notes:
-            lines += textwrap.wrap("note: " + note, TEXT_WIDTH, initial_indent="      ",
-                                   subsequent_indent="      ")
+        lines += _recommended_grazing(fits)
     else:
         lines += _row("gap h, f_s, zeta", note="not fitted: " + _not_fitted(data, "grazing"))
     not_fitted = data.summary.not_fitted if data.summary is not None else {}
-    for key, label, what in (("damping_ramp", "zeta (ramp model)", "upward ramps"),
+    for key, label, what in (("damping_ramp", "zeta (ramp replay)", "upward ramps"),
                              ("restitution_ratio", "e (velocity ratios)", "impacts"),
                              ("restitution_down", "e (disappearance thresholds)", "thresholds")):
         est: Estimate | None = getattr(fits, key)
+        if key == "damping_ramp" and (fits.grazing_ramp is None and est is not None):
+            continue  # already the recommended zeta above
         if est is None:
             if key != "damping_ramp" or key in not_fitted:  # an optional fit: only if tried
                 lines += _row(label, note="not fitted: " + _not_fitted(data, key))
@@ -111,16 +211,31 @@ def parameter_lines(data: ReportData) -> list[str]:
                           note="not fitted: " + _not_fitted(data, f"spl_law_{name}"))
             continue
         lin, db = law.linear, law.db
-        lines += _row(f"SPL {label}: slope", lin.slope, None,
-                      (lin.slope_ci_low, lin.slope_ci_high), "Pa/(m/s)",
+        slope_ci = (lin.slope_ci_low, lin.slope_ci_high)
+        icpt_ci = (lin.intercept_ci_low, lin.intercept_ci_high)
+        c_ci = (db.c_ci_low, db.c_ci_high)
+        lines += _row(f"SPL {label}: slope", lin.slope, _t_stderr(slope_ci, lin.n - 2),
+                      slope_ci, "Pa/(m/s)",
                       f"p = slope * |v_in| + intercept, r2 = {fmt(lin.r2, '.3f')}, "
-                      f"{lin.n} impacts")
-        lines += _row(f"SPL {label}: intercept", lin.intercept, None,
-                      (lin.intercept_ci_low, lin.intercept_ci_high), "Pa")
-        lines += _row(f"SPL {label}: C", db.c_db, None,
-                      (db.c_ci_low, db.c_ci_high), "dB re 20 uPa at 1 m/s",
+                      f"{lin.n} impacts (OLS; std. error from the t interval)")
+        lines += _row(f"SPL {label}: intercept", lin.intercept, _t_stderr(icpt_ci, lin.n - 2),
+                      icpt_ci, "Pa")
+        lines += _row(f"SPL {label}: C", db.c_db, _t_stderr(c_ci, db.n - 1), c_ci,
+                      "dB re 20 uPa at 1 m/s",
                       f"L = 20 log10(|v_in| / (1 m/s)) + C; free-slope check k = "
                       f"{fmt(db.k_db_per_decade, '.3g')} dB/decade (20 for a linear law)")
+    # the eq. (3.4) values that a ramp-corrected one supersedes above, labelled, with their
+    # biases; without any ramp-corrected fit the eq. (3.4) values are the recommended ones
+    superseded: tuple[str, ...] = (
+        ("gap_m", "zeta", "f_s_hz") if fits.grazing_ramp is not None
+        else ("zeta",) if fits.damping_ramp is not None and fits.damping_ramp.value is not None
+        else ())
+    if g is not None and superseded:
+        lines += ["", "Eq. (3.4) fit of the measured onsets (for reference: the ramp lag reads as "
+                  "gap and damping; recommended values above)"]
+        lines += _eq34_lines(g, superseded)
+    elif g is not None and (g.unidentifiable or g.outliers_hz):
+        lines += _eq34_lines(g, ())
     return lines
 
 
@@ -132,9 +247,20 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
         n_imp = sum(r.n_impacts for r in summ.runs)
         lines.append(f"runs: {summ.n_runs} ({summ.n_ok} analysed, "
                      f"{len(summ.skipped)} skipped), {n_imp} impacts detected")
-    lines += ["", "Fitted parameters (95 % CI: as the fit gives it, e.g. profile likelihood for "
-              "eq. (3.4); else Student t from the standard error; OLS t for the SPL laws)"]
-    lines += parameter_lines(data)
+    if data.summary is not None and data.summary.shocks_only:
+        from ._shocks import shock_lines
+
+        lines += ["", "Transient records (single shocks): no rattle fits (the grazing curve, "
+                  "restitution and SPL laws need shaker runs). The shock found in each channel, "
+                  "the cause (force or drive) first; sample numbers on each channel's own clock"]
+        for tr in data.summary.transients:
+            lines += ["", f"  {tr.input_key}/{tr.run_id}"]
+            lines += shock_lines(tr.channels, indent="    ")
+    else:
+        lines += ["", "Recommended values (ramp-corrected gap and zeta where fitted; 95 % CI: as "
+                  "the fit gives it, e.g. profile likelihood for eq. (3.4); else Student t from "
+                  "the standard error; OLS t for the SPL laws)"]
+        lines += parameter_lines(data)
     lines += ["", "Data-quality flags (catalogue)"]
     cat = data.catalogue
     flagged = cat[cat["flags"].astype(str) != ""]
