@@ -62,7 +62,7 @@ import numpy as np
 from rattle_lab._resources import find_resource
 from rattle_lab.exceptions import FileFormatError
 from .._convert import (CHANNEL_FIELDS, RIG_FIELDS, ROOT_FIELDS, RUN_FIELDS, SCHEMA_NAME,
-                        SCHEMA_VERSION, SCHEMA_VERSION_CHAIN)
+                        SCHEMA_VERSION, SCHEMA_VERSION_CHAIN, edges_to_v1)
 from .._errors import DuplicateRunError, MappingError
 from .._h5 import H5Handle, H5Source, decode_attr_value, hdf5_signature_offset
 from .._model import ArraySource, Skipped
@@ -272,7 +272,8 @@ def build_raw(path: Path, spec: MappingSpec, backend: Backend) -> RawRecord:
                 raise MappingError(f"{label}: rig.sensors[{i}]: missing key 'sensor_id'")
             sensors[sensor_id] = {"kind": "group", "members": {},
                                   "attrs": {k: value(v, k, f"rig.sensors[{i}]") for k, v in s.items()}}
-        rig = {"kind": "group", "attrs": {k: value(v, k, "[rig]") for k, v in rig_data.items()},
+        rig_attrs = {k: value(v, k, "[rig]") for k, v in rig_data.items()}
+        rig = {"kind": "group", "attrs": rig_attrs,
                "members": {"sensors": {"kind": "group", "attrs": {}, "members": sensors}}
                if sensors else {}}
 
@@ -334,6 +335,9 @@ def build_raw(path: Path, spec: MappingSpec, backend: Backend) -> RawRecord:
             "members": {"rig": rig, "runs": {"kind": "group", "attrs": {}, "members": runs}}}
     if _uses_chain_attrs(rig, runs):
         root_attrs["schema_version"] = SCHEMA_VERSION_CHAIN
+    elif "edge_conditions" in rig_attrs:
+        # a mapping gives the edges in EDGE_ORDER; a version-1 tree lists them in v1's order
+        rig_attrs["edge_conditions"] = edges_to_v1(rig_attrs["edge_conditions"])
     return RawRecord(tree=tree, sources=sources, format=backend.format, skipped=skipped,
                      closer=backend.close)
 
