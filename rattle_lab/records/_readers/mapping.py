@@ -107,8 +107,12 @@ class MappingSpec:
         return self.data.get("mapping", {}).get("format")
 
 
-def load_mapping(source: str | os.PathLike[str] | Mapping[str, Any]) -> MappingSpec:
+def load_mapping(source: str | os.PathLike[str] | Mapping[str, Any], *,
+                 label: str | None = None) -> MappingSpec:
     """Read and check a TOML mapping (a path) or take a mapping given as a dict.
+
+    ``label`` names a dict mapping in messages (default ``"<mapping>"``; a reader's own
+    default mapping names the file it was made from).
 
     Raises
     ------
@@ -117,7 +121,7 @@ def load_mapping(source: str | os.PathLike[str] | Mapping[str, Any]) -> MappingS
     """
     if isinstance(source, Mapping):
         data = dict(source)
-        label = "<mapping>"
+        label = label or "<mapping>"
         digest = hashlib.sha256(repr(sorted(data.items())).encode()).hexdigest()
     else:
         path = Path(source)
@@ -376,6 +380,11 @@ def is_matlab(path: Path) -> bool:
         b"MATLAB" in head and hdf5_signature_offset(path) == 512)
 
 
+#: MATLAB classes whose arrays are samples (a v7.3 file's ``MATLAB_class`` attribute).
+MATLAB_NUMERIC = ("double", "single", "int8", "int16", "int32", "int64", "uint8", "uint16",
+                  "uint32", "uint64")
+
+
 class HDF5Backend:
     """Channels are datasets of any HDF5 layout, selected by path."""
 
@@ -404,6 +413,14 @@ class HDF5Backend:
         if ds.dtype.kind not in "fiu":
             raise MappingError(f"{where}: source {spec['source']!r}: dataset of dtype {ds.dtype} "
                                "is not numeric")
+        mclass = (decode_attr_value(ds.attrs["MATLAB_class"], where=f"{self.path}: {ds.name}",
+                                    name="MATLAB_class")
+                  if self.matlab and "MATLAB_class" in ds.attrs else "double")
+        if mclass not in MATLAB_NUMERIC:
+            # MATLAB stores text as uint16 and logicals as uint8: numbers that are not samples
+            raise MappingError(f"{where}: source {spec['source']!r}: attribute 'MATLAB_class': "
+                               f"{mclass!r} is not a numeric MATLAB array ("
+                               f"{', '.join(MATLAB_NUMERIC)})")
         src = H5Source(self.handle, ds.name, index=spec.get("index"), axis=spec.get("axis", 0))
         return src, {}, (ds.name,)
 
