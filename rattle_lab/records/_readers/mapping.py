@@ -36,6 +36,10 @@ Example (``droptable.toml``)::
     source = "Untitled"
     reason = "impedance value, 5 samples: not a time series"
 
+``[rig] edge_conditions`` are in the plate model's order
+(:data:`rattle_lab.model.plate.EDGE_ORDER`: y=0, x=length, y=width, x=0) whatever
+schema version the built record says.
+
 Channel selectors: ``source`` (name or path), ``index`` and ``axis`` (a row or
 column of a 2-D array; NumPy rows, WAV channels), ``segment`` (LVM segment).
 Explicit time bases go in ``[runs.timestamps.NAME]`` with the same selectors
