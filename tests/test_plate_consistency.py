@@ -73,6 +73,17 @@ def test_a_v1_file_written_per_the_v1_text_reads_the_v1_plate(tmp_path):
     assert f1.f1_hz < 0.85 * lo_b                   # not the plate of span = the width
 
 
+def test_plate_model_f1_is_the_closed_form_for_a_simply_supported_plate():
+    # Leissa: f11 = (pi / 2) (1/a^2 + 1/b^2) sqrt(D / (rho h)), exact for SSSS
+    rig = dataclasses.replace(make_record().rig, edge_conditions="SSSS", plate_material="Aluminium 6061")
+    d = E * H ** 3 / (12 * (1 - NU ** 2))
+    exact = math.pi / 2 * (1 / A ** 2 + 1 / B ** 2) * math.sqrt(d / (RHO * H))
+    f1 = plate_model_f1(rig)
+    assert f1 is not None and f1.f1_hz == pytest.approx(exact, rel=1e-12)
+    # a material the model does not know: no f1 (and so no check), not a guess
+    assert plate_model_f1(dataclasses.replace(rig, plate_material="polycarbonate")) is None
+
+
 def test_a_v2_file_keeps_its_letters_and_writers_write_each_version_in_its_order(tmp_path):
     rec = make_record()
     assert rec.rig.edge_conditions == "CFCF"        # in memory: EDGE_ORDER

@@ -17,6 +17,7 @@ data-quality flag :data:`FLAG_PARTICIPATION_ASSUMED` says so.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -70,15 +71,23 @@ def participation_from_plate(length_m: float, width_m: float, edges: str,
     depend on the plate's thickness, modulus or density, only on its shape, edges and
     Poisson's ratio (the free edges' conditions carry it).
     """
+    return _first_mode(float(length_m), float(width_m), str(edges), float(poisson_ratio))[1]
+
+
+@functools.lru_cache(maxsize=32)
+def _first_mode(length_m: float, width_m: float, edges: str,
+                poisson_ratio: float) -> tuple[float, float]:
+    """``(lambda, Q1/Q2)`` of the plate's first mode (shared by the participation and f1:
+    one Ritz solve per plate and process)."""
     from rattle_lab.model.plate import Plate, simply_supported_modes
 
     plate = Plate(a_m=length_m, b_m=width_m, h_p_m=1e-3, E_pa=7e10, nu=poisson_ratio,
                   rho_kg_m3=2700.0, edges=edges)
     if plate.edges == "SSSS":
         mode = next(iter(simply_supported_modes(plate.aspect_ratio, 1)))
-        return float(mode.Q1 / mode.Q2)
-    modes = plate.modes(1)
-    return float(modes[0].Q1 / modes[0].Q2)
+        return float(mode.lam), float(mode.Q1 / mode.Q2)
+    first = plate.modes(1)[0]
+    return float(first.lam), float(first.Q1 / first.Q2)
 
 
 def rig_participation(rig: Any) -> Participation | None:
@@ -127,7 +136,7 @@ def plate_model_f1(rig: Any) -> PlateF1 | None:
     and a ``plate_material`` naming one of :data:`PLATE_MATERIALS` (Poisson's ratio:
     ``plate_poisson_ratio`` or :data:`ASSUMED_POISSON_RATIO`).
     """
-    from rattle_lab.model.plate import Plate, simply_supported_modes
+    from rattle_lab.model.plate import Plate
 
     a, b, h = rig.plate_length_m, rig.plate_width_m, rig.plate_thickness_m
     edges, material = rig.edge_conditions, rig.plate_material
@@ -142,12 +151,7 @@ def plate_model_f1(rig: Any) -> PlateF1 | None:
     nu = ASSUMED_POISSON_RATIO if nu is None else float(nu)
     plate = Plate(a_m=float(a), b_m=float(b), h_p_m=float(h), E_pa=props[0], nu=nu,
                   rho_kg_m3=props[1], edges=str(edges))
-    if plate.edges == "SSSS":
-        mode = next(iter(simply_supported_modes(plate.aspect_ratio, 1)))
-        lam, q = mode.lam, mode.Q1 / mode.Q2
-    else:
-        first = plate.modes(1)[0]
-        lam, q = first.lam, first.Q1 / first.Q2
+    lam, q = _first_mode(float(a), float(b), plate.edges, nu)   # lambda: no h, E or rho
     return PlateF1(float(plate.frequency_hz(lam)), float(q),
                    f"{edges}, {float(a):g} m x {float(b):g} m x {float(h):g} m {material} "
                    f"(E = {props[0]:.3g} Pa, rho = {props[1]:g} kg/m^3, nu = {nu:g})")
