@@ -118,6 +118,8 @@ def test_matlab_v73_file_through_a_mapping(tmp_path):
     assert detect_format(mat) == "hdf5"
     with read(mat, mapping=mapping) as rec:
         assert rec.campaign_id == "mat-lab_042" and rec.operator == "Ana"
+        # a mapping's edge_conditions are in the plate model's EDGE_ORDER (issue 28)
+        assert rec.rig.edge_conditions == "CFCF"
         run = rec.run("dwell_094")
         base, mic, drive = run.channels
         assert base.sample_rate_hz == 25600.0 and base.n_samples == N_MAT

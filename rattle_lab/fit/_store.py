@@ -33,6 +33,7 @@ from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
                      transient_shocks)
 from ._grazing import GrazingFit, fit_grazing
+from ._plate_check import check_plate_model
 from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
 from ._damping import fit_zeta_ramp
 from ._restitution import (FLAG_RING_MODES_ONE_RUN, FLAG_RINGING_UNCORRECTED,
@@ -217,16 +218,20 @@ def store_participation(store: str | os.PathLike[str], given: float | None,
     model); else 1.0, with the data-quality flag ``participation_assumed``.  See
     :func:`rattle_lab.records._chain.resolve_participation`.
     """
+    return resolve_participation([] if given is not None else store_rigs(store), given, source)
+
+
+def store_rigs(store: str | os.PathLike[str]) -> list[Any]:
+    """The rig of every record in ``store`` (in catalogue order)."""
     rigs = []
-    if given is None:
-        catalogue = read_catalogue(store, level="runs")
-        for key in dict.fromkeys(catalogue["input_key"]):
-            record = open_stored_record(store, key)
-            try:
-                rigs.append(record.rig)
-            finally:
-                record.close()
-    return resolve_participation(rigs, given, source)
+    catalogue = read_catalogue(store, level="runs")
+    for key in dict.fromkeys(catalogue["input_key"]):
+        record = open_stored_record(store, key)
+        try:
+            rigs.append(record.rig)
+        finally:
+            record.close()
+    return rigs
 
 
 def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
@@ -262,8 +267,14 @@ def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
     """
     if curve is None:
         curve = tabulate_thresholds([r.threshold for r in runs if r.threshold is not None])
-    participation = store_participation(store, fit.get("participation"), participation_source)
+    rigs = store_rigs(store)
+    given = fit.get("participation")
+    participation = resolve_participation([] if given is not None else rigs, given,
+                                          participation_source)
     summary = summarise_fits(list(runs), curve, fit, participation=participation)
+    # issue 28: the rig's plate model against the fitted f_s (flag plate_model_disagrees)
+    summary = check_plate_model(summary, rigs, participation,
+                                lambda p: summarise_fits(list(runs), curve, fit, participation=p))
     prov = {"function": "rattle_lab.workflow.fit_store", **dict(provenance or {}),
             "rattle_lab_version": __version__, "python": sys.version.split()[0],
             "parameters": {"detect": dict(detect), "fit": dict(fit)},
@@ -569,4 +580,4 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
 
 __all__ = ["analyse_run", "check_fit_params", "fit_runs", "json_ready", "load_pipeline", "paired_plate_channels",
            "relative_to_striker", "restitution_down_summary", "run_chain_flags",
-           "store_participation", "summarise_fits", "transient_shocks"]
+           "store_participation", "store_rigs", "summarise_fits", "transient_shocks"]

@@ -13,7 +13,7 @@ The layout is the one ``rattle-lab fit --json`` printed before these classes exi
 ``schema_version``::
 
     {"schema_version": 1,
-     "participation": {"value", "source"},  "data_quality": [str],
+     "participation": {"value", "source"[, "note"]},  "data_quality": [str],
      "n_runs": int, "n_ok": int,
      "skipped": [{"input_key", "run_id", "reason"}],
      "runs": [{"input_key", "run_id", "protocol", "freq_hz", "n_impacts", "pattern",
@@ -184,14 +184,20 @@ class ParticipationInfo(_Normalised):
 
     value: float | None
     source: str
+    #: Why the rig's plate model was not used, with both frequencies (``plate_model_disagrees``).
+    note: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        return {"value": self.value, "source": self.source}
+        out: dict[str, Any] = {"value": self.value, "source": self.source}
+        if self.note is not None:
+            out["note"] = self.note
+        return out
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], path: str = "participation") -> ParticipationInfo:
         r = _In(d, path)
-        return r.build(cls, value=r["value"], source=r["source"])  # type: ignore[no-any-return]
+        return r.build(cls, value=r["value"], source=r["source"],  # type: ignore[no-any-return]
+                       note=r.get("note"))
 
 
 @dataclass(frozen=True)

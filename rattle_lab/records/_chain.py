@@ -17,6 +17,7 @@ data-quality flag :data:`FLAG_PARTICIPATION_ASSUMED` says so.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -70,15 +71,23 @@ def participation_from_plate(length_m: float, width_m: float, edges: str,
     depend on the plate's thickness, modulus or density, only on its shape, edges and
     Poisson's ratio (the free edges' conditions carry it).
     """
+    return _first_mode(float(length_m), float(width_m), str(edges), float(poisson_ratio))[1]
+
+
+@functools.lru_cache(maxsize=32)
+def _first_mode(length_m: float, width_m: float, edges: str,
+                poisson_ratio: float) -> tuple[float, float]:
+    """``(lambda, Q1/Q2)`` of the plate's first mode (shared by the participation and f1:
+    one Ritz solve per plate and process)."""
     from rattle_lab.model.plate import Plate, simply_supported_modes
 
     plate = Plate(a_m=length_m, b_m=width_m, h_p_m=1e-3, E_pa=7e10, nu=poisson_ratio,
                   rho_kg_m3=2700.0, edges=edges)
     if plate.edges == "SSSS":
         mode = next(iter(simply_supported_modes(plate.aspect_ratio, 1)))
-        return float(mode.Q1 / mode.Q2)
-    modes = plate.modes(1)
-    return float(modes[0].Q1 / modes[0].Q2)
+        return float(mode.lam), float(mode.Q1 / mode.Q2)
+    first = plate.modes(1)[0]
+    return float(first.lam), float(first.Q1 / first.Q2)
 
 
 def rig_participation(rig: Any) -> Participation | None:
@@ -100,6 +109,52 @@ def rig_participation(rig: Any) -> Participation | None:
         nu, flags = ASSUMED_POISSON_RATIO, (FLAG_POISSON_ASSUMED,)
     q = participation_from_plate(float(a), float(b), str(edges), float(nu))
     return Participation(q, f"plate model ({edges}, {a:g} m x {b:g} m, nu = {nu:g})", flags)
+
+
+#: Young's modulus (Pa) and density (kg/m^3) of the plate materials the plate model knows,
+#: by a word of ``plate_material`` (handbook values of the usual alloys; f1 goes as
+#: sqrt(E/rho), which the alloys of one metal share to about 2 %).
+PLATE_MATERIALS: dict[str, tuple[float, float]] = {
+    "aluminium": (7.0e10, 2700.0), "aluminum": (7.0e10, 2700.0),
+    "steel": (2.0e11, 7850.0), "stainless": (1.93e11, 8000.0),
+    "brass": (1.0e11, 8500.0), "copper": (1.2e11, 8900.0), "titanium": (1.1e11, 4500.0)}
+
+
+@dataclass(frozen=True)
+class PlateF1:
+    """The plate model's first natural frequency for a rig that declares its plate."""
+
+    f1_hz: float
+    participation: float
+    description: str
+
+
+def plate_model_f1(rig: Any) -> PlateF1 | None:
+    """The plate model's f1 (Hz) and ``Q1/Q2`` for the plate ``rig`` declares, or None.
+
+    Needs ``plate_length_m``, ``plate_width_m``, ``plate_thickness_m``, ``edge_conditions``
+    and a ``plate_material`` naming one of :data:`PLATE_MATERIALS` (Poisson's ratio:
+    ``plate_poisson_ratio`` or :data:`ASSUMED_POISSON_RATIO`).
+    """
+    from rattle_lab.model.plate import Plate
+
+    a, b, h = rig.plate_length_m, rig.plate_width_m, rig.plate_thickness_m
+    edges, material = rig.edge_conditions, rig.plate_material
+    if None in (a, b, h, edges, material):
+        return None
+    words = str(material).lower().replace("-", " ").split()
+    known = [w for w in words if w in PLATE_MATERIALS]
+    props = PLATE_MATERIALS["stainless" if "stainless" in known else known[0]] if known else None
+    if props is None:
+        return None
+    nu = getattr(rig, "plate_poisson_ratio", None)
+    nu = ASSUMED_POISSON_RATIO if nu is None else float(nu)
+    plate = Plate(a_m=float(a), b_m=float(b), h_p_m=float(h), E_pa=props[0], nu=nu,
+                  rho_kg_m3=props[1], edges=str(edges))
+    lam, q = _first_mode(float(a), float(b), plate.edges, nu)   # lambda: no h, E or rho
+    return PlateF1(float(plate.frequency_hz(lam)), float(q),
+                   f"{edges}, {float(a):g} m x {float(b):g} m x {float(h):g} m {material} "
+                   f"(E = {props[0]:.3g} Pa, rho = {props[1]:g} kg/m^3, nu = {nu:g})")
 
 
 def resolve_participation(rigs: list[Any], given: float | None, given_source: str
@@ -146,6 +201,7 @@ def channel_time_offset_s(channel: Any) -> float:
 
 
 __all__ = ["ASSUMED_POISSON_RATIO", "FLAG_MEASURAND_ABSOLUTE", "FLAG_MEASURAND_UNDECLARED",
-           "FLAG_PARTICIPATION_ASSUMED", "FLAG_POISSON_ASSUMED", "MEASURANDS", "Participation",
-           "SIGN_CONVENTIONS", "channel_time_offset_s", "participation_from_plate",
-           "resolve_participation", "rig_participation"]
+           "FLAG_PARTICIPATION_ASSUMED", "FLAG_POISSON_ASSUMED", "MEASURANDS", "PLATE_MATERIALS",
+           "Participation", "PlateF1", "SIGN_CONVENTIONS", "channel_time_offset_s",
+           "participation_from_plate", "plate_model_f1", "resolve_participation",
+           "rig_participation"]

@@ -35,6 +35,31 @@ SCHEMA_NAME = "rattle_record"
 SCHEMA_VERSION = 1
 #: Layout version written when a record uses the measurement-chain attributes of version 2.
 SCHEMA_VERSION_CHAIN = 2
+#: Layout version 1 listed ``edge_conditions`` for the edges x=0, y=0, x=length, y=width;
+#: version 2 (and every :class:`Rig` in memory) uses :data:`rattle_lab.model.plate.EDGE_ORDER`
+#: (y=0, x=length, y=width, x=0).
+V1_EDGE_ORDER = ("x=0", "y=0", "x=a", "y=b")
+
+
+def edges_from_v1(edges: Any) -> Any:
+    """A version-1 file's ``edge_conditions`` (x=0, y=0, x=a, y=b) in ``EDGE_ORDER``.
+
+    Anything but a 4-character string is returned unchanged (the schema refuses it).
+
+    >>> edges_from_v1("CFCF")   # v1: clamped at x=0 and x=length
+    'FCFC'
+    """
+    if not isinstance(edges, str) or len(edges) != 4:
+        return edges
+    return edges[1] + edges[2] + edges[3] + edges[0]
+
+
+def edges_to_v1(edges: Any) -> Any:
+    """``EDGE_ORDER`` letters in the order a version-1 file lists them (inverse of
+    :func:`edges_from_v1`)."""
+    if not isinstance(edges, str) or len(edges) != 4:
+        return edges
+    return edges[3] + edges[0] + edges[1] + edges[2]
 
 
 def schema_version_of(record: Record) -> int:
@@ -65,13 +90,21 @@ def _members(node: Mapping[str, Any], name: str) -> dict[str, Any]:
 
 
 def record_from_tree(tree: Mapping[str, Any], sources: Mapping[str, ArraySource],
-                     origin: Origin | None = None) -> Record:
-    """Build a :class:`Record` from a validated tree and its dataset sources (keyed by HDF5 path)."""
+                     origin: Origin | None = None, *, store: bool = False) -> Record:
+    """Build a :class:`Record` from a validated tree and its dataset sources (keyed by HDF5 path).
+
+    A version-1 file's ``edge_conditions`` are read in the version-1 order (x=0, y=0,
+    x=length, y=width) and turned into ``EDGE_ORDER``.  ``store=True``: the tree is a record
+    of an ingest store, whose ``edge_conditions`` are always in ``EDGE_ORDER``.
+    """
     root_attrs = {k: v for k, v in tree["attrs"].items() if k not in ("schema", "schema_version")}
     root_known, root_extra = _split(root_attrs, ROOT_FIELDS)
     members = tree["members"]
 
     rig_known, rig_extra = _split(members["rig"]["attrs"], RIG_FIELDS)
+    if not store and tree["attrs"].get("schema_version") == SCHEMA_VERSION \
+            and "edge_conditions" in rig_known:
+        rig_known["edge_conditions"] = edges_from_v1(rig_known["edge_conditions"])
     sensors = []
     for sensor_id, node in _members(members["rig"], "sensors").items():
         attrs = dict(node["attrs"])
@@ -164,19 +197,28 @@ def _dataset_node(source: ArraySource, attrs: dict[str, Any]) -> dict[str, Any]:
             "shape": [int(source.n_samples)]}
 
 
-def record_to_tree(record: Record) -> tuple[dict[str, Any], dict[str, ArraySource]]:
-    """The node tree and dataset sources (keyed by HDF5 path) that represent ``record``."""
+def record_to_tree(record: Record, *, store: bool = False
+                   ) -> tuple[dict[str, Any], dict[str, ArraySource]]:
+    """The node tree and dataset sources (keyed by HDF5 path) that represent ``record``.
+
+    In a version-1 tree ``edge_conditions`` are written in the version-1 order (see
+    :func:`record_from_tree`); ``store=True`` (a record of an ingest store) keeps
+    ``EDGE_ORDER``.
+    """
     from ._model import ArrayData
 
     sources: dict[str, ArraySource] = {}
-    root_attrs = {"schema": SCHEMA_NAME, "schema_version": schema_version_of(record),
+    version = schema_version_of(record)
+    root_attrs = {"schema": SCHEMA_NAME, "schema_version": version,
                   **_attrs(record, ROOT_FIELDS, record.extra)}
     sensors = {s.sensor_id: {"kind": "group", "members": {},
                              "attrs": _attrs(s, ("position_m", "mounted_on", "description"), s.extra)}
                for s in record.rig.sensors}
     rig_members = {"sensors": {"kind": "group", "attrs": {}, "members": sensors}} if sensors else {}
-    rig = {"kind": "group", "attrs": _attrs(record.rig, RIG_FIELDS, record.rig.extra),
-           "members": rig_members}
+    rig_attrs = _attrs(record.rig, RIG_FIELDS, record.rig.extra)
+    if not store and version == SCHEMA_VERSION and "edge_conditions" in rig_attrs:
+        rig_attrs["edge_conditions"] = edges_to_v1(rig_attrs["edge_conditions"])
+    rig = {"kind": "group", "attrs": rig_attrs, "members": rig_members}
     runs: dict[str, Any] = {}
     for run in record.runs:
         channels = {}

@@ -38,6 +38,17 @@ def _head(path: Path) -> bytes:
         return fh.read(64)
 
 
+def _known_but_refused(head: bytes) -> str | None:
+    """Why a file of a format we recognise but do not read is refused (one line), or None."""
+    if head.startswith(b"MATLAB 5.0 MAT-file"):
+        return ("header: a MATLAB v5/v7 MAT-file (not HDF5); only v7.3 MAT-files are read: "
+                "save it with save(name, '-v7.3')")
+    if head.startswith(b"PK\x03\x04") and b".npy" in head:
+        return ("header: a NumPy .npz archive (zip of arrays); save each array with numpy.save "
+                "and give the .npy file with a mapping")
+    return None
+
+
 def detect_format(path: str | os.PathLike[str]) -> str:
     """The format of ``path``: ``rattle_hdf5``, ``hdf5`` (foreign layout), ``tdms``, ``wav``, ``lvm``, ``npy``.
 
@@ -60,6 +71,9 @@ def detect_format(path: str | os.PathLike[str]) -> str:
     for name in SNIFFED:
         if importlib.import_module(READERS[name]).sniff(head, path):
             return name
+    refused = _known_but_refused(head)
+    if refused is not None:
+        raise FileFormatError(f"{path}: {refused}")
     raise FileFormatError(f"{path}: not a recognised record format (a rattle HDF5 record, or HDF5 / "
                           "MATLAB v7.3, TDMS, WAV, UFF 58, LabVIEW .lvm or NumPy .npy with a mapping)")
 

@@ -117,7 +117,8 @@ def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
     try:
         validate_tree(raw.tree, label)
         return record_from_tree(raw.tree, raw.sources,
-                                Origin(path=store, format="rattle_store", closer=raw.closer))
+                                Origin(path=store, format="rattle_store", closer=raw.closer),
+                                store=True)
     except BaseException:
         if raw.closer is not None:
             raw.closer()

@@ -34,7 +34,7 @@ class _ChannelPlan:
 def _store_tree(record: Record, plans: Mapping[str, _ChannelPlan]) -> tuple[dict[str, Any],
                                                                            dict[str, ArraySource]]:
     """The record's node tree for the store: the input's own attributes plus the SI conversion."""
-    tree, sources = record_to_tree(record)
+    tree, sources = record_to_tree(record, store=True)   # edges in EDGE_ORDER
     for run_id, run_node in tree["members"]["runs"]["members"].items():
         for name, node in run_node["members"]["channels"]["members"].items():
             plan = plans[f"/runs/{run_id}/channels/{name}"]

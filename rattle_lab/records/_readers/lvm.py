@@ -1,25 +1,39 @@
 """LabVIEW Measurement (``.lvm``) text files, read through a mapping.
 
-The parser honours the header rather than guessing:
+Built to NI's published "Specification for the LabVIEW Measurement File (.lvm)" (LVM 1.0
+and 2.0), not to examples.  What is honoured:
 
-* file header (``LabVIEW Measurement`` ... ``***End_of_Header***``):
-  ``Separator`` (Tab, Comma or Semicolon), ``Decimal_Separator`` (``.`` or
-  ``,``), ``X_Columns`` (No, One or Multi), ``Date``/``Time``;
+* file header (``LabVIEW Measurement`` ... ``***End_of_Header***``): ``Separator`` (Tab or
+  Comma; Semicolon also read), ``Decimal_Separator`` (``.`` or ``,``; a comma with the Comma
+  separator is refused, the fields could not be told apart), ``X_Columns`` (No, One or
+  Multi), ``Multi_Headings`` (Yes or No), ``Time_Pref`` (Absolute: X0 and X values are
+  seconds since 1904-01-01 00:00 UTC, time zero is the earliest X0 and the run starts at
+  its channel's Date/Time stamp; Relative: seconds since the Date/Time stamps),
+  ``Date``/``Time``; every other field the specification defines is kept and not used;
 * one or more segments, each with its own header (``Channels``, ``Samples``,
-  ``Y_Unit_Label``, ``X_Dimension``, ``X0``, ``Delta_X``, ``Date``, ``Time``;
-  one value per channel), a column-name line and data rows.  Data that resume
-  after a blank line without a new header form a segment with the previous
-  header.  The trailing ``Comment`` column is ignored;
-* each channel's timing comes from its own ``X0`` and ``Delta_X`` (the X
-  column is printed with fewer digits, and LabVIEW guarantees it for the first
-  channel only), its unit from ``Y_Unit_Label``;
-* a channel shorter than the others has empty fields at the end of its column;
-  its value count must equal the header's ``Samples``;
-* ``X_Columns No``: LabVIEW still writes the ``X_Value`` heading and an empty first
-  field on every row; that column is dropped (not taken for the first channel), or
-  kept as the X values when it holds numbers;
-* header fields the LabVIEW format does not define are reported with an
-  :class:`LvmHeaderWarning` (they are kept in the parsed header, never used).
+  ``Y_Unit_Label``, ``X_Dimension``, ``X0``, ``Delta_X``, ``Date``, ``Time``; one value per
+  channel), a column-name line and data rows.  Segments without a header (``Multi_Headings
+  No``, or data resuming after a blank line) take the previous header; their start is the
+  first value of their X column, or (without X columns) the sample after the previous
+  segment's last.  With ``Multi_Headings No`` the rows after the header's ``Samples`` are
+  such segments.  The trailing ``Comment`` column is ignored;
+* the X columns: ``One`` (one X column first), ``Multi`` (an X column before every channel),
+  ``No`` (none; LabVIEW still writes an empty first field on every row, under an
+  ``X_Value`` heading or an empty one: that column is dropped, or kept as the X values when
+  it holds numbers);
+* each channel's timing comes from its own ``X0`` and ``Delta_X`` (the X column is printed
+  with fewer digits), its unit from ``Y_Unit_Label``;
+* ragged columns: a channel shorter than the others has empty fields at the end of its
+  column; its value count must equal the header's ``Samples`` (per channel);
+* header fields the specification does not define are reported with an
+  :class:`LvmHeaderWarning` (kept in the parsed header, never used).
+
+What is refused, in one line naming the file and the field (:class:`FileFormatError`): no
+``LabVIEW Measurement`` line, no ``***End_of_Header***``, a separator other than Tab,
+Comma or Semicolon, an unknown ``Decimal_Separator``, ``X_Columns``, ``Multi_Headings`` or
+``Time_Pref``, data before any segment header, a field that is not a number, an empty field
+followed by values, a value count other than ``Samples``, ``Channels`` above the number of
+columns, and a ``Delta_X`` or ``X0`` that is not a number.
 
 The whole text is parsed at once: LVM files are text and small by nature
 (a 1 s, 51.2 kHz record is 1.6 MB); use HDF5 or TDMS for long records.
@@ -79,6 +93,8 @@ class LvmChannel:
     x_dimension: str
     date: str | None
     time: str | None
+    #: ``X0`` as written (exact; with ``Time_Pref`` Absolute, seconds since 1904).
+    x0_exact: Decimal | None = None
 
 
 @dataclass(frozen=True)
@@ -93,6 +109,8 @@ class LvmFile:
     channels: tuple[LvmChannel, ...]
     x_values: Mapping[int, np.ndarray]
     n_segments: int
+    multi_headings: str = "Yes"
+    time_pref: str = "Relative"
 
 
 def sniff(head: bytes, path: Path) -> bool:
@@ -139,25 +157,31 @@ def parse_lvm(path: str | Path) -> LvmFile:
     i = 1
     while i < len(lines) and not lines[i].split(sep)[0].strip() == END:
         fields = lines[i].split(sep)
-        if fields[0].strip():
-            header[fields[0].strip()] = fields[1].strip() if len(fields) > 1 else ""
+        key = fields[0].strip()
+        if key == "Decimal_Separator" and sep == "," and len(fields) > 2 and \
+                not fields[1].strip() and not fields[2].strip():
+            raise FileFormatError(f"{path}: line {i + 1}: header 'Decimal_Separator': ',' with "
+                                  "'Separator' Comma: a number's comma and the field separator "
+                                  "cannot be told apart")
+        if key:
+            header[key] = fields[1].strip() if len(fields) > 1 else ""
         i += 1
     if i >= len(lines):
         raise FileFormatError(f"{path}: file header has no '{END}' line")
     _warn_unknown(path, "file header", header, FILE_HEADER_FIELDS)
     i += 1
     decimal = header.get("Decimal_Separator", ".") or "."
-    # (A comma separator cannot also be the decimal one: the header value would be empty.)
     if decimal not in (".", ","):
         raise FileFormatError(f"{path}: header 'Decimal_Separator': {decimal!r} is not '.' or ','")
-    x_columns = header.get("X_Columns", "One") or "One"
-    if x_columns not in ("No", "One", "Multi"):
-        raise FileFormatError(f"{path}: header 'X_Columns': {x_columns!r} is not No, One or Multi")
+    x_columns = _choice(path, header, "X_Columns", ("No", "One", "Multi"), "One")
+    multi_headings = _choice(path, header, "Multi_Headings", ("Yes", "No"), "Yes")
+    time_pref = _choice(path, header, "Time_Pref", ("Absolute", "Relative"), "Relative")
 
     channels: list[LvmChannel] = []
     x_values: dict[int, np.ndarray] = {}
     seg_header: dict[str, list[str]] | None = None
     names: list[str] | None = None
+    previous: list[LvmChannel] = []
     segment = -1
     n = len(lines)
     while i < n:
@@ -165,10 +189,11 @@ def parse_lvm(path: str | Path) -> LvmFile:
         if not any(f.strip() for f in fields):
             i += 1
             continue
-        if _is_data(fields, decimal):
+        headerless = _is_data(fields, decimal)
+        if headerless:
             if seg_header is None or names is None:
                 raise FileFormatError(f"{path}: line {i + 1}: data before any segment header")
-            # Data resuming after a blank line: a new segment with the previous header.
+            # Data resuming without a new header: a new segment with the previous header.
         else:
             seg_header = {}
             while i < n and lines[i].split(sep)[0].strip() != END:
@@ -184,7 +209,6 @@ def parse_lvm(path: str | Path) -> LvmFile:
                 raise FileFormatError(f"{path}: line {i}: segment header without a column-name line")
             names = [v.strip() for v in lines[i].split(sep)]
             i += 1
-        segment += 1
         start = i
         rows = []
         while i < n:
@@ -194,12 +218,41 @@ def parse_lvm(path: str | Path) -> LvmFile:
             rows.append(f)
             i += 1
         assert seg_header is not None and names is not None
-        _segment(path, segment, seg_header, names, rows, start, x_columns, decimal, header,
-                 channels, x_values)
+        chunks = [(start, rows)]
+        if multi_headings == "No" and not headerless:
+            # one header for all writes: the rows after its Samples are the later writes
+            n_first = _max_samples(seg_header)
+            if n_first is not None and 0 < n_first < len(rows):
+                chunks = [(start, rows[:n_first]), (start + n_first, rows[n_first:])]
+        for k, (first_line, chunk) in enumerate(chunks):
+            segment += 1
+            previous = _segment(path, segment, seg_header, names, chunk, first_line, x_columns,
+                                decimal, header, channels, x_values,
+                                previous if (headerless or k > 0) else None)
     if not channels:
         raise FileFormatError(f"{path}: no data segment found")
     return LvmFile(path=path, header=header, separator=sep, decimal=decimal, x_columns=x_columns,
-                   channels=tuple(channels), x_values=x_values, n_segments=segment + 1)
+                   channels=tuple(channels), x_values=x_values, n_segments=segment + 1,
+                   multi_headings=multi_headings, time_pref=time_pref)
+
+
+def _choice(path: Path, header: Mapping[str, str], key: str, allowed: tuple[str, ...],
+            default: str) -> str:
+    value = header.get(key, default) or default
+    if value not in allowed:
+        raise FileFormatError(f"{path}: header {key!r}: {value!r} is not "
+                              f"{', '.join(allowed[:-1])} or {allowed[-1]}")
+    return value
+
+
+def _max_samples(seg_header: Mapping[str, list[str]]) -> int | None:
+    counts = []
+    for v in seg_header.get("Samples", []):
+        try:
+            counts.append(int(v))
+        except ValueError:
+            continue
+    return max(counts) if counts else None
 
 
 def _warn_unknown(path: Path, where: str, header: Mapping[str, Any], known: frozenset[str]) -> None:
@@ -229,16 +282,20 @@ def _is_data(fields: list[str], decimal: str) -> bool:
 def _segment(path: Path, segment: int, seg_header: Mapping[str, list[str]], names: list[str],
              rows: list[list[str]], first_line: int, x_columns: str, decimal: str,
              header: Mapping[str, str], channels: list[LvmChannel],
-             x_values: dict[int, np.ndarray]) -> None:
-    # X_Columns No: LabVIEW still writes the X_Value heading and an empty first field per row.
-    x_heading = x_columns == "No" and bool(names) and names[0] == "X_Value"
+             x_values: dict[int, np.ndarray],
+             previous: list[LvmChannel] | None) -> list[LvmChannel]:
+    """Add one segment's channels; ``previous``: the channels of the segment whose header a
+    header-less segment continues (None for a segment with its own header)."""
+    # X_Columns No: LabVIEW still writes an empty first field per row, under an X_Value or
+    # an empty heading (the first field of the column-name line).
+    x_heading = x_columns == "No" and len(names) > 1 and names[0] in ("X_Value", "")
     if x_columns == "One":
         ch_names = names[1:]
     elif x_columns == "Multi":
         ch_names = names[1::2]
     else:
         ch_names = names[1:] if x_heading else names
-    declared = seg_header.get("Channels", [""])[0]
+    declared = seg_header.get("Channels", [""])[0] if seg_header.get("Channels") else ""
     if declared:
         try:
             n_ch = int(declared)
@@ -282,12 +339,19 @@ def _segment(path: Path, segment: int, seg_header: Mapping[str, list[str]], name
                                           "not a number") from None
             raise
 
+    def first_x(col: int) -> Decimal | None:
+        if col >= len(transposed):
+            return None
+        text = transposed[col][0].strip() if transposed[col] else ""
+        return Decimal(_number(text, decimal)) if text else None
+
     if x_columns == "One":
         x_values[segment] = column(0, "column 'X_Value'")
     elif x_heading:
         x_col = column(0, "column 'X_Value'")
         if x_col.size:       # numbers under the heading after all: the X values
             x_values[segment] = x_col
+    added: list[LvmChannel] = []
     for j, name in enumerate(ch_names):
         col = (j + 1 if x_columns == "One" or x_heading
                else (2 * j + 1 if x_columns == "Multi" else j))
@@ -299,7 +363,7 @@ def _segment(path: Path, segment: int, seg_header: Mapping[str, list[str]], name
             except ValueError:
                 raise FileFormatError(f"{path}: segment {segment} header 'Samples': {samples!r} "
                                       f"of column {name!r} is not an integer") from None
-            if n_declared != values.size:
+            if previous is None and n_declared != values.size:
                 raise FileFormatError(f"{path}: segment {segment}: column {name!r} has "
                                       f"{values.size} values, the header 'Samples' says {n_declared}")
         dx_text = per_channel("Delta_X", j)
@@ -310,16 +374,36 @@ def _segment(path: Path, segment: int, seg_header: Mapping[str, list[str]], name
                                   f"column {name!r} is not a number") from None
         x0_text = per_channel("X0", j)
         try:
-            x0 = float(_number(x0_text, decimal)) if x0_text is not None else None
-        except ValueError:
+            x0 = Decimal(_number(x0_text, decimal)) if x0_text is not None else None
+            if x0 is not None and not x0.is_finite():
+                raise InvalidOperation
+        except InvalidOperation:
             raise FileFormatError(f"{path}: segment {segment} header 'X0': {x0_text!r} of column "
                                   f"{name!r} is not a number") from None
-        channels.append(LvmChannel(
+        if previous is not None:
+            # a segment without a header starts where its X column says, or (no X column)
+            # after the previous segment's last sample
+            x_index = (2 * j if x_columns == "Multi"
+                       else 0 if x_columns == "One" and j == 0 else None)   # One: channel 0's
+            try:
+                x0 = first_x(x_index) if x_index is not None else None
+            except InvalidOperation:
+                x0 = None    # reported by column() on the X column
+            if x0 is None:
+                prev = next((c for c in previous if c.column == j), None)
+                x0 = (prev.x0_exact + prev.values.size * prev.delta_x
+                      if prev is not None and prev.x0_exact is not None
+                      and prev.delta_x is not None else None)
+        ch = LvmChannel(
             name=name, segment=segment, column=j, values=values,
             unit_label=per_channel("Y_Unit_Label", j) or "",
-            delta_x=delta_x, x0=x0, x_dimension=per_channel("X_Dimension", j) or "",
+            delta_x=delta_x, x0=float(x0) if x0 is not None else None,
+            x_dimension=per_channel("X_Dimension", j) or "",
             date=per_channel("Date", j) or header.get("Date"),
-            time=per_channel("Time", j) or header.get("Time")))
+            time=per_channel("Time", j) or header.get("Time"), x0_exact=x0)
+        channels.append(ch)
+        added.append(ch)
+    return added
 
 
 def iso_from_lvm(date: str | None, time: str | None) -> str | None:
@@ -388,13 +472,30 @@ class LvmBackend:
                 raise FileFormatError(f"{self.lvm.path}: header 'Delta_X' of column "
                                       f"{first.name!r}: must be > 0, was {first.delta_x}")
             declared["sample_rate_hz"] = float(Decimal(1) / first.delta_x)
-            declared["start_time_s"] = first.x0 if first.x0 is not None else 0.0
+            declared["start_time_s"] = self._start_s(first)
         unit = known_unit(first.unit_label)
         if unit is not None:
             declared["units"] = unit
         elif first.unit_label:
             declared["x_source_units"] = first.unit_label
         return ArrayData(values), declared, tuple(self._labels[id(c)] for c in chans)
+
+    def _t_ref(self) -> Decimal | None:
+        """Time_Pref Absolute: the earliest X0 of the file (seconds since 1904), time zero."""
+        starts = [c.x0_exact for c in self.lvm.channels if c.x0_exact is not None]
+        return min(starts) if starts else None
+
+    def _start_s(self, ch: LvmChannel) -> float:
+        """The channel's ``start_time_s``: X0 (Relative: seconds since the Date/Time stamps),
+        or X0 less the file's earliest X0 (Absolute: seconds since 1904; the run's
+        ``start_time_iso`` is then the Date/Time stamp of the channel with that X0)."""
+        if ch.x0_exact is None:
+            return 0.0
+        if self.lvm.time_pref == "Absolute":
+            ref = self._t_ref()
+            assert ref is not None
+            return float(ch.x0_exact - ref)
+        return float(ch.x0_exact)
 
     def timestamps(self, spec: Mapping[str, Any], where: str) -> tuple[ArraySource, tuple[str, ...]]:
         if spec.get("source") == "X_Value":
@@ -411,6 +512,10 @@ class LvmBackend:
         first = next((by_label[u] for u in used if u in by_label), None)
         if first is None:
             return {}
+        ref = self._t_ref()
+        if self.lvm.time_pref == "Absolute" and ref is not None:
+            # time zero is the file's earliest X0: its channel's Date/Time stamp
+            first = next(c for c in self.lvm.channels if c.x0_exact == ref)
         iso = iso_from_lvm(first.date, first.time)
         return {"start_time_iso": iso} if iso else {}
 
@@ -434,18 +539,18 @@ class LvmBackend:
 
 
 def _expected_x0(ch: LvmChannel) -> float | None:
-    if ch.x0 is None or ch.delta_x is None:
+    if ch.x0_exact is None or ch.delta_x is None:
         return None
-    return ch.x0 + ch.values.size * float(ch.delta_x)
+    return float(ch.x0_exact + ch.values.size * ch.delta_x)
 
 
 def _contiguous(a: LvmChannel, b: LvmChannel) -> bool:
     if a.delta_x != b.delta_x or a.unit_label != b.unit_label:
         return False
-    expected = _expected_x0(a)
-    if expected is None or b.x0 is None or a.delta_x is None:
-        return expected is None and b.x0 is None
-    return abs(b.x0 - expected) <= 0.5 * float(a.delta_x)
+    if a.x0_exact is None or a.delta_x is None or b.x0_exact is None:
+        return a.x0_exact is None and b.x0_exact is None
+    expected = a.x0_exact + a.values.size * a.delta_x
+    return abs(b.x0_exact - expected) <= a.delta_x / 2
 
 
 def load(path: Path, mapping: MappingSpec | None) -> RawRecord:

@@ -36,6 +36,10 @@ Example (``droptable.toml``)::
     source = "Untitled"
     reason = "impedance value, 5 samples: not a time series"
 
+``[rig] edge_conditions`` are in the plate model's order
+(:data:`rattle_lab.model.plate.EDGE_ORDER`: y=0, x=length, y=width, x=0) whatever
+schema version the built record says.
+
 Channel selectors: ``source`` (name or path), ``index`` and ``axis`` (a row or
 column of a 2-D array; NumPy rows, WAV channels), ``segment`` (LVM segment).
 Explicit time bases go in ``[runs.timestamps.NAME]`` with the same selectors
@@ -62,7 +66,7 @@ import numpy as np
 from rattle_lab._resources import find_resource, not_found_hint
 from rattle_lab.exceptions import FileFormatError
 from .._convert import (CHANNEL_FIELDS, RIG_FIELDS, ROOT_FIELDS, RUN_FIELDS, SCHEMA_NAME,
-                        SCHEMA_VERSION, SCHEMA_VERSION_CHAIN)
+                        SCHEMA_VERSION, SCHEMA_VERSION_CHAIN, edges_to_v1)
 from .._errors import DuplicateRunError, MappingError
 from .._h5 import H5Handle, H5Source, decode_attr_value, hdf5_signature_offset
 from .._model import ArraySource, Skipped
@@ -107,8 +111,12 @@ class MappingSpec:
         return self.data.get("mapping", {}).get("format")
 
 
-def load_mapping(source: str | os.PathLike[str] | Mapping[str, Any]) -> MappingSpec:
+def load_mapping(source: str | os.PathLike[str] | Mapping[str, Any], *,
+                 label: str | None = None) -> MappingSpec:
     """Read and check a TOML mapping (a path) or take a mapping given as a dict.
+
+    ``label`` names a dict mapping in messages (default ``"<mapping>"``; a reader's own
+    default mapping names the file it was made from).
 
     Raises
     ------
@@ -117,7 +125,7 @@ def load_mapping(source: str | os.PathLike[str] | Mapping[str, Any]) -> MappingS
     """
     if isinstance(source, Mapping):
         data = dict(source)
-        label = "<mapping>"
+        label = label or "<mapping>"
         digest = hashlib.sha256(repr(sorted(data.items())).encode()).hexdigest()
     else:
         path = Path(source)
@@ -276,7 +284,8 @@ def build_raw(path: Path, spec: MappingSpec, backend: Backend) -> RawRecord:
                 raise MappingError(f"{label}: rig.sensors[{i}]: missing key 'sensor_id'")
             sensors[sensor_id] = {"kind": "group", "members": {},
                                   "attrs": {k: value(v, k, f"rig.sensors[{i}]") for k, v in s.items()}}
-        rig = {"kind": "group", "attrs": {k: value(v, k, "[rig]") for k, v in rig_data.items()},
+        rig_attrs = {k: value(v, k, "[rig]") for k, v in rig_data.items()}
+        rig = {"kind": "group", "attrs": rig_attrs,
                "members": {"sensors": {"kind": "group", "attrs": {}, "members": sensors}}
                if sensors else {}}
 
@@ -338,6 +347,9 @@ def build_raw(path: Path, spec: MappingSpec, backend: Backend) -> RawRecord:
             "members": {"rig": rig, "runs": {"kind": "group", "attrs": {}, "members": runs}}}
     if _uses_chain_attrs(rig, runs):
         root_attrs["schema_version"] = SCHEMA_VERSION_CHAIN
+    elif "edge_conditions" in rig_attrs:
+        # a mapping gives the edges in EDGE_ORDER; a version-1 tree lists them in v1's order
+        rig_attrs["edge_conditions"] = edges_to_v1(rig_attrs["edge_conditions"])
     return RawRecord(tree=tree, sources=sources, format=backend.format, skipped=skipped,
                      closer=backend.close)
 
@@ -376,6 +388,11 @@ def is_matlab(path: Path) -> bool:
         b"MATLAB" in head and hdf5_signature_offset(path) == 512)
 
 
+#: MATLAB classes whose arrays are samples (a v7.3 file's ``MATLAB_class`` attribute).
+MATLAB_NUMERIC = ("double", "single", "int8", "int16", "int32", "int64", "uint8", "uint16",
+                  "uint32", "uint64")
+
+
 class HDF5Backend:
     """Channels are datasets of any HDF5 layout, selected by path."""
 
@@ -404,6 +421,14 @@ class HDF5Backend:
         if ds.dtype.kind not in "fiu":
             raise MappingError(f"{where}: source {spec['source']!r}: dataset of dtype {ds.dtype} "
                                "is not numeric")
+        mclass = (decode_attr_value(ds.attrs["MATLAB_class"], where=f"{self.path}: {ds.name}",
+                                    name="MATLAB_class")
+                  if self.matlab and "MATLAB_class" in ds.attrs else "double")
+        if mclass not in MATLAB_NUMERIC:
+            # MATLAB stores text as uint16 and logicals as uint8: numbers that are not samples
+            raise MappingError(f"{where}: source {spec['source']!r}: attribute 'MATLAB_class': "
+                               f"{mclass!r} is not a numeric MATLAB array ("
+                               f"{', '.join(MATLAB_NUMERIC)})")
         src = H5Source(self.handle, ds.name, index=spec.get("index"), axis=spec.get("axis", 0))
         return src, {}, (ds.name,)
 

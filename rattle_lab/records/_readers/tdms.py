@@ -182,7 +182,8 @@ def load(path: Path, mapping: MappingSpec | None) -> RawRecord:
     backend = TdmsBackend(path)
     try:
         if mapping is None:
-            mapping = load_mapping(default_mapping(path, backend))
+            mapping = load_mapping(default_mapping(path, backend),
+                                   label=f"{path} (its channels' properties as the mapping)")
     except BaseException:
         backend.close()
         raise

@@ -204,5 +204,6 @@ def load(path: Path, mapping: MappingSpec | None) -> RawRecord:
     """Read a UFF file, through ``mapping`` or the default one."""
     backend = UffBackend(path)
     if mapping is None:
-        mapping = load_mapping(default_mapping(path, backend))
+        mapping = load_mapping(default_mapping(path, backend),
+                               label=f"{path} (its ID lines as the mapping)")
     return build_raw(path, mapping, backend)

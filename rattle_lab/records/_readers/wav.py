@@ -159,5 +159,6 @@ def load(path: Path, mapping: MappingSpec | None) -> RawRecord:
     """Read a WAV file, through ``mapping`` or the default one."""
     backend = WavBackend(path)
     if mapping is None:
-        mapping = load_mapping(default_mapping(path, backend.handle.channels))
+        mapping = load_mapping(default_mapping(path, backend.handle.channels),
+                               label=f"{path} (read without a mapping)")
     return build_raw(path, mapping, backend)
