@@ -238,7 +238,7 @@ def iir_dc_delay_s(kind: str, order: int, cutoff_hz: float, fs_hz: float) -> flo
     return float(np.sum(np.real(1 / (1 - z))) - order / 2) / fs_hz
 
 
-def _iir(x: np.ndarray, chain: "Chain") -> np.ndarray:
+def _iir(x: np.ndarray, chain: Chain) -> np.ndarray:
     """The causal decoder and the extra pure delay, through the FFT (zero padded, lead-in mirrored)."""
     fs = chain.fs_hz
     lead = min(x.size, 4096)

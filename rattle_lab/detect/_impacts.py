@@ -600,7 +600,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         n_guard = n_samples_of(params.sine_guard_s, fs_hz, name="sine_guard_s")
     t_idx, onsets, v_in, v_out, strength, pads = [], [], [], [], [], []
     spans: list[tuple[int, int, int, int]] = []
-    jumps: list[_JumpFits] = []
+    jfits: list[_JumpFits] = []
     for j, (start, peak, end) in enumerate(trig):
         j_lo, j_hi = start, end
         if v is not None:
@@ -621,13 +621,13 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         lo_lim = trig[j - 1][2] + 1 if j > 0 else 0
         hi_lim = trig[j + 1][0] - 1 if j + 1 < len(trig) else v.size - 1
         spans.append((j_lo, j_hi, lo_lim, hi_lim))
-        jumps.append(_jump_fits(v, j_lo, j_hi, lo_lim, hi_lim, n_fit=n_fit, n_guard=n_guard,
+        jfits.append(_jump_fits(v, j_lo, j_hi, lo_lim, hi_lim, n_fit=n_fit, n_guard=n_guard,
                                 degree=degree, omega_per_sample=omega, accel=a))
     # issue 28: the velocity steps' centroids against the contact pulses' measure what is
     # left of the vibrometer's delay after the declared one (the first moment of any
     # filter's impulse response is its low-frequency group delay): the fits are evaluated
     # at the impact time plus it, the impact time stays the accelerometer's
-    delay = channel_delay([j.t_v for j in jumps], [j.t_a for j in jumps]) \
+    delay = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits]) \
         if v is not None and a is not None else DelayEstimate(float("nan"), float("nan"), 0)
     delay = DelayEstimate(delay.value + lag, delay.stderr, delay.n)
     d_use = 0.0     # of the residual delay after the whole samples taken off
@@ -638,14 +638,14 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             return jf.t_a + d_use
         return jf.t_v if np.isfinite(jf.t_v) else jf.t_half
 
-    if v is not None and jumps:
+    if v is not None and jfits:
         # issue 28: the chain's step response as the record shows it: where it has not
         # settled at the fit windows' near ends (a decoder's overshoot and ringing), the
         # fits move out by what it needs
-        t_ev = np.array([t_eval_of(jf) for jf in jumps])
+        t_ev = np.array([t_eval_of(jf) for jf in jfits])
         n_pad0 = max(hi - lo + 1 for lo, hi, _, _ in spans) + n_guard
         n_extra_max = int(round(MAX_EXTRA_GUARD_S * fs_hz))
-        taus, med, noise = step_error(v, t_ev, [(jf.p, jf.q) for jf in jumps],
+        taus, med, noise = step_error(v, t_ev, [(jf.p, jf.q) for jf in jfits],
                                       [(lo_l, hi_l) for _, _, lo_l, hi_l in spans],
                                       n_pad0 + n_extra_max)
         first, last = settled_span(taus, med, noise)
@@ -658,12 +658,18 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         if extra > 0:
             step_guard_s = extra / fs_hz
             pads = [pd + extra for pd in pads]
-            jumps = [replace(_jump_fits(v, j_lo, j_hi, lo_l, hi_l, n_fit=n_fit,
+            jfits = [replace(_jump_fits(v, j_lo, j_hi, lo_l, hi_l, n_fit=n_fit,
                                         n_guard=n_guard + extra, degree=degree,
                                         omega_per_sample=omega, accel=None),
                              t_a=jf.t_a)
-                     for jf, (j_lo, j_hi, lo_l, hi_l) in zip(jumps, spans)]
-        for i, jf in enumerate(jumps):
+                     for jf, (j_lo, j_hi, lo_l, hi_l) in zip(jfits, spans)]
+            # the step's centroid over the wider span holds more of a ringing decoder's tail
+            est = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits])
+            if np.isfinite(est.value):
+                delay = DelayEstimate(est.value + lag, est.stderr, est.n)
+                if not velocity_delay_declared or delay_contradicted(delay):
+                    d_use = est.value
+        for i, jf in enumerate(jfits):
             if np.isfinite(jf.t_a):
                 t_idx[i], t_eval = jf.t_a, jf.t_a + d_use
             elif np.isfinite(jf.t_v):
