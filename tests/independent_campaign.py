@@ -278,11 +278,12 @@ def measure(plant: Plant, chain: Chain, W: float, levels: np.ndarray, rng: np.ra
             ring_v[i0:i0 + tau.size] += r * dv * env * np.cos(wj * tau)
             ring_a[i0:i0 + tau.size] += -r * dv * wj * env * np.sin(wj * tau)
         # the velocity step spread over one sample: a contact pulse of area dv in the accelerometer
+        # (linear interpolation of a delta at t_i: the centroid of the two samples is t_i)
         frac = i0 - t_i * fs
         if i0 - 1 >= 0:
-            acc[i0 - 1] += dv * fs * (1 - frac)
+            acc[i0 - 1] += dv * fs * frac
         if i0 < acc.size:
-            acc[i0] += dv * fs * frac
+            acc[i0] += dv * fs * (1 - frac)
     vel = v + (ring_v if chain.ring_in_velocity else 0.0) + (v_b if chain.measurand == "panel_absolute" else 0.0)
     hum = chain.hum_v_m_s * np.sin(2 * math.pi * chain.hum_hz * ts + 0.3)
     vel = vel + hum + chain.offset_v_m_s + chain.noise_v_m_s * rng.standard_normal(ts.size)
