@@ -228,6 +228,16 @@ class ImpactLog:
         Extra guard the velocity fits kept from each jump because the chain's step response
         (pooled over the impacts, :func:`rattle_lab.detect._timing.step_error`) had not
         settled at their near ends, s (0: it had).
+    velocity_delay_window_s : float
+        How far the delay estimate moved when the fits moved out by ``step_guard_s`` (the
+        centroids' dependence on their windows: a systematic error of the estimate), s.
+    e_per_delay_s : float
+        Median over the impacts of ``d e / d delay`` at the instant used, 1/s (NaN where no
+        measured delay was applied): what an error of the delay does to ``e``.
+    e_window_change : float
+        ``|median change of e|`` over the impacts when the fits moved out by
+        ``step_guard_s`` (0 when they did not): how much of the chain's step response the
+        nearer fits read, a measure of what the moved fits may still read.
     """
 
     t_s: np.ndarray
@@ -250,6 +260,9 @@ class ImpactLog:
     velocity_delay_n: int = 0
     velocity_delay_applied_s: float = 0.0
     step_guard_s: float = 0.0
+    velocity_delay_window_s: float = float("nan")
+    e_per_delay_s: float = float("nan")
+    e_window_change: float = 0.0
 
     def __post_init__(self) -> None:   # (pairs come back from a cache as lists)
         object.__setattr__(self, "ring_modes",
@@ -573,7 +586,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         floor = params.sigma_floor_rel * float(np.max(np.abs(a), initial=0.0))
         cfs.append(characteristic(a, floor, n_detrend, jump=False))
         names.append("acceleration")
-    lag, step_guard_s = 0, 0.0
+    lag, step_guard_s, e_slope, e_window = 0, 0.0, float("nan"), 0.0
     if v is not None and a is not None:
         # issue 28: a decoder can delay the velocity by many samples; its events are brought
         # onto the accelerometer's (whole samples) before the two are paired
@@ -630,7 +643,10 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     delay = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits]) \
         if v is not None and a is not None else DelayEstimate(float("nan"), float("nan"), 0)
     delay = DelayEstimate(delay.value + lag, delay.stderr, delay.n)
-    d_use = 0.0     # of the residual delay after the whole samples taken off
+    delay_first = delay.value
+    # the velocity is read at the impact time plus d_use in the shifted velocity's samples
+    # (plus lag in its own): -lag where the declared delay stands
+    d_use = -float(lag)
     if np.isfinite(delay.value) and (not velocity_delay_declared or delay_contradicted(delay)):
         d_use = delay.value - lag
     def t_eval_of(jf: _JumpFits) -> float:
@@ -655,6 +671,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             if np.isfinite(te):
                 need.append(max(0.0, pre_hi - (te + first) + 1, (te + last) - post_lo + 1))
         extra = min(int(np.ceil(np.median(need))) if need else 0, n_extra_max)
+        first_fits = jfits
         if extra > 0:
             step_guard_s = extra / fs_hz
             pads = [pd + extra for pd in pads]
@@ -669,6 +686,32 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                 delay = DelayEstimate(est.value + lag, est.stderr, est.n)
                 if not velocity_delay_declared or delay_contradicted(delay):
                     d_use = est.value
+        if d_use + lag != 0.0:
+            # how much e moves per sample of delay: the fits read a quarter sample either
+            # side of the instant used (the median over the impacts)
+            slopes = []
+            for jf in jfits:
+                te = t_eval_of(jf)
+                if np.isfinite(te):
+                    (pi1, qo1), (pi0, qo0) = jf.at(te + 0.25), jf.at(te - 0.25)
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        slopes.append((-qo1 / pi1 + qo0 / pi0) / 0.5)
+            sl = np.asarray(slopes, dtype=float)
+            sl = sl[np.isfinite(sl)]
+            e_slope = float(np.median(sl)) * fs_hz if sl.size else float("nan")
+        if first_fits is not jfits:
+            # what moving the fits out of the unsettled step changed in e: the part of the
+            # chain's step response the first fits read (a systematic error of their own)
+            moved = []
+            for jf0, jf in zip(first_fits, jfits):
+                te = t_eval_of(jf)
+                if np.isfinite(te):
+                    (pi0, qo0), (pi1, qo1) = jf0.at(te), jf.at(te)
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        moved.append(-qo1 / pi1 + qo0 / pi0)
+            mv = np.asarray(moved, dtype=float)
+            mv = mv[np.isfinite(mv)]
+            e_window = abs(float(np.median(mv))) if mv.size else float("nan")
         for i, jf in enumerate(jfits):
             if np.isfinite(jf.t_a):
                 t_idx[i], t_eval = jf.t_a, jf.t_a + d_use
@@ -759,7 +802,10 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                      velocity_delay_s=delay.value / fs_hz if delay.n else float("nan"),
                      velocity_delay_stderr_s=delay.stderr / fs_hz if delay.n else float("nan"),
                      velocity_delay_n=delay.n, velocity_delay_applied_s=(d_use + lag) / fs_hz,
-                     step_guard_s=step_guard_s)
+                     step_guard_s=step_guard_s,
+                     velocity_delay_window_s=abs(delay.value - delay_first) / fs_hz
+                     if delay.n else float("nan"),
+                     e_per_delay_s=e_slope, e_window_change=e_window)
 
 
 #: ``velocity_model = "auto"`` runs the flight model where the local fits' median residual

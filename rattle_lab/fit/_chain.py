@@ -138,6 +138,36 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
     return ()
 
 
+def delay_systematic(logs: list[Any]) -> tuple[float, str]:
+    """The error of e from the runs' measured vibrometer delays, and a note (0, "" if none).
+
+    Per run with a measured delay applied: ``|d e / d delay|`` times the delay's
+    uncertainty, its standard error and the change of the estimate when the fits moved out
+    of the step's unsettled part (:attr:`~rattle_lab.detect.ImpactLog.velocity_delay_window_s`)
+    in quadrature, and in quadrature with that the change of e itself when they moved
+    (:attr:`~rattle_lab.detect.ImpactLog.e_window_change`).  The same chain times every run
+    alike, so this is not averaged down over runs: the median over the runs is returned, to
+    be added to e's standard error in quadrature.
+    """
+    vals, deltas = [], []
+    for log in logs:
+        if log is None or not log.velocity_delay_applied_s or not np.isfinite(log.e_per_delay_s):
+            continue
+        sd = float(np.hypot(np.nan_to_num(log.velocity_delay_stderr_s),
+                            np.nan_to_num(log.velocity_delay_window_s)))
+        vals.append(float(np.hypot(abs(log.e_per_delay_s) * sd,
+                                   np.nan_to_num(log.e_window_change))))
+        deltas.append(sd * log.fs_hz)
+    if not vals:
+        return 0.0, ""
+    se = float(np.median(vals))
+    return se, (f"the vibrometer's delay was measured from the impacts in {len(vals)} runs; its "
+                f"uncertainty (median {np.median(deltas):.3f} samples: standard error and the "
+                "estimate's dependence on the fit windows) and the decoder's step response "
+                f"read by the velocity fits move e by {se:.4f} (median of the runs), added to "
+                "the standard error")
+
+
 def infer_measurand(run: Any, log: Any, v_si: np.ndarray, fs: float, t0: float, base: Any,
                     freq_hz: float | None) -> tuple[Any, tuple[str, ...]]:
     """An undeclared vibrometer's measurand from the data; the log made relative if absolute.
@@ -281,7 +311,7 @@ def _crossing_curve(thresholds: list[Threshold], freq_hz: np.ndarray) -> np.ndar
     return out
 
 
-__all__ = ["CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
+__all__ = ["CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED", "delay_systematic",
            "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
            "infer_measurand", "paired_plate_channels", "relative_to_striker", "run_chain_flags",
            "runs_thresholds", "transient_shocks", "velocity_delay_flags"]

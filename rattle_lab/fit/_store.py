@@ -30,7 +30,8 @@ from rattle_lab.fit._results import RunResult, StoreFit
 from rattle_lab.store import (input_hashes, open_stored_record, read_catalogue)
 from rattle_lab.detect.thresholds import Threshold, ramp_threshold, tabulate_thresholds
 from rattle_lab.records._chain import FLAG_MEASURAND_UNDECLARED
-from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of, infer_measurand,
+from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of, delay_systematic,
+                     infer_measurand,
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
                      transient_shocks, velocity_delay_flags)
 from ._grazing import GrazingFit, fit_grazing
@@ -503,8 +504,13 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                      "across the runs: these ratios include them and are biased; e from the "
                      "downward thresholds does not depend on them")
         ringing_flags.append(FLAG_RINGING_UNCORRECTED)
+    # issue 28: an error of a measured vibrometer delay moves every ratio of a run alike
+    delay_se, delay_note = delay_systematic([r.impacts for r in ok])
+    if delay_note:
+        notes.append(delay_note)
     if st.n:
-        ratio = RatioRestitution(st.mean, rs.stderr, "1", std=st.std, median=st.median, n=st.n,
+        ratio = RatioRestitution(st.mean, float(np.hypot(rs.stderr, delay_se)), "1", std=st.std,
+                                 median=st.median, n=st.n,
                                  n_runs=st.n_groups, notes=tuple(notes), **extra)
     else:
         missing["restitution_ratio"] = " ".join(
