@@ -41,7 +41,7 @@ from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, detrended_abs, n_samples_of, robust_sigma
 from ._flights import RingingProblem, flight_velocities, ringing_problem
 from ._timing import (MAX_COARSE_LAG_S, MAX_EXTRA_GUARD_S, DelayEstimate, channel_delay,
-                      coarse_lag, delay_contradicted, settled_span, shift_earlier, step_error)
+                      coarse_lag, settled_span, shift_earlier, step_error)
 
 
 @dataclass(frozen=True)
@@ -545,9 +545,9 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         (``group_delay_s``).  With both channels the vibrometer's delay relative to the
         accelerometer is measured from the impacts (:func:`rattle_lab.detect._timing.channel_delay`):
         undeclared, it is applied (the velocity fits are evaluated at the impact time plus
-        it); declared, it is applied only where the data contradict the declaration
-        (:func:`~rattle_lab.detect._timing.delay_contradicted`).  Either way it is in
-        :attr:`ImpactLog.velocity_delay_s`.
+        it); declared, the declaration stands and the measurement only checks it (the fit
+        flags a contradiction, :func:`rattle_lab.fit._chain.velocity_delay_flags`).  Either
+        way it is in :attr:`ImpactLog.velocity_delay_s`.
 
     Returns
     -------
@@ -647,7 +647,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     # the velocity is read at the impact time plus d_use in the shifted velocity's samples
     # (plus lag in its own): -lag where the declared delay stands
     d_use = -float(lag)
-    if np.isfinite(delay.value) and (not velocity_delay_declared or delay_contradicted(delay)):
+    if np.isfinite(delay.value) and not velocity_delay_declared:
         d_use = delay.value - lag
     def t_eval_of(jf: _JumpFits) -> float:
         if np.isfinite(jf.t_a):
@@ -684,7 +684,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             est = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits])
             if np.isfinite(est.value):
                 delay = DelayEstimate(est.value + lag, est.stderr, est.n)
-                if not velocity_delay_declared or delay_contradicted(delay):
+                if not velocity_delay_declared:
                     d_use = est.value
         if d_use + lag != 0.0:
             # how much e moves per sample of delay: the fits read a quarter sample either

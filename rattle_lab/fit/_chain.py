@@ -107,7 +107,7 @@ def relative_to_striker(run: Any, log: Any, base: Any, freq_hz: float | None) ->
 
 #: Data-quality flag: the vibrometer's delay was not declared and was measured from the impacts.
 FLAG_DELAY_ESTIMATED = "channel_delay_estimated"
-#: Data-quality flag: the declared delay is contradicted by the impacts (the measured is used).
+#: Data-quality flag: the declared delay is contradicted by the impacts (the declared is used).
 FLAG_DELAY_CONTRADICTED = "channel_delay_contradicted"
 #: Data-quality flag: the measurand was not declared and was inferred from the data.
 FLAG_MEASURAND_INFERRED = "measurand_inferred"
@@ -119,9 +119,11 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
     """Flags (with their notes) of the vibrometer's delay measured from the impacts.
 
     Undeclared and measured: :data:`FLAG_DELAY_ESTIMATED`; declared and contradicted by the
-    data beyond its uncertainty (:func:`rattle_lab.detect._timing.delay_contradicted`):
-    :data:`FLAG_DELAY_CONTRADICTED`.  Nothing where there was nothing to measure (one
-    channel, too few impacts) or the declaration holds.
+    data beyond its uncertainty and a whole sample
+    (:func:`rattle_lab.detect._timing.delay_contradicted`): :data:`FLAG_DELAY_CONTRADICTED`
+    (the declaration is still used).  Nothing where there was nothing to measure (one
+    channel, too few impacts), where the plate's higher modes ring in the vibrometer (its
+    step centroid is then not a measure of the delay) or where the declaration holds.
     """
     d, se, n = log.velocity_delay_s, log.velocity_delay_stderr_s, log.velocity_delay_n
     if not np.isfinite(d):
@@ -132,9 +134,17 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
     if not declared:
         return (f"{FLAG_DELAY_ESTIMATED}: the velocity lags the plate accelerometer by {what}; "
                 "the velocities are read at the impact time plus it",)
-    if log.velocity_delay_applied_s != 0.0:
+    from rattle_lab.detect._impacts import RINGING_RESIDUAL_RATIO
+    from rattle_lab.detect._timing import DelayEstimate, delay_contradicted
+
+    if log.ringing_ratio >= RINGING_RESIDUAL_RATIO:
+        # the plate's higher modes ring in the vibrometer after each impact: they move the
+        # velocity step's centroid (by up to 2 samples on the independent generator), so
+        # the data cannot check the declaration
+        return ()
+    if delay_contradicted(DelayEstimate(d * fs, se * fs, n)):
         return (f"{FLAG_DELAY_CONTRADICTED}: after the declared group_delay_s the velocity "
-                f"still lags the plate accelerometer by {what}; the measured delay is used",)
+                f"still lags the plate accelerometer by {what}; the declared delay is used",)
     return ()
 
 
