@@ -670,7 +670,16 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             _, pre_hi, post_lo, _ = _fit_windows(j_lo, j_hi, lo_l, hi_l, n_fit, n_guard)
             if np.isfinite(te):
                 need.append(max(0.0, pre_hi - (te + first) + 1, (te + last) - post_lo + 1))
-        extra = min(int(np.ceil(np.median(need))) if need else 0, n_extra_max)
+        extra = int(np.ceil(np.median(need))) if need else 0
+        if velocity_delay_declared:
+            # a declared chain keeps the fits where they were (the plate's higher modes
+            # ringing in the vibrometer also leave the step unsettled, and the flight model
+            # that deals with them was tuned on these windows)
+            extra = 0
+        if extra > n_extra_max:
+            # not settled within MAX_EXTRA_GUARD_S: not a decoder's step response but the
+            # plate's higher modes ringing in the vibrometer (the flight model's business)
+            extra = 0
         first_fits = jfits
         if extra > 0:
             step_guard_s = extra / fs_hz

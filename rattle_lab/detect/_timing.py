@@ -130,7 +130,9 @@ def shift_earlier(x: np.ndarray, lag: int) -> np.ndarray:
 #: A step has settled where the pooled normalised step error stays within this fraction of
 #: the jump (or within 4 of its own noise units, whichever is larger).
 SETTLED_WITHIN = 0.005
-#: Most extra guard, s, the settling adds on each side of a jump.
+#: Most extra guard, s, the settling adds on each side of a jump (a step that has not
+#: settled by then is taken for the plate's higher modes ringing in the vibrometer, and
+#: no guard is added).
 MAX_EXTRA_GUARD_S = 1e-3
 
 
