@@ -591,6 +591,9 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         # issue 28: a decoder can delay the velocity by many samples; its events are brought
         # onto the accelerometer's (whole samples) before the two are paired
         lag = coarse_lag(cfs[0], cfs[1], int(round(MAX_COARSE_LAG_S * fs_hz)), params.off)
+        # (a velocity jump's characteristic function sits on the later of its two samples:
+        # a lag of one is that, or a delay the centroids measure without the shift)
+        lag = lag if abs(lag) > 1 else 0
         if lag:
             v = shift_earlier(v, lag)
             floor = params.sigma_floor_rel * float(np.max(np.abs(v), initial=0.0))
