@@ -54,7 +54,7 @@ RATTLE_LAB = find_entry_point()
 #: dense eigensolvers and least squares (the BLAS kernel), the exact simulator and the flow
 #: (libm, the CPU features numba compiles for), fits and thresholds of simulated records
 #: (which inherit both, and in irregular regimes amplify them).  Their tests carry the
-#: ``numerics`` marker; ``make test-foreign`` (run by ``.ci/run`` after ``make test``) runs
+#: ``numerics`` marker; ``make test-foreign`` runs
 #: them again with ``OPENBLAS_CORETYPE=Nehalem`` and ``NUMBA_CPU_NAME=generic``, so a test
 #: that pins a machine's last bit fails on the developer's own machine.
 NUMERICS_MODULES = frozenset({

@@ -118,11 +118,11 @@ def test_report_parameter_reruns_only_the_report_and_outside_fits_are_noticed(
     no_model = _pipe(["report"], report={"model": False})
     first = run_pipeline(no_model, rec, store=store, out_dir=tmp_path)
     assert first.executed == ["ingest", "detect", "thresholds", "fit", "report"]
-    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 7  # with the acoustics page
+    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 8  # two summary pages, acoustics
     # [report] model = true: the report only (one more page pair: the model predictions)
     with_model = run_pipeline(_pipe(["report"]), rec, store=store, out_dir=tmp_path)
     assert with_model.executed == ["report"]
-    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 9
+    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 10
     # `rattle-lab fit` run on the store by hand replaces /results: the fit stage is stale
     fit_store(store, fit={"outlier_k": 3.0})
     after = run_pipeline(_pipe(["results"]), rec, store=store, out_dir=tmp_path)
@@ -186,6 +186,8 @@ def _as_plain(obj: Any) -> Any:
         return {f.name: _as_plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
     if isinstance(obj, (tuple, list)):
         return [_as_plain(x) for x in obj]
+    if isinstance(obj, dict):  # open mappings (a run's acoustics) may hold NaN too
+        return {k: _as_plain(v) for k, v in obj.items()}
     if isinstance(obj, np.ndarray):
         return ("array", obj.dtype.str, [_as_plain(x) for x in obj.tolist()])
     if isinstance(obj, float) and np.isnan(obj):

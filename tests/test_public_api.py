@@ -168,7 +168,7 @@ PACKAGES: dict[str, list[str]] = {
         "has_path", "read_results", "write_results", "StoredResults", "CACHE_GROUP",
         "read_cache_keys", "record_cache_keys", "read_cached", "write_cached", "output_digest",
         "input_hashes", "provenance_log", "verify_store", "check_linked_inputs", "Mismatch",
-        "record_attrs_count", "REINGEST_ADVICE"
+        "record_attrs_count", "REINGEST_ADVICE", "reingest_advice"
     ],
 }
 

@@ -270,7 +270,7 @@ def impact_gap_cycles(impact_t_s: object, t_threshold_s: float, freq_hz: float,
     --------
     >>> import numpy as np
     >>> t = np.r_[np.arange(1.0, 1.2, 0.01), np.arange(1.2, 2.0, 0.05)]   # 100 Hz: 1 then 5 cycles
-    >>> float(impact_gap_cycles(t, 1.0, 100.0, "up"))
+    >>> round(float(impact_gap_cycles(t, 1.0, 100.0, "up")), 6)
     1.0
     >>> round(float(impact_gap_cycles(t, t[-1], 100.0, "down")), 6)
     5.0
