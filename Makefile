@@ -38,15 +38,17 @@ demo: $(STAMP_RUN)
 	$(BIN)/rattle-lab demo --out demo_out
 
 ## make test: the whole test suite and every docstring example (doctests), on TEST_JOBS
-## processes (pytest-xdist; TEST_JOBS=0 runs it in this one)
+## processes (pytest-xdist; TEST_JOBS=0 runs it in this one), a whole file to a process
+## (its fixtures are built once)
 TEST_JOBS ?= 2
+XDIST = -n $(TEST_JOBS) --dist loadfile
 PYTEST_ARGS ?=
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -n $(TEST_JOBS) $(PYTEST_ARGS)
+	$(BIN)/python -m pytest -q $(XDIST) $(PYTEST_ARGS)
 
 ## make test-fast: the suite without the tests marked slow (over about 8 s each)
 test-fast: $(STAMP)
-	$(BIN)/python -m pytest -q -n $(TEST_JOBS) -m "not slow" $(PYTEST_ARGS)
+	$(BIN)/python -m pytest -q $(XDIST) -m "not slow" $(PYTEST_ARGS)
 
 ## make test-foreign: the numerically sensitive tests (marker numerics) again as another
 ## x86-64 machine computes them: OpenBLAS's Nehalem kernels (which every x86-64 CPU runs)
@@ -54,7 +56,7 @@ test-fast: $(STAMP)
 FOREIGN_ENV = OPENBLAS_CORETYPE=Nehalem NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=$(CURDIR)/.numba-generic
 test-foreign: $(STAMP)
 	$(FOREIGN_ENV) $(BIN)/python -m rattle_lab.model.sdf._compiled
-	$(FOREIGN_ENV) $(BIN)/python -m pytest -q -n $(TEST_JOBS) -m numerics -p no:cacheprovider \
+	$(FOREIGN_ENV) $(BIN)/python -m pytest -q $(XDIST) -m numerics -p no:cacheprovider \
 		$(PYTEST_ARGS)
 
 ## make lint: ruff (style, bugs) and mypy (types of the package)

@@ -77,12 +77,21 @@ NUMERICS_MODULES = frozenset({
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Mark the tests of :data:`NUMERICS_MODULES` ``numerics``."""
+    """Mark the tests of :data:`NUMERICS_MODULES` ``numerics``; run the files that hold a
+    ``slow`` test first.
+
+    ``make test`` hands whole files to its processes (pytest-xdist ``--dist loadfile``), so
+    that a file's module and session fixtures (the report's stores, a simulated campaign)
+    are built once rather than in each process; the long files go first so that the
+    processes end together.  The order within a file is kept.
+    """
     for item in items:
         module = getattr(item, "module", None)
         name = getattr(module, "__name__", "").rpartition(".")[2]
         if name in NUMERICS_MODULES:
             item.add_marker(pytest.mark.numerics)
+    slow_files = {item.path for item in items if item.get_closest_marker("slow") is not None}
+    items.sort(key=lambda item: item.path not in slow_files)  # stable: order kept otherwise
 
 
 @pytest.fixture(scope="session")

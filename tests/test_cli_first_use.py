@@ -8,7 +8,9 @@ then finds no cached kernel, as after ``pip install .``.
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -44,9 +46,45 @@ def test_commands_that_do_not_simulate_say_nothing(tmp_path: Path) -> None:
     assert proc.returncode == 0 and "compiling" not in proc.stderr
 
 
+def _cache_folders(cache: Path | None) -> dict[str, str]:
+    """Where numba keeps each kernel's cache, with ``NUMBA_CACHE_DIR=cache`` (or in the
+    package's ``__pycache__``)."""
+    code = ("import json; from rattle_lab.model.sdf._compiled import KERNELS, jit_kernel; "
+            "print(json.dumps({n: getattr(jit_kernel, n)._cache._cache_path for n in KERNELS}))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=_env(cache), timeout=300, check=True)
+    return json.loads(out.stdout)
+
+
+def _seed(cache: Path, names: tuple[str, ...]) -> None:
+    """Copy the test environment's numba cache of the kernels ``names`` into the cache folder
+    ``cache`` (numba's own layout below it); the kernels not named stay cold there."""
+    from rattle_lab.model.sdf._compiled import jit_kernel
+
+    ours, theirs = _cache_folders(None), _cache_folders(cache)
+    for name in names:
+        stem = getattr(jit_kernel, name)._cache._cache_file._index_name.removesuffix(".nbi")
+        files = list(Path(ours[name]).glob(stem + ".*"))
+        assert files, (name, stem)
+        Path(theirs[name]).mkdir(parents=True, exist_ok=True)
+        for f in files:
+            shutil.copy2(f, Path(theirs[name]) / f.name)
+
+
+def test_seeded_cache_leaves_only_the_unseeded_kernel_cold(tmp_path: Path) -> None:
+    # what the test below relies on: a cache folder with two kernels copied in is warm for
+    # those two and cold for the third
+    _seed(tmp_path / "seeded", ("run", "run_packed"))
+    assert _cold(tmp_path / "seeded") == ["run_pieces"]
+
+
 @pytest.mark.slow
 def test_the_first_simulation_says_it_compiles(tmp_path: Path) -> None:
+    # A cache with one kernel missing stands for the fresh install (the notice and the
+    # progress lines do not depend on how many are cold; compiling all three costs about a
+    # minute of the suite): the two others are copied in from the test environment's cache.
     cache = tmp_path / "fresh"
+    _seed(cache, ("run", "run_packed"))
     args = [str(RATTLE_LAB), "model", "run", "--F", "0.2", "--omega", "1.1", "--zeta", "0.05",
             "--e", "0.6", "--cycles", "5"]
     first = subprocess.run(args, capture_output=True, text=True, env=_env(cache), timeout=900)

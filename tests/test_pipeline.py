@@ -204,8 +204,10 @@ def _as_plain(obj: Any) -> Any:
 def pinned_sources(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A copy of the rattle_lab package: PYTHONPATH for every process of the Dask tests."""
     root = tmp_path_factory.mktemp("pinned")
-    shutil.copytree(Path(pipeline_module.__file__).parents[1], root / "rattle_lab",
-                    ignore=shutil.ignore_patterns("__pycache__"))
+    # with its __pycache__ folders: numba's cache of the compiled kernels lies there, and is
+    # valid for the copy (numba checks the source file's time stamp and size, which copytree
+    # keeps), so the workers and CLI processes do not compile every kernel again
+    shutil.copytree(Path(pipeline_module.__file__).parents[1], root / "rattle_lab")
     return root
 
 

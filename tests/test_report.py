@@ -334,10 +334,6 @@ def variant_rasters(report_content, tmp_path_factory: pytest.TempPathFactory):
     return out
 
 
-@pytest.mark.xfail(reason="NOT DONE (issue 23 item 4): in DejaVu Serif pages 1-6 stay within "
-                          "0-2.1 grey levels, but one of pages 7-10 moves by 16.0 (measured "
-                          "2026-11-27), likely the model page, whose legend outside the axes "
-                          "sets the plot's width by the glyphs", strict=True)
 def test_reference_comparison_survives_another_font(variant_rasters,
                                                     report_rasters: list[np.ndarray]) -> None:
     # another font family (wider glyphs) moves the drawing through the layout: every page

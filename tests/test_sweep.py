@@ -28,6 +28,7 @@ import pytest
 
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.model.analysis import branch_events, one_over_n_orbits
+import rattle_lab.model.analysis._sweep as sweep_module
 from rattle_lab.model.analysis._sweep import (
     SETTLE_CYCLES,
     Regime,
@@ -324,9 +325,15 @@ def test_unsettled_matches_get_no_period_label() -> None:
 
 
 @pytest.mark.parametrize("discard", [0, 20])
-def test_one_compiled_call_equals_the_simulate_loop(discard: int) -> None:
-    # The sweep runs a whole direction in one compiled call; it must be the same motion,
-    # bit for bit, as the loop of simulate() calls it replaces (state carried over).
+@pytest.mark.parametrize("call_cycles", [None, 80, 1])
+def test_compiled_calls_equal_the_simulate_loop(discard: int, call_cycles: int | None,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    # The sweep runs a direction in compiled calls of SWEEP_CALL_CYCLES periods (default:
+    # these 6 values in one call; 80: two values per call; 1: one value per call); it must
+    # be the same motion, bit for bit, as the loop of simulate() calls it replaces (state
+    # carried over, also from call to call).
+    if call_cycles is not None:
+        monkeypatch.setattr(sweep_module, "SWEEP_CALL_CYCLES", call_cycles)
     values = sweep_values(0.9, 1.0, 0.02)
     sw = sweep("omega", values, base=BASE, direction="down", cycles=40, discard=discard,
                n_max=10, lyapunov="none")

@@ -31,7 +31,13 @@ def _bifurcation_page(c: ModelContent) -> Figure:
 
     sets = c.sets
     fig = landscape_figure()
-    ax = fig.add_subplot()
+    # the plot and, right of it, a column of fixed width for the legend (outside the plot, so
+    # that the regions, the hatched coexistence first, stay visible); the legend is left out
+    # of the layout, so the plot's width does not follow the glyphs of the legend's font
+    grid = fig.add_gridspec(1, 2, width_ratios=[2.6, 1.0])
+    ax = fig.add_subplot(grid[0, 0])
+    legend_ax = fig.add_subplot(grid[0, 1])
+    legend_ax.set_axis_off()
     handles: list[Any] = []
     tab10 = matplotlib.colormaps["tab10"].colors  # type: ignore[attr-defined]
     for k, n in enumerate(sets.ns):
@@ -66,9 +72,9 @@ def _bifurcation_page(c: ModelContent) -> Figure:
     ax.set_title(f"Model bifurcation sets at the fitted zeta = {c.zeta:.3g} ({c.zeta_source}), "
                  f"e = {c.e:.3g}, with the measured thresholds\n(region edges smoothed within "
                  f"one cell of the {sets.omega.size} x {sets.F.size} grid)")
-    # outside the plot, right of it: the regions (the hatched coexistence first) stay visible
-    ax.legend(handles=[*handles, graze, on, off], fontsize=8.5, loc="upper left",
-              bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    legend = legend_ax.legend(handles=[*handles, graze, on, off], fontsize=8.5,
+                              loc="upper left", borderaxespad=0.0)
+    legend.set_in_layout(False)
     ax.grid(alpha=0.3)
     return fig
 

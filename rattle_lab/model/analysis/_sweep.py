@@ -38,10 +38,12 @@ The gap
     nondimensional state ``(x, v)`` is carried to the next value unchanged, as
     for the other parameters.
 
-One compiled call
-    A whole sweep direction (all values, discarded and kept periods) is one call
-    of the compiled kernel (:func:`rattle_lab.model.sdf._kernel.run_sweep`), the same
-    motion bit for bit as one ``simulate`` call per window; the first
+Compiled calls
+    A whole sweep direction (all values, discarded and kept periods) runs in calls
+    of the compiled kernel (:func:`rattle_lab.model.sdf._kernel.run_sweep`) of about
+    :data:`SWEEP_CALL_CYCLES` forcing periods each, the state carried from call to
+    call, the same motion bit for bit as one ``simulate`` call per window (and a
+    Ctrl-C lands between two calls, within a fraction of a second); the first
     classification of every window is a second compiled call
     (:func:`rattle_lab.model.analysis._periods._classify_windows`, what
     :func:`classify_settled` computes first), and only a match that has not
@@ -214,28 +216,56 @@ def _check_settings(param: object, cycles: object, discard: object, n_max: objec
     return cycles_i, discard_i, n_max_i
 
 
+#: Forcing periods per compiled call of a sweep (about 0.1 s of work): a sweep direction runs
+#: as consecutive calls of this size, the state carried over exactly, so that a Ctrl-C (held
+#: while a call runs, :func:`~rattle_lab.model.sdf._compiled.signals_deferred`) lands within
+#: a fraction of a second however long the sweep.  The motion is the same to the last bit.
+SWEEP_CALL_CYCLES = 20_000
+
+
 def _run_sweep(all_params: Sequence[SDFParams], state: SDFState, discard: int, kept: int
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Run a sweep direction in one compiled call; raise and warn as ``simulate`` does.
+    """Run a sweep direction in compiled calls of :data:`SWEEP_CALL_CYCLES` forcing periods;
+    raise and warn as ``simulate`` does.
 
-    Returns the arrays of :func:`rattle_lab.model.sdf._kernel.run_sweep`.
+    Returns the arrays of :func:`rattle_lab.model.sdf._kernel.run_sweep` for the whole
+    direction (as one call would).
     """
     from rattle_lab.model.sdf._compiled import jit_kernel, signals_deferred
 
     zeta = all_params[0].zeta
-    with signals_deferred():  # a Ctrl-C while the arrays are boxed would crash the process
-        out = jit_kernel.run_sweep(np.array([q.F for q in all_params]),
-                                   np.array([q.omega for q in all_params]),
-                                   np.array([q.e for q in all_params]), zeta, state.t, state.x,
-                                   state.v, state.theta, bool(state.stuck), float(discard),
-                                   float(kept))
-    imp, crs, off, ends, info = out
-    bad = np.flatnonzero(info[:, 1] != 0)
-    if bad.size:
-        q = all_params[int(bad[0])]
-        raise SimulationError(
-            f"event budget exhausted in the sweep at F={q.F}, omega={q.omega}, zeta={q.zeta}, "
-            f"e={q.e}; shorten `cycles`")
+    F = np.array([q.F for q in all_params])
+    w = np.array([q.omega for q in all_params])
+    e = np.array([q.e for q in all_params])
+    per_call = max(1, SWEEP_CALL_CYCLES // max(1, discard + kept))
+    t, x, v, th, stuck = state.t, state.x, state.v, state.theta, bool(state.stuck)
+    parts = []
+    for lo in range(0, len(all_params), per_call):
+        hi = min(lo + per_call, len(all_params))
+        with signals_deferred():  # a Ctrl-C while the arrays are boxed would crash the process
+            part = jit_kernel.run_sweep(F[lo:hi], w[lo:hi], e[lo:hi], zeta, t, x, v, th, stuck,
+                                        float(discard), float(kept))
+        parts.append(part)
+        bad = np.flatnonzero(part[4][:, 1] != 0)
+        if bad.size:
+            q = all_params[lo + int(bad[0])]
+            raise SimulationError(
+                f"event budget exhausted in the sweep at F={q.F}, omega={q.omega}, "
+                f"zeta={q.zeta}, e={q.e}; shorten `cycles`")
+        t, x, v, th, stuck_f = part[3][-1, 1:].tolist()
+        stuck = stuck_f != 0.0
+    imp = np.concatenate([p[0] for p in parts])
+    crs = np.concatenate([p[1] for p in parts])
+    ends = np.concatenate([p[3] for p in parts])
+    info = np.concatenate([p[4] for p in parts])
+    off = np.zeros((len(all_params) + 1, 2), dtype=np.int64)
+    base = np.zeros(2, dtype=np.int64)
+    row = 0
+    for p in parts:
+        n = p[3].shape[0]
+        off[row + 1:row + n + 1] = p[2][1:] + base
+        base = base + p[2][-1]
+        row += n
     unresolved = int(np.sum(info[:, 2]))
     if unresolved:
         warnings.warn(f"{unresolved} event searches of the sweep were settled at the work cap; "
@@ -337,7 +367,7 @@ def sweep(param: SweepParam, values: ArrayLike, *, base: SDFParams, direction: D
     linear = np.atleast_1d(linear_impact_velocity(np.array([q.F for q in all_params]),
                                                   np.array([q.omega for q in all_params]),
                                                   base.zeta))
-    # The whole direction in one compiled call (rattle_lab.model.sdf._kernel.run_sweep): at each
+    # The whole direction in compiled calls (rattle_lab.model.sdf._kernel.run_sweep): at each
     # value `discard` periods without crossings (a second call from the same state and
     # forcing phase is the same motion, and the cheaper one), then the kept periods.
     imp_all, crs_all, off, ends, info = _run_sweep(all_params, state, discard_i, kept)
