@@ -59,12 +59,13 @@ test-foreign: $(STAMP)
 	$(FOREIGN_ENV) $(BIN)/python -m pytest -q $(XDIST) -m numerics -p no:cacheprovider \
 		$(PYTEST_ARGS)
 
-## make lint: ruff (style, bugs) and mypy (types of the package)
-lint: $(STAMP_DEV)
+## make lint: ruff (style, bugs), mypy (types of the package) and the docs build (make docs)
+lint: $(STAMP_DEV) $(STAMP_DOCS)
 	$(BIN)/ruff check .
 	$(BIN)/mypy
+	$(MAKE) docs
 
-## make docs: the API reference (Sphinx, warnings are errors) in docs/_build/html
+## make docs: the guide and the API reference (Sphinx, warnings are errors) in docs/_build/html
 docs: $(STAMP_DOCS)
 	$(BIN)/python -m sphinx -W --keep-going -E -b html -q docs docs/_build/html
 
