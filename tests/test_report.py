@@ -402,9 +402,10 @@ def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -
         fig = model_pages(model_content(gather(stores["fitted"])))[0]
     finally:
         analysis.bifurcation_sets = real
-    ax = fig.axes[0]
-    legend = {t.get_text(): h for t, h in zip(ax.get_legend().get_texts(),
-                                              ax.get_legend().legend_handles)}
+    # the legend sits in the column right of the plot (an axes of its own, no axis drawn)
+    (box,) = [a.get_legend() for a in fig.axes if a.get_legend() is not None]
+    assert not fig.axes[1].axison and box.axes is fig.axes[1]
+    legend = {t.get_text(): h for t, h in zip(box.get_texts(), box.legend_handles)}
     kinds = [k for k in ("saddle-node", "period-doubling", "secondary-grazing") if k in legend]
     assert kinds, legend.keys()
     for kind in kinds:
