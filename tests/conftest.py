@@ -148,8 +148,21 @@ def full_report(report_content, tmp_path_factory: pytest.TempPathFactory):
 
 
 @pytest.fixture(scope="session")
-def report_rasters(full_report) -> list:
-    """The full report's pages as images of their drawn structure (rendered once)."""
+def snapshot_report(tmp_path_factory: pytest.TempPathFactory):
+    """``(content, ReportResult, path)`` of the content snapshot the reference images were
+    drawn from (``tests/report_images.py``), written to a PDF once."""
+    from report_images import load_content_snapshot
+
+    from rattle_lab.report import write_pdf
+
+    content = load_content_snapshot()
+    out = tmp_path_factory.mktemp("snapshot") / "report.pdf"
+    return content, write_pdf(content, out), out
+
+
+@pytest.fixture(scope="session")
+def snapshot_rasters(snapshot_report) -> list:
+    """The snapshot report's pages as images of their drawn structure (rendered once)."""
     from report_images import structure_rasters
 
-    return structure_rasters(full_report[1])
+    return structure_rasters(snapshot_report[2])

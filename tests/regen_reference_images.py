@@ -5,7 +5,8 @@ Run after an intended change to a report page, then look at the images and commi
     make reference-images        # or: .venv/bin/python tests/regen_reference_images.py
 
 It builds the report exactly as the tests do (:mod:`report_fixture`: the default scene,
-ingested and fitted with default settings) and writes each page's drawn structure
+ingested and fitted with default settings), writes its content as the snapshot the image
+tests draw (:data:`report_images.CONTENT_SNAPSHOT`) and each page's drawn structure
 (:func:`report_images.structure_rasters`).  The tests only compare; none writes a reference.
 """
 
@@ -17,10 +18,17 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from report_fixture import build_report, build_stores  # noqa: E402
-from report_images import REF_DIR, save_references, structure_rasters  # noqa: E402
+from report_fixture import build_stores  # noqa: E402
+from report_images import (  # noqa: E402
+    REF_DIR,
+    save_content_snapshot,
+    save_references,
+    structure_rasters,
+)
 
+from rattle_lab.report import write_pdf  # noqa: E402
 from rattle_lab.rig import write_synthetic  # noqa: E402
+from rattle_lab.workflow import build_report_content, gather  # noqa: E402
 
 
 def main() -> int:
@@ -29,9 +37,12 @@ def main() -> int:
         record = folder / "campaign.h5"
         write_synthetic("default", record, quiet=True)
         stores = build_stores(record, folder)
-        result = build_report(stores["fitted"], folder / "report.pdf")
+        content = build_report_content(gather(stores["fitted"]), model=True)
+        save_content_snapshot(content)
+        result = write_pdf(content, folder / "report.pdf")
         paths = save_references(structure_rasters(result.path))
-    print(f"{len(paths)} reference images written to {REF_DIR}; look at them before committing")
+    print(f"{len(paths)} reference images and the content snapshot written to {REF_DIR}; "
+          "look at them before committing")
     return 0
 
 

@@ -270,19 +270,35 @@ def test_errors(stores: dict[str, Path], tmp_path: Path) -> None:
 # rewrites the references, to be looked at before they are committed.
 
 
-def test_report_pages_match_reference_images(full_report: tuple[ReportResult, Path],
-                                             report_rasters: list[np.ndarray]) -> None:
-    result, _ = full_report
-    assert len(report_rasters) == result.n_pages
+def test_report_pages_match_reference_images(snapshot_report,
+                                             snapshot_rasters: list[np.ndarray]) -> None:
+    _, result, _ = snapshot_report
+    assert len(snapshot_rasters) == result.n_pages
     refs = reference_paths()
-    assert len(refs) == len(report_rasters), \
+    assert len(refs) == len(snapshot_rasters), \
         "reference images out of date: run `make reference-images` and look at them"
-    for i, (img, ref_path) in enumerate(zip(report_rasters, refs), start=1):
+    for i, (img, ref_path) in enumerate(zip(snapshot_rasters, refs), start=1):
         ref = load_reference(ref_path)
         assert img.shape == ref.shape, (i, img.shape, ref.shape)
         assert worst_tile(img, ref) <= TILE_TOLERANCE, (i, worst_tile(img, ref))
         assert (img.std() > 5.0) == (ref.std() > 5.0)  # a drawing where the reference has
         # one (the summary pages are text only: blank here)
+
+
+def test_the_snapshot_has_the_live_reports_sections_and_pages(
+        snapshot_report, report_content, full_report: tuple[ReportResult, Path]) -> None:
+    # the images are drawn from the content snapshot (tests/report_images.py says why); the
+    # report simulated, ingested and fitted in this run has the same sections, the same
+    # content types and as many pages; else `make reference-images` is due
+    content, result, _ = snapshot_report
+    live = dict(report_content.sections)
+    assert [name for name, _ in content.sections] == list(live), \
+        "content snapshot out of date: run `make reference-images` and look at the images"
+    for name, section in content.sections:
+        assert type(section) is type(live[name]), name
+        assert [f.name for f in dataclasses.fields(section)] == \
+            [f.name for f in dataclasses.fields(live[name])], name
+    assert result.n_pages == full_report[0].n_pages
 
 
 def test_no_test_writes_a_reference_image() -> None:
@@ -305,7 +321,7 @@ def _page_of(result: ReportResult, path: Path, section: str) -> int:
 
 
 @pytest.fixture(scope="module")
-def variant_rasters(report_content, tmp_path_factory: pytest.TempPathFactory):
+def variant_rasters(snapshot_report, tmp_path_factory: pytest.TempPathFactory):
     """Rasters of the same content drawn another way: ``name -> pages``.
 
     ``serif``: every page in another font family; the damaged ones: the summary and the one
@@ -315,6 +331,7 @@ def variant_rasters(report_content, tmp_path_factory: pytest.TempPathFactory):
 
     from rattle_lab.report import write_pdf
 
+    report_content = snapshot_report[0]
     folder = tmp_path_factory.mktemp("variants")
     sections = dict(report_content.sections)
     spl, th = sections["SPL law"], sections["thresholds"]
@@ -335,27 +352,28 @@ def variant_rasters(report_content, tmp_path_factory: pytest.TempPathFactory):
 
 
 def test_reference_comparison_survives_another_font(variant_rasters,
-                                                    report_rasters: list[np.ndarray]) -> None:
+                                                    snapshot_rasters: list[np.ndarray]) -> None:
     # another font family (wider glyphs) moves the drawing through the layout: every page
     # stays within the tolerance
     pages = variant_rasters["serif"]
-    worst = [worst_tile(a, b) for a, b in zip(pages, report_rasters)]
-    assert len(pages) == len(report_rasters)
+    worst = [worst_tile(a, b) for a, b in zip(pages, snapshot_rasters)]
+    assert len(pages) == len(snapshot_rasters)
     assert max(worst) <= TILE_TOLERANCE, worst
 
 
 @pytest.mark.parametrize("name, section", [("no SPL lines", "SPL law"),
                                            ("no band", "thresholds")])
 def test_image_comparison_catches_a_lost_curve_or_band(name: str, section: str,
-                                                      variant_rasters, full_report,
-                                                      report_rasters: list[np.ndarray]) -> None:
+                                                      variant_rasters, snapshot_report,
+                                                      snapshot_rasters: list[np.ndarray]
+                                                      ) -> None:
     # the guard can fail: the SPL-law page without its fitted lines, the threshold page
     # without the fit's 95 % band, are each beyond the tolerance; the summary page, drawn
     # alike, is not
     pages = variant_rasters[name]
-    k = _page_of(*full_report, section)
-    assert worst_tile(pages[-1], report_rasters[k]) > TILE_TOLERANCE
-    assert worst_tile(pages[0], report_rasters[0]) <= TILE_TOLERANCE
+    k = _page_of(*snapshot_report[1:], section)
+    assert worst_tile(pages[-1], snapshot_rasters[k]) > TILE_TOLERANCE
+    assert worst_tile(pages[0], snapshot_rasters[0]) <= TILE_TOLERANCE
 
 
 def test_negative_hysteresis_is_flagged(stores: dict[str, Path], tmp_path: Path) -> None:
