@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import signal
 import re
 import stat
 import tempfile
@@ -64,6 +65,22 @@ def remove_stale_temporaries(directory: str | os.PathLike[str]) -> list[Path]:
     return removed
 
 
+_HELD = (signal.SIGINT, signal.SIGTERM)
+
+
+def _hold_signals() -> set[int | signal.Signals] | None:
+    """Block Ctrl-C and SIGTERM in this thread (they stay pending); the previous mask."""
+    if not hasattr(signal, "pthread_sigmask"):  # not POSIX: nothing to hold
+        return None
+    return signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+
+
+def _release_signals(previous: set[int | signal.Signals] | None) -> None:
+    """Restore the mask :func:`_hold_signals` returned (a pending signal is delivered)."""
+    if previous is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike[str], suffix: str | None = None) -> Iterator[Path]:
     """Yield a temporary path; on success rename it onto ``target``.
@@ -93,25 +110,31 @@ def atomic_path(target: str | os.PathLike[str], suffix: str | None = None) -> It
     if target.is_dir():
         raise OutputError(f"{target}: is a directory; give a file name for the output")
     remove_stale_temporaries(directory)
+    # Ctrl-C and SIGTERM are held from the temporary file's creation until the clean-up below
+    # is in place (a signal in between left the file behind); one that came meanwhile lands
+    # inside it.
+    held = _hold_signals()
     try:
         fd, tmp_name = tempfile.mkstemp(
             prefix=f".{target.name}{TMP_MARKER}{os.getpid()}-",
             suffix=suffix if suffix is not None else target.suffix, dir=directory)
     except OSError as exc:
+        _release_signals(held)
         raise OutputError(f"{target}: cannot write in {directory}: "
                           f"{exc.strerror or exc}") from exc
-    try:
-        # mkstemp makes the file 0o600; the result should have the mode of the file it
-        # replaces, or else that of any new file (0o666 less the umask).
-        try:
-            mode = stat.S_IMODE(os.stat(target).st_mode)
-        except OSError:
-            mode = 0o666 & ~_umask()
-        os.fchmod(fd, mode)
-    finally:
-        os.close(fd)
     tmp = Path(tmp_name)
     try:
+        try:
+            _release_signals(held)
+            # mkstemp makes the file 0o600; the result should have the mode of the file it
+            # replaces, or else that of any new file (0o666 less the umask).
+            try:
+                mode = stat.S_IMODE(os.stat(target).st_mode)
+            except OSError:
+                mode = 0o666 & ~_umask()
+            os.fchmod(fd, mode)
+        finally:
+            os.close(fd)
         yield tmp
         os.replace(tmp, target)
     except BaseException as exc:
