@@ -18,8 +18,8 @@ from rattle_lab.exceptions import OutputError
 from rattle_lab.model.plate import Plate
 from rattle_lab.records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable, Truth,
                        scale_to_si, write_record)
-from rattle_lab.model.modal._sound import C_AIR_M_S
-from rattle_lab.records._model import as_source
+from rattle_lab.model.modal import C_AIR_M_S
+from rattle_lab.records import as_source
 from . import _chain as cc
 from . import _modal as md
 from . import _channels as ch

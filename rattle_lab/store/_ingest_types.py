@@ -12,8 +12,8 @@ from typing import Any, Literal
 
 import xxhash
 
-from rattle_lab.records._model import Skipped
-from rattle_lab.records._quality import Finding
+from rattle_lab.records import Skipped
+from rattle_lab.records import Finding
 
 Storage = Literal["link", "copy"]
 

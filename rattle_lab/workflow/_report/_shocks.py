@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from rattle_lab.report._content_types import ShockContent, ShockRun, ShockTrace
+from rattle_lab.report import ShockContent, ShockRun, ShockTrace
 from ._content import Missing, require_results
 from ._gather import ReportData
 

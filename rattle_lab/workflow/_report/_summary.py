@@ -18,7 +18,7 @@ import numpy as np
 from rattle_lab.fit import (SIGNIFICANCE_K, Estimate, Fits, GrazingSummary, RatioRestitution,
                             negative_hysteresis)
 from rattle_lab.fit import student_t_ci
-from rattle_lab.report._common import TEXT_WIDTH, fmt, wrapped
+from rattle_lab.report import TEXT_WIDTH, fmt, wrapped
 from ._gather import ReportData
 
 _COLS = (("quantity", 34), ("value", 11), ("std. error", 11), ("95 % CI", 27), ("unit", 0))
