@@ -303,3 +303,94 @@ def test_every_package_imports_first():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-3000:]
     assert out.stdout.strip() == "ok"
+
+
+# ------------------------------------------------------------------- no hidden import circle
+def _type_checking_only(tree: ast.AST) -> set[int]:
+    """Lines of the imports under ``if TYPE_CHECKING:`` (they never run)."""
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and ast.unparse(node.test) in ("TYPE_CHECKING",
+                                                                  "typing.TYPE_CHECKING"):
+            found |= {n.lineno for stmt in node.body for n in ast.walk(stmt)
+                      if isinstance(n, (ast.Import, ast.ImportFrom))}
+    return found
+
+
+def import_circles(modules: dict[str, Module], root: str = "rattle_lab") -> list[list[str]]:
+    """The circles of the module import graph, imports inside functions included.
+
+    An import inside a function that closes a circle still couples the modules both ways;
+    only imports under ``TYPE_CHECKING`` are left out.  Returns each circle's modules
+    (a strongly connected component with more than one module), sorted.
+    """
+    graph: dict[str, set[str]] = {name: set() for name in modules}
+    for name, module in modules.items():
+        skip = _type_checking_only(ast.parse(module.source))
+        for line, target, imported, _node in _module_imports(name, module):
+            if line in skip or not (target == root or target.startswith(root + ".")):
+                continue
+            if imported is not None and f"{target}.{imported}" in modules:
+                target = f"{target}.{imported}"
+            if target in modules and target != name:
+                graph[name].add(target)
+    # Tarjan's strongly connected components, iteratively
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    circles = []
+    for start in graph:
+        if start in index:
+            continue
+        work = [(start, iter(sorted(graph[start])))]
+        index[start] = low[start] = len(index)
+        stack.append(start)
+        on_stack.add(start)
+        while work:
+            v, children = work[-1]
+            for w in children:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on_stack.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                    break
+                if w in on_stack:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    component = []
+                    while True:
+                        w = stack.pop()
+                        on_stack.discard(w)
+                        component.append(w)
+                        if w == v:
+                            break
+                    if len(component) > 1:
+                        circles.append(sorted(component))
+    return sorted(circles)
+
+
+def test_no_import_circle():
+    """No two modules import each other, directly or round a circle (issue 25, item 5)."""
+    circles = import_circles(modules_on_disk())
+    assert not circles, "import circles: " + "; ".join(" <-> ".join(c) for c in circles)
+
+
+def test_the_circle_check_finds_a_hidden_circle():
+    tree = {
+        "pkg": Module("", True),
+        # a -> b at import, b -> c in a function, c -> a in a function: one circle of three
+        "pkg._a": Module("from ._b import f\n", False),
+        "pkg._b": Module("def f():\n    from pkg._c import g\n", False),
+        "pkg._c": Module("def g():\n    from . import _a\n", False),
+        # d <-> e only for the type checker: no circle
+        "pkg._d": Module("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                         "    from ._e import E\n", False),
+        "pkg._e": Module("from ._d import D\n", False),
+    }
+    assert import_circles(tree, root="pkg") == [["pkg._a", "pkg._b", "pkg._c"]]
