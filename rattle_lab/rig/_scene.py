@@ -13,11 +13,9 @@ import math
 import os
 import tomllib
 from dataclasses import dataclass, field
-from importlib import resources
-from pathlib import Path
 from typing import Any, Literal
 
-from rattle_lab._resources import find_resource, not_found_hint
+from rattle_lab._resources import find_resource, resolve_resource
 from rattle_lab.exceptions import ParameterError
 from ._chain_spec import ChainSpec, parse_chain
 from ._modal_spec import ModalRigSpec, parse_modal
@@ -489,22 +487,15 @@ def load_scene(scene: str | os.PathLike[str]) -> Scene:
     >>> load_scene("default").campaign_id
     'demo-cfcf'
     """
-    if str(scene) == "default":
-        text = resources.files("rattle_lab").joinpath("data/scenes/default.toml").read_text("utf-8")
-        source = "default"
-    else:
-        path = Path(scene)
-        if not path.exists():  # a scene shipped with rattle_lab, by name
-            found = find_resource("scenes", str(scene))
-            if found is None:
-                raise SceneError(f"{scene}: cannot read the scene: "
-                                 f"{not_found_hint('scenes', scene)}")
-            path = found
-        source = str(path)
-        try:
-            text = path.read_text("utf-8")
-        except OSError as exc:
-            raise SceneError(f"{source}: cannot read the scene: {exc.strerror}") from exc
+    # "default": the embedded scene (whatever the folder holds); else a file, or a scene
+    # shipped with rattle_lab, by name
+    embedded = find_resource("scenes", "default") if str(scene) == "default" else None
+    path = embedded or resolve_resource("scenes", scene, SceneError, "cannot read the scene")
+    source = "default" if embedded else str(path)
+    try:
+        text = path.read_text("utf-8")
+    except OSError as exc:
+        raise SceneError(f"{source}: cannot read the scene: {exc.strerror}") from exc
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -161,9 +161,7 @@ def _is_scene(item: str) -> bool:
 
 def _scene_bytes(item: str) -> bytes:
     if item == "default":
-        from importlib import resources
-
-        return resources.files("rattle_lab").joinpath("data/scenes/default.toml").read_bytes()
+        item = str(find_resource("scenes", "default"))   # the embedded scene
     try:
         return Path(item).read_bytes()
     except OSError as exc:
