@@ -26,7 +26,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from rattle_lab.records import (FLAG_PARTICIPATION_ASSUMED, Participation, PlateF1,
-                                       plate_model_f1)
+                                plate_model_f1)
 
 #: Data-quality flag: the rig's plate model's f1 and the fitted f_s disagree.
 FLAG_PLATE_MODEL_DISAGREES = "plate_model_disagrees"

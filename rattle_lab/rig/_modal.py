@@ -43,10 +43,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from rattle_lab.model.modal import (ModalResult, ModalState, ModalSystem, contact_from_name, plate_system,
-                     rayleigh_pressure, residual_pressure, simulate_modal)
-from rattle_lab.model.modal import C_AIR_M_S, plate_surface
-from rattle_lab.model.modal import Contact
+from rattle_lab.model.modal import (C_AIR_M_S, Contact, ModalResult, ModalState, ModalSystem,
+                                    contact_from_name, plate_surface, plate_system,
+                                    rayleigh_pressure, residual_pressure, simulate_modal)
 from rattle_lab.model.plate import Plate
 from rattle_lab.records import Rig
 from ._counter import StageCounter

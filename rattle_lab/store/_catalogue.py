@@ -12,10 +12,7 @@ import numpy as np
 
 from rattle_lab.exceptions import ParameterError
 from ._errors import StoreError
-from rattle_lab.records import LinkPolicy, link_policy
-from rattle_lab.records import Record
-from rattle_lab.records import load_group
-from rattle_lab.records import validate_tree
+from rattle_lab.records import LinkPolicy, Record, link_policy, load_group, validate_tree
 
 from ._index import _link_problem, _open_store, _read_columns_from, _text, reingest_advice
 from ._ingest_types import CATALOGUE_COLUMNS

@@ -11,10 +11,8 @@ import h5py
 import numpy as np
 
 from rattle_lab._progress import progress_bar
-from rattle_lab.records import record_to_tree
-from rattle_lab.records import ArraySource, Channel, Record
-from rattle_lab.records import ChannelChecker, Finding, QualityLimits, TimestampChecker
-from rattle_lab.records import write_tree
+from rattle_lab.records import (ArraySource, Channel, ChannelChecker, Finding, QualityLimits,
+                                Record, TimestampChecker, record_to_tree, write_tree)
 
 from ._ingest_types import Storage
 

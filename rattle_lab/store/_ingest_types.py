@@ -12,8 +12,7 @@ from typing import Any, Literal
 
 import xxhash
 
-from rattle_lab.records import Skipped
-from rattle_lab.records import Finding
+from rattle_lab.records import Finding, Skipped
 
 Storage = Literal["link", "copy"]
 

@@ -70,7 +70,7 @@ from rattle_lab._resources import find_resource
 from rattle_lab._version import __version__
 from rattle_lab.exceptions import OutputError, ParameterError
 from rattle_lab.store import (CACHE_GROUP, check_linked_inputs, has_path, output_digest,
-                    read_cache_keys, read_cached, record_cache_keys, store_lock, write_cached)
+                              read_cache_keys, read_cached, record_cache_keys, store_lock, write_cached)
 from ._pipeline_spec import (DEPENDS, OUTPUTS, STAGES, Pipeline, Stage, load_pipeline_file,
                              parse_pipeline)
 

@@ -16,8 +16,7 @@ from typing import Any
 import numpy as np
 
 from rattle_lab.fit import (SIGNIFICANCE_K, Estimate, Fits, GrazingSummary, RatioRestitution,
-                            negative_hysteresis)
-from rattle_lab.fit import student_t_ci
+                            negative_hysteresis, student_t_ci)
 from rattle_lab.report import TEXT_WIDTH, fmt, wrapped
 from ._gather import ReportData
 
