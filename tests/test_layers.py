@@ -167,17 +167,17 @@ def _declared_all(source: str, where: str) -> list[str] | None:
     return None
 
 
-def _module_imports(name: str, module: Module) -> list[tuple[int, str, str | None, ast.AST]]:
-    """``(line, target module, imported name or None, node)`` for every import of the module.
+def _module_imports(name: str, module: Module) -> list[tuple[int, str, str | None, str | None]]:
+    """``(line, target module, imported name, bound name)`` for every import of the module.
 
-    ``from a.b import c`` where ``a.b.c`` is a module gives target ``a.b.c`` and name None;
-    relative imports are resolved against ``name``.
+    The bound name is what the import defines in the module (None for ``import a.b``
+    without ``as``).  Relative imports are resolved against ``name``.
     """
     out = []
     tree = ast.parse(module.source)
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            out.extend((node.lineno, alias.name, None, node) for alias in node.names)
+            out.extend((node.lineno, alias.name, None, alias.asname) for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = name.split(".") if module.is_package else name.split(".")[:-1]
@@ -185,7 +185,8 @@ def _module_imports(name: str, module: Module) -> list[tuple[int, str, str | Non
                 target = ".".join(base + ([node.module] if node.module else []))
             else:
                 target = node.module or ""
-            out.extend((node.lineno, target, alias.name, node) for alias in node.names)
+            out.extend((node.lineno, target, alias.name, alias.asname or alias.name)
+                       for alias in node.names)
     return out
 
 
@@ -211,7 +212,8 @@ def layer_violations(modules: dict[str, Module], root: str = "rattle_lab") -> li
     found = []
     for name, module in modules.items():
         home = owner(name)
-        for line, target, imported, _node in _module_imports(name, module):
+        tree = ast.parse(module.source)
+        for line, target, imported, bound in _module_imports(name, module):
             if target != root and not target.startswith(root + "."):
                 continue
             if imported is not None and f"{target}.{imported}" in modules:
@@ -232,6 +234,12 @@ def layer_violations(modules: dict[str, Module], root: str = "rattle_lab") -> li
             elif imported is not None and imported not in declared:
                 found.append(Violation(name, line, target, imported,
                                        f"not in {target}.__all__"))
+            elif imported is None and bound is not None:   # a module: the names used on it
+                for node in ast.walk(tree):
+                    if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
+                            and node.value.id == bound and node.attr not in declared):
+                        found.append(Violation(name, node.lineno, target, node.attr,
+                                               f"not in {target}.__all__"))
     return found
 
 
@@ -265,7 +273,9 @@ def test_the_check_finds_what_it_should():
             "from pkg.low.open import f, g\n"        # 8 g is not in open.__all__
             "import pkg.low.bare\n"                  # 9 a public module without __all__
             "import pkg.low\n"                       # 10 fine
-            "from pkg.nowhere import y\n",           # 11 no such module
+            "from pkg.nowhere import y\n"            # 11 no such module
+            "from pkg import low as lo\n"            # 12 a package as a module: fine ...
+            "lo.Thing, lo.hidden\n",                 # 13 ... but hidden is not in its __all__
             False),
     }
     got = {(v.line, v.target, v.name) for v in layer_violations(tree, root="pkg")}
@@ -277,6 +287,7 @@ def test_the_check_finds_what_it_should():
         (8, "pkg.low.open", "g"),
         (9, "pkg.low.bare", None),
         (11, "pkg.nowhere", "y"),
+        (13, "pkg.low", "hidden"),
     }
 
 
@@ -327,7 +338,7 @@ def import_circles(modules: dict[str, Module], root: str = "rattle_lab") -> list
     graph: dict[str, set[str]] = {name: set() for name in modules}
     for name, module in modules.items():
         skip = _type_checking_only(ast.parse(module.source))
-        for line, target, imported, _node in _module_imports(name, module):
+        for line, target, imported, _bound in _module_imports(name, module):
             if line in skip or not (target == root or target.startswith(root + ".")):
                 continue
             if imported is not None and f"{target}.{imported}" in modules:
