@@ -16,11 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from rattle_lab.detect._pairing import base_velocity_at, onto_grid
-from rattle_lab.detect._shock import detect_shock
+from rattle_lab.detect import base_velocity_at, detect_shock, onto_grid
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
-                              channel_time_offset_s)
+from rattle_lab.records import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
+                                channel_time_offset_s)
 from rattle_lab.fit._results import RunResult
 from rattle_lab.detect.thresholds import Threshold, crossing_level_ms2
 

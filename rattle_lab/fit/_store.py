@@ -23,9 +23,9 @@ import numpy as np
 from rattle_lab._version import __version__
 from rattle_lab.acoustics import campaign_background, run_acoustics  # [issue 17, 26]
 from rattle_lab.detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
-                      impact_pattern, impulse_train, rms_spl_db, sound_peaks)
+                               impact_pattern, impulse_train, rms_spl_db, sound_peaks)
 from rattle_lab.exceptions import RattleLabError
-from rattle_lab.records._chain import Participation, resolve_participation
+from rattle_lab.records import Participation, resolve_participation
 from rattle_lab.fit._results import RunResult, StoreFit
 from rattle_lab.store import (input_hashes, open_stored_record, read_catalogue)
 from rattle_lab.detect.thresholds import Threshold, ramp_threshold, tabulate_thresholds
