@@ -108,6 +108,138 @@ def relative_to_striker(run: Any, log: Any, base: Any, freq_hz: float | None) ->
     return dataclasses.replace(log, v_in_m_s=vin, v_out_m_s=vout, e=e)
 
 
+#: Data-quality flag: the vibrometer's delay was not declared and was measured from the impacts.
+FLAG_DELAY_ESTIMATED = "channel_delay_estimated"
+#: Data-quality flag: the declared delay is contradicted by the impacts (the declared is used).
+FLAG_DELAY_CONTRADICTED = "channel_delay_contradicted"
+#: Data-quality flag: the measurand was not declared and was inferred from the data.
+FLAG_MEASURAND_INFERRED = "measurand_inferred"
+#: Data-quality flag: the measurand was not declared and the data cannot tell (e withheld).
+FLAG_MEASURAND_UNDETERMINED = "measurand_undetermined"
+
+
+def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
+    """Flags (with their notes) of the vibrometer's delay measured from the impacts.
+
+    Undeclared and measured: :data:`FLAG_DELAY_ESTIMATED`; declared and contradicted by the
+    data beyond its uncertainty and a whole sample
+    (:func:`rattle_lab.detect._timing.delay_contradicted`): :data:`FLAG_DELAY_CONTRADICTED`
+    (the declaration is still used).  Nothing where there was nothing to measure (one
+    channel, too few impacts), where the plate's higher modes ring in the vibrometer (its
+    step centroid is then not a measure of the delay) or where the declaration holds.
+    """
+    d, se, n = log.velocity_delay_s, log.velocity_delay_stderr_s, log.velocity_delay_n
+    if not np.isfinite(d):
+        return ()
+    fs = log.fs_hz
+    what = (f"{1e6 * d:.2f} +- {1e6 * se:.2f} us ({d * fs:.3f} samples) from {n} impacts "
+            "(velocity step centroid less contact pulse centroid, median)")
+    if not declared:
+        return (f"{FLAG_DELAY_ESTIMATED}: the velocity lags the plate accelerometer by {what}; "
+                "the velocities are read at the impact time plus it",)
+    from rattle_lab.detect._impacts import RINGING_RESIDUAL_RATIO
+    from rattle_lab.detect._timing import DelayEstimate, delay_contradicted
+
+    if log.ringing_ratio >= RINGING_RESIDUAL_RATIO:
+        # the plate's higher modes ring in the vibrometer after each impact: they move the
+        # velocity step's centroid (by up to 2 samples on the independent generator), so
+        # the data cannot check the declaration
+        return ()
+    if delay_contradicted(DelayEstimate(d * fs, se * fs, n)):
+        return (f"{FLAG_DELAY_CONTRADICTED}: after the declared group_delay_s the velocity "
+                f"still lags the plate accelerometer by {what}; the declared delay is used",)
+    return ()
+
+
+def delay_systematic(logs: list[Any]) -> tuple[float, str]:
+    """The error of e from the runs' measured vibrometer delays, and a note (0, "" if none).
+
+    Per run with a measured delay applied: ``|d e / d delay|`` times the delay's
+    uncertainty, its standard error and the change of the estimate when the fits moved out
+    of the step's unsettled part (:attr:`~rattle_lab.detect.ImpactLog.velocity_delay_window_s`)
+    in quadrature, and in quadrature with that the change of e itself when they moved
+    (:attr:`~rattle_lab.detect.ImpactLog.e_window_change`).  The same chain times every run
+    alike, so this is not averaged down over runs: the median over the runs is returned, to
+    be added to e's standard error in quadrature.
+    """
+    vals, deltas = [], []
+    for log in logs:
+        if log is None or not log.velocity_delay_applied_s or not np.isfinite(log.e_per_delay_s):
+            continue
+        sd = float(np.hypot(np.nan_to_num(log.velocity_delay_stderr_s),
+                            np.nan_to_num(log.velocity_delay_window_s)))
+        vals.append(float(np.hypot(abs(log.e_per_delay_s) * sd,
+                                   np.nan_to_num(log.e_window_change))))
+        deltas.append(sd * log.fs_hz)
+    if not vals:
+        return 0.0, ""
+    se = float(np.median(vals))
+    return se, (f"the vibrometer's delay was measured from the impacts in {len(vals)} runs; its "
+                f"uncertainty (median {np.median(deltas):.3f} samples: standard error and the "
+                "estimate's dependence on the fit windows) and the decoder's step response "
+                f"read by the velocity fits move e by {se:.4f} (median of the runs), added to "
+                "the standard error")
+
+
+def infer_measurand(run: Any, log: Any, v_si: np.ndarray, fs: float, t0: float, base: Any,
+                    freq_hz: float | None) -> tuple[Any, tuple[str, ...]]:
+    """An undeclared vibrometer's measurand from the data; the log made relative if absolute.
+
+    The integrated velocity at the impacts against the base displacement there
+    (:func:`rattle_lab.detect._timing.measurand_share`).  Relative: the log unchanged;
+    absolute: the base velocity taken off (:func:`relative_to_striker`); both flagged
+    :data:`FLAG_MEASURAND_INFERRED` with the evidence.  Undetermined (no base channel, no
+    constant frequency, impacts at one phase of the base motion): where the two readings'
+    ``e`` differ by more than their noise, the velocities are withheld from e (NaN ratios;
+    ``v_in`` kept as the relative reading's) and :data:`FLAG_MEASURAND_UNDETERMINED` says
+    why; otherwise the relative reading, flagged :data:`FLAG_MEASURAND_UNDECLARED` with the
+    difference bound.
+    """
+    from rattle_lab.detect._timing import measurand_share
+
+    if log.n_impacts == 0:
+        return log, (FLAG_MEASURAND_UNDECLARED,)
+    if base is None or freq_hz is None:
+        why = "no base accelerometer" if base is None else "no constant excitation frequency"
+        return _withhold_or_keep(run, log, base, freq_hz, why)
+    t_v = log.t_s + log.velocity_delay_applied_s
+    share = measurand_share(v_si, fs, t0, t_v, base.read(), _fs_of(run, base), _t0_of(run, base),
+                            freq_hz, jumps_m_s=np.nan_to_num(log.v_out_m_s - log.v_in_m_s))
+    ev = (f"coefficient of the base displacement in the integrated velocity at {share.n} "
+          f"impacts {share.value:.3f} +- {share.stderr:.3f} (0: relative, 1: absolute; base "
+          f"displacement spread {1e6 * share.spread_m:.1f} um)")
+    if share.verdict == "relative":
+        return log, (f"{FLAG_MEASURAND_INFERRED}: relative to the striker: {ev}",)
+    if share.verdict == "absolute":
+        return (relative_to_striker(run, log, base, freq_hz),
+                (f"{FLAG_MEASURAND_INFERRED}: panel_absolute, made relative with the base: {ev}",))
+    return _withhold_or_keep(run, log, base, freq_hz, f"the data cannot tell: {ev}")
+
+
+def _withhold_or_keep(run: Any, log: Any, base: Any, freq_hz: float | None, why: str
+                      ) -> tuple[Any, tuple[str, ...]]:
+    """Undetermined measurand: withhold the ratios where the two readings differ."""
+    alt = relative_to_striker(run, log, base, freq_hz) if base is not None and freq_hz else None
+    if alt is not None:
+        e0, e1 = np.asarray(log.e, dtype=float), np.asarray(alt.e, dtype=float)
+        both = np.isfinite(e0) & np.isfinite(e1)
+        if both.sum() >= 2:
+            diff = float(np.mean(e1[both] - e0[both]))
+            noise = float(np.std(e0[both], ddof=1) / np.sqrt(both.sum()))
+            if abs(diff) <= noise:
+                return log, (f"{FLAG_MEASURAND_UNDECLARED}: {why}; read as relative (the "
+                             f"absolute reading's e differs by {diff:+.4f}, within the noise "
+                             f"{noise:.4f})",)
+            nan = np.full(log.n_impacts, np.nan)
+            return (dataclasses.replace(log, e=nan, v_out_m_s=nan), (
+                f"{FLAG_MEASURAND_UNDETERMINED}: {why}; the relative and absolute readings "
+                f"give e differing by {diff:+.4f}: this run's ratios are withheld",))
+    nan = np.full(log.n_impacts, np.nan)
+    return (dataclasses.replace(log, e=nan, v_out_m_s=nan), (
+        f"{FLAG_MEASURAND_UNDETERMINED}: {why}; an absolute vibrometer cannot be made relative "
+        "here: this run's ratios are withheld",))
+
+
 def run_chain_flags(run: Any) -> list[str]:
     """Named data-quality flags of a run's measurement chain (schema v2 metadata)."""
     flags = []
@@ -214,5 +346,7 @@ def _crossing_curve(thresholds: list[Threshold], freq_hz: np.ndarray) -> np.ndar
     return out
 
 
-__all__ = ["CAUSE_QUANTITIES", "SHOCK_QUANTITIES", "paired_plate_channels", "relative_to_striker",
-           "run_chain_flags", "runs_thresholds", "transient_shocks"]
+__all__ = ["CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED", "delay_systematic",
+           "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
+           "infer_measurand", "paired_plate_channels", "relative_to_striker", "run_chain_flags",
+           "runs_thresholds", "transient_shocks", "velocity_delay_flags"]
