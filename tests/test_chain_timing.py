@@ -194,3 +194,74 @@ def test_schema_v1_nothing_declared_through_the_cli(tmp_path, measurand):
     assert ratio is not None, out["not_fitted"]
     assert ratio["value"] == pytest.approx(plant.e, rel=0.03)
     assert abs(ratio["value"] - plant.e) <= 1.96 * ratio["stderr"]
+
+
+# --- the review fixes: undeclared chains keep e with an honest interval -------------------
+
+def test_delay_indistinguishable_from_zero_is_not_applied_and_unresolved_steps_are_named():
+    """An undeclared delay is applied only beyond 4 standard errors; per-impact delays
+    spread over a sample (steps whose timing the sampling limits) are only known to the
+    sample.  Synthetic centroids: Gaussian scatter (closed-form median error) and the
+    clustered +-0.5 sample pattern of an unfiltered jump at three sampling phases."""
+    from rattle_lab.detect._timing import DelayEstimate, delay_significant
+
+    rng = np.random.default_rng(7)
+    ta = np.cumsum(rng.uniform(120, 140, 60))
+    small = channel_delay(ta + 0.004 + 0.05 * rng.standard_normal(60), ta)
+    assert small.resolved and not delay_significant(small)
+    # median of 60 N(0, 0.05): standard error 1.2533 * 0.05 / sqrt(60) = 0.0081 sample
+    assert small.stderr == pytest.approx(0.0081, rel=0.35)
+    decoder = channel_delay(ta + 0.476 + 0.02 * rng.standard_normal(60), ta)
+    assert decoder.resolved and delay_significant(decoder)
+    assert decoder.value == pytest.approx(0.476, abs=4 * decoder.stderr)
+    # an unfiltered jump: +0.5 at two of three phases, -0.5 at the third; the median says
+    # 0.48 with a tiny MAD, the truth is 0
+    pattern = np.tile([0.48, 0.5, -0.47], 20) + 0.01 * rng.standard_normal(60)
+    jump = channel_delay(ta + pattern, ta)
+    assert not jump.resolved and not delay_significant(jump)
+    assert jump.stderr >= 1 / math.sqrt(12)
+    assert not delay_significant(DelayEstimate(float("nan"), float("nan"), 0))
+
+
+class _Log:
+    """The ImpactLog fields the fit's chain systematics read."""
+
+    def __init__(self, e, *, d=float("nan"), se=float("nan"), applied=0.0, slope=float("nan"),
+                 diff=0.0, alt_se=float("nan"), fs=25600.0):
+        self.e = np.asarray(e, dtype=float)
+        self.velocity_delay_s, self.velocity_delay_stderr_s = d, se
+        self.velocity_delay_applied_s, self.e_per_delay_s = applied, slope
+        self.velocity_delay_window_s, self.e_window_change = 0.0, 0.0
+        self.e_measurand_diff, self.e_measurand_alt_se, self.fs_hz = diff, alt_se, fs
+
+
+def test_delay_left_at_zero_still_widens_e_by_its_pooled_uncertainty():
+    from rattle_lab.fit._chain import delay_systematic
+
+    fs = 25600.0
+    logs = [_Log([0.6] * 10, d=0.01 / fs, se=0.02 / fs, slope=0.3 * fs) for _ in range(4)]
+    se, notes = delay_systematic(logs)
+    # pooled: 0.01 +- 0.02 / sqrt(4) samples; rms hypot(0.01, 0.01); e moves 0.3 per sample
+    assert se == pytest.approx(0.3 * math.hypot(0.01, 0.01), rel=1e-9)
+    assert len(notes) == 1 and "left at zero" in notes[0]
+    assert delay_systematic([_Log([0.6] * 10)]) == (0.0, [])
+
+
+def test_undetermined_measurand_widens_or_is_established_across_runs():
+    from rattle_lab.fit._chain import measurand_systematic
+
+    rng = np.random.default_rng(3)
+    e = [0.6 + 0.01 * rng.standard_normal(40) for _ in range(3)]
+    # the absolute readings scatter from run to run (-0.2, +0.1, +0.3): the relative ones
+    # agree, so the runs establish the relative reading and nothing is added
+    logs = [_Log(x, diff=dd, alt_se=0.003) for x, dd in zip(e, (-0.2, 0.1, 0.3))]
+    se, note = measurand_systematic(logs)
+    assert se == 0.0 and "relative readings of e agree" in note
+    # absolute readings that agree as well: e could be either, the interval spans both
+    logs = [_Log(x, diff=0.05, alt_se=0.003) for x in e]
+    se, note = measurand_systematic(logs)
+    assert se == pytest.approx(0.05) and "+0.0500" in note
+    # one such run among runs whose measurand is known: its share of the ratios
+    se, _ = measurand_systematic([_Log(e[0], diff=0.05, alt_se=0.003), _Log(e[1]), _Log(e[2])])
+    assert se == pytest.approx(0.05 / 3)
+    assert measurand_systematic([_Log(x) for x in e]) == (0.0, "")

@@ -41,7 +41,7 @@ from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, detrended_abs, n_samples_of, robust_sigma
 from ._flights import RingingProblem, flight_velocities, ringing_problem
 from ._timing import (MAX_COARSE_LAG_S, MAX_EXTRA_GUARD_S, DelayEstimate, channel_delay,
-                      coarse_lag, settled_span, shift_earlier, step_error)
+                      coarse_lag, delay_significant, settled_span, shift_earlier, step_error)
 
 
 @dataclass(frozen=True)
@@ -232,12 +232,19 @@ class ImpactLog:
         How far the delay estimate moved when the fits moved out by ``step_guard_s`` (the
         centroids' dependence on their windows: a systematic error of the estimate), s.
     e_per_delay_s : float
-        Median over the impacts of ``d e / d delay`` at the instant used, 1/s (NaN where no
-        measured delay was applied): what an error of the delay does to ``e``.
+        Median over the impacts of ``d e / d delay`` at the instant used, 1/s (NaN where the
+        delay was declared or not measured): what an error of the delay does to ``e``.
     e_window_change : float
         ``|median change of e|`` over the impacts when the fits moved out by
         ``step_guard_s`` (0 when they did not): how much of the chain's step response the
         nearer fits read, a measure of what the moved fits may still read.
+    e_measurand_diff : float
+        Where the vibrometer's measurand is neither declared nor established from the data
+        and the relative reading is kept: the mean ``e`` of the absolute reading (the base
+        velocity taken off) less the relative reading's (0 elsewhere).  The fit widens e's
+        interval by it (:func:`rattle_lab.fit._chain.measurand_systematic`).
+    e_measurand_alt_se : float
+        The standard error of the absolute reading's median e there (NaN elsewhere).
     """
 
     t_s: np.ndarray
@@ -263,6 +270,8 @@ class ImpactLog:
     velocity_delay_window_s: float = float("nan")
     e_per_delay_s: float = float("nan")
     e_window_change: float = 0.0
+    e_measurand_diff: float = 0.0
+    e_measurand_alt_se: float = float("nan")
 
     def __post_init__(self) -> None:   # (pairs come back from a cache as lists)
         object.__setattr__(self, "ring_modes",
@@ -544,10 +553,12 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         Whether the velocity's time base already has its declared filter delay taken off
         (``group_delay_s``).  With both channels the vibrometer's delay relative to the
         accelerometer is measured from the impacts (:func:`rattle_lab.detect._timing.channel_delay`):
-        undeclared, it is applied (the velocity fits are evaluated at the impact time plus
-        it); declared, the declaration stands and the measurement only checks it (the fit
-        flags a contradiction, :func:`rattle_lab.fit._chain.velocity_delay_flags`).  Either
-        way it is in :attr:`ImpactLog.velocity_delay_s`.
+        undeclared, it is applied where it is beyond its uncertainty
+        (:func:`rattle_lab.detect._timing.delay_significant`: the velocity fits are evaluated
+        at the impact time plus it) and left at zero otherwise; declared, the declaration
+        stands and the measurement only checks it (the fit flags a contradiction,
+        :func:`rattle_lab.fit._chain.velocity_delay_flags`).  Either way it is in
+        :attr:`ImpactLog.velocity_delay_s`.
 
     Returns
     -------
@@ -645,12 +656,17 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     # at the impact time plus it, the impact time stays the accelerometer's
     delay = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits]) \
         if v is not None and a is not None else DelayEstimate(float("nan"), float("nan"), 0)
-    delay = DelayEstimate(delay.value + lag, delay.stderr, delay.n)
+    delay = replace(delay, value=delay.value + lag)
     delay_first = delay.value
     # the velocity is read at the impact time plus d_use in the shifted velocity's samples
     # (plus lag in its own): -lag where the declared delay stands
     d_use = -float(lag)
-    if np.isfinite(delay.value) and not velocity_delay_declared:
+    # measured and undeclared: applied only where it is beyond its uncertainty (a delay the
+    # data cannot tell from zero is left at zero; the fit still carries its uncertainty
+    # into e's interval, :func:`rattle_lab.fit._chain.delay_systematic`)
+    measured = bool(np.isfinite(delay.value)) and not velocity_delay_declared
+    applied = measured and delay_significant(delay)
+    if applied:
         d_use = delay.value - lag
     def t_eval_of(jf: _JumpFits) -> float:
         if np.isfinite(jf.t_a):
@@ -674,10 +690,11 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             if np.isfinite(te):
                 need.append(max(0.0, pre_hi - (te + first) + 1, (te + last) - post_lo + 1))
         extra = int(np.ceil(np.median(need))) if need else 0
-        if velocity_delay_declared:
-            # a declared chain keeps the fits where they were (the plate's higher modes
-            # ringing in the vibrometer also leave the step unsettled, and the flight model
-            # that deals with them was tuned on these windows)
+        if not applied:
+            # a declared chain, or a delay the data cannot tell from zero, keeps the fits
+            # where they were (the plate's higher modes ringing in the vibrometer also leave
+            # the step unsettled, and the flight model that deals with them was tuned on
+            # these windows)
             extra = 0
         if extra > n_extra_max:
             # not settled within MAX_EXTRA_GUARD_S: not a decoder's step response but the
@@ -695,10 +712,9 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             # the step's centroid over the wider span holds more of a ringing decoder's tail
             est = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits])
             if np.isfinite(est.value):
-                delay = DelayEstimate(est.value + lag, est.stderr, est.n)
-                if not velocity_delay_declared:
-                    d_use = est.value
-        if d_use + lag != 0.0:
+                delay = replace(est, value=est.value + lag)
+                d_use = est.value
+        if measured:
             # how much e moves per sample of delay: the fits read a quarter sample either
             # side of the instant used (the median over the impacts)
             slopes = []

@@ -31,7 +31,7 @@ from rattle_lab.store import (input_hashes, open_stored_record, read_catalogue)
 from rattle_lab.detect.thresholds import Threshold, ramp_threshold, tabulate_thresholds
 from rattle_lab.records._chain import FLAG_MEASURAND_UNDECLARED
 from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of, delay_systematic,
-                     infer_measurand,
+                     infer_measurand, measurand_systematic,
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
                      transient_shocks, velocity_delay_flags)
 from ._grazing import GrazingFit, fit_grazing
@@ -517,11 +517,15 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                      "downward thresholds does not depend on them")
         ringing_flags.append(FLAG_RINGING_UNCORRECTED)
     # issue 28: an error of a measured vibrometer delay moves every ratio of a run alike
-    delay_se, delay_note = delay_systematic([r.impacts for r in ok])
-    if delay_note:
-        notes.append(delay_note)
+    delay_se, delay_notes = delay_systematic([r.impacts for r in ok])
+    notes.extend(delay_notes)
+    # issue 28: an undeclared measurand the data could not establish: both readings inside
+    measurand_se, measurand_note = measurand_systematic([r.impacts for r in ok])
+    if measurand_note:
+        notes.append(measurand_note)
     if st.n:
-        ratio = RatioRestitution(st.mean, float(np.hypot(rs.stderr, delay_se)), "1", std=st.std,
+        ratio = RatioRestitution(st.mean, float(np.hypot(np.hypot(rs.stderr, delay_se),
+                                                         measurand_se)), "1", std=st.std,
                                  median=st.median, n=st.n,
                                  n_runs=st.n_groups, notes=tuple(notes), **extra)
     else:
