@@ -341,7 +341,8 @@ def _undetermined(run: Any, log: Any, base: Any, freq_hz: float | None, why: str
 
     A coefficient of restitution lies in [0, 1]: where exactly one reading's median e does
     (beyond :data:`_UNPHYSICAL_SIGMAS` standard errors), that reading is the measurand
-    (:data:`FLAG_MEASURAND_INFERRED`).  Otherwise the relative reading is kept and the
+    (:data:`FLAG_MEASURAND_INFERRED`); where neither does, nothing can be established and
+    the run's ratios are withheld.  Otherwise the relative reading is kept and the
     absolute reading's difference recorded (``e_measurand_diff``: it widens e's interval).
     """
     alt = relative_to_striker(run, log, base, freq_hz) if base is not None and freq_hz else None
@@ -361,6 +362,12 @@ def _undetermined(run: Any, log: Any, base: Any, freq_hz: float | None, why: str
                 return alt, (f"{FLAG_MEASURAND_INFERRED}: panel_absolute, made relative with "
                              f"the base: the relative reading gives a coefficient of restitution "
                              f"outside [0, 1] ({readings}); {why}",)
+            if not (ok0 or ok1):
+                nan = np.full(log.n_impacts, np.nan)
+                return (dataclasses.replace(log, e=nan, v_out_m_s=nan), (
+                    f"{FLAG_MEASURAND_UNDETERMINED}: {why}; neither reading gives a coefficient "
+                    f"of restitution within [0, 1] ({readings}): this run's ratios are "
+                    "withheld",))
             diff = m1 - m0
             kept = dataclasses.replace(log, e_measurand_diff=diff, e_measurand_alt_se=s1)
             if abs(diff) <= math.hypot(s0, s1):
