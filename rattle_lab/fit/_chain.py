@@ -215,9 +215,11 @@ def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
         fs = float(np.median(fs_u))
         notes.append(f"the vibrometer's delay is not declared; measured from the impacts in "
                      f"{len(d_u)} runs it is {1e6 * d_bar:.2f} +- {1e6 * s_bar:.2f} us "
-                     f"({d_bar * fs:.3f} samples), not distinguishable from zero, and left at "
-                     f"zero; reading at zero moves e by up to {se_u:.4f} (root mean square), "
-                     "added to the standard error")
+                     f"({d_bar * fs:.3f} samples) and was left at zero (not distinguishable from "
+                     "zero, or its per-impact values scatter by a sample or more: steps the "
+                     "sampling does not resolve, or the plate's higher modes ringing in the "
+                     f"vibrometer); reading at zero moves e by up to {se_u:.4f} (root mean "
+                     "square), added to the standard error")
     return float(np.hypot(se_a, se_u)), notes
 
 
