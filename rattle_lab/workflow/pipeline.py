@@ -78,8 +78,10 @@ from ._pipeline_spec import (DEPENDS, OUTPUTS, STAGES, Pipeline, Stage, load_pip
 #: stages whose products a store caches.  2: the classes moved with the data-flow layout and
 #: RunResult gained chain_flags and shocks.  3: ImpactLog gained velocity_note.  4: ImpactLog
 #: gained velocity_offset_m_s, ringing_share and ringing_ratio.  5: ImpactLog gained
-#: ring_modes (and ringing_problem, never cached).
-CACHE_FORMAT = 5
+#: ring_modes (and ringing_problem, never cached).  6: ImpactLog gained velocity_delay_* and
+#: step_guard_s, velocity_delay_window_s, e_per_delay_s, e_window_change (issue 28).  7: and
+#: e_measurand_diff (format 6 was briefly on main without it).
+CACHE_FORMAT = 7
 
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
