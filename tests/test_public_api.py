@@ -83,7 +83,9 @@ PACKAGES: dict[str, list[str]] = {
         "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
         "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle",
         # issue 25: what the fit imports from detect
-        "RINGING_RESIDUAL_RATIO", "base_velocity_at", "onto_grid", "detect_shock"
+        "RINGING_RESIDUAL_RATIO", "base_velocity_at", "onto_grid", "detect_shock",
+        # issue 28: the channel timing the fit checks
+        "DelayEstimate", "delay_contradicted", "measurand_share",
     ],
     "rattle_lab.explorer": [
         "Explorer", "Histories", "compute_histories", "save_histories", "impacts_path",

@@ -10,6 +10,7 @@ from ._impacts import (RINGING_RESIDUAL_RATIO, ImpactLog, ImpactParams, detect_i
                        trigger_onsets)
 from ._pairing import base_velocity_at, onto_grid
 from ._shock import detect_shock
+from ._timing import DelayEstimate, delay_contradicted, measurand_share
 from ._patterns import PatternResult, impact_pattern, impacts_per_cycle
 from ._sound import SoundPeaks, cross_correlation_delay, impulse_train, sound_peaks
 from ._spl import P_REF_PA, a_weight, a_weighting_db, rms_spl_db, spl_db
@@ -20,4 +21,5 @@ __all__ = [
     "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
     "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle",
     "RINGING_RESIDUAL_RATIO", "base_velocity_at", "onto_grid", "detect_shock",
+    "DelayEstimate", "delay_contradicted", "measurand_share",
 ]

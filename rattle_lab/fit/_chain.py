@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from rattle_lab.detect import base_velocity_at, detect_shock, onto_grid
+from rattle_lab.detect import (RINGING_RESIDUAL_RATIO, DelayEstimate, base_velocity_at,
+                               delay_contradicted, detect_shock, measurand_share, onto_grid)
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.records import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
                                 channel_time_offset_s)
@@ -142,9 +143,6 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
             return ()
         return (f"{FLAG_DELAY_ESTIMATED}: the velocity lags the plate accelerometer by {what}; "
                 "the velocities are read at the impact time plus it",)
-    from rattle_lab.detect._impacts import RINGING_RESIDUAL_RATIO
-    from rattle_lab.detect._timing import DelayEstimate, delay_contradicted
-
     if log.ringing_ratio >= RINGING_RESIDUAL_RATIO:
         # the plate's higher modes ring in the vibrometer after each impact: they move the
         # velocity step's centroid (by up to 2 samples on the independent generator), so
@@ -299,8 +297,6 @@ def infer_measurand(run: Any, log: Any, v_si: np.ndarray, fs: float, t0: float, 
     Only where no absolute reading can be formed (no base accelerometer, no constant
     excitation frequency) are the run's ratios withheld, with the reason.
     """
-    from rattle_lab.detect._timing import measurand_share
-
     if log.n_impacts == 0:
         return log, (FLAG_MEASURAND_UNDECLARED,)
     if base is None or freq_hz is None:

@@ -25,11 +25,10 @@ from rattle_lab.acoustics import campaign_background, run_acoustics  # [issue 17
 from rattle_lab.detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
                                impact_pattern, impulse_train, rms_spl_db, sound_peaks)
 from rattle_lab.exceptions import RattleLabError
-from rattle_lab.records import Participation, resolve_participation
+from rattle_lab.records import FLAG_MEASURAND_UNDECLARED, Participation, resolve_participation
 from rattle_lab.fit._results import RunResult, StoreFit
 from rattle_lab.store import (input_hashes, open_stored_record, read_catalogue)
 from rattle_lab.detect.thresholds import Threshold, ramp_threshold, tabulate_thresholds
-from rattle_lab.records._chain import FLAG_MEASURAND_UNDECLARED
 from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of, delay_systematic,
                      infer_measurand, measurand_systematic,
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
