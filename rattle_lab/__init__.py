@@ -51,7 +51,7 @@ _LAZY: dict[str, str] = {
     "sound_peaks": "rattle_lab.detect",
     "fit_grazing": "rattle_lab.fit",
     "fit_store": "rattle_lab.workflow",
-    "read_results": "rattle_lab.fit._results",
+    "read_results": "rattle_lab.store",
     # reports and pipelines
     "write_report": "rattle_lab.workflow",
     "load_pipeline_file": "rattle_lab.workflow.pipeline",

@@ -15,8 +15,11 @@ schema     ``data_schema/``           ``.json``
 ========== ========================== ============
 
 A name is a file's stem (``thesis_cfcf_1p3mm``) or its file name
-(``thesis_cfcf_1p3mm.toml``).  An existing file path always wins over a name: callers
-look a name up only when the path they were given does not exist.
+(``thesis_cfcf_1p3mm.toml``).  An existing file path always wins over a name:
+:func:`resource_file` and :func:`resolve_resource` (what the loaders of scenes,
+mappings, pipelines and the schema call) look a name up only when the path they were
+given does not exist.  :data:`RESOURCE_KINDS` is also the wheel's resource list:
+``setup.py`` copies :func:`checkout_files` into the package.
 
 Examples
 --------
@@ -34,8 +37,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-__all__ = ["RESOURCE_KINDS", "find_resource", "not_found_hint", "read_pipeline_toml", "resource_dirs",
-           "resource_names"]
+__all__ = ["RESOURCE_KINDS", "checkout_files", "find_resource", "not_found_hint", "read_pipeline_toml",
+           "resolve_resource", "resource_dirs", "resource_file", "resource_names"]
 
 #: kind -> (folder of the source checkout, relative to its root; file suffix)
 RESOURCE_KINDS: dict[str, tuple[str, str]] = {
@@ -52,6 +55,16 @@ def _checkout_root() -> Path | None:
     """The source checkout this package was imported from, or None for an installed wheel."""
     root = _PACKAGE_DATA.parents[1]
     return root if (root / "pyproject.toml").is_file() else None
+
+
+def checkout_files(root: Path) -> dict[str, list[Path]]:
+    """kind -> the files of the source checkout at ``root`` that the wheel ships as that kind.
+
+    ``setup.py`` copies them to ``rattle_lab/data/<kind>/`` (it loads this module by its
+    path, so the list is kept in one place).
+    """
+    return {kind: sorted((root / folder).glob(f"*{suffix}"))
+            for kind, (folder, suffix) in RESOURCE_KINDS.items()}
 
 
 def resource_dirs(kind: str) -> list[Path]:
@@ -90,6 +103,34 @@ def find_resource(kind: str, name: str) -> Path | None:
         if candidate.is_file():
             return candidate
     return None
+
+
+def resource_file(kind: str, path_or_name: str | os.PathLike[str]) -> Path | None:
+    """The file ``path_or_name`` stands for: the path if it exists, else the resource of
+    ``kind`` shipped under that name, else None."""
+    path = Path(path_or_name)
+    if path.exists():
+        return path
+    return find_resource(kind, str(path_or_name))
+
+
+def resolve_resource(kind: str, path_or_name: str | os.PathLike[str], error: type[Exception],
+                     action: str) -> Path:
+    """:func:`resource_file`, or ``error("<path_or_name>: <action>: <why>")`` if there is none.
+
+    ``why`` (:func:`not_found_hint`) lists the shipped names and the closest one.
+
+    >>> resolve_resource("pipelines", "full_campaign", ValueError, "cannot read").name
+    'full_campaign.toml'
+    >>> resolve_resource("scenes", "defualt", ValueError, "cannot read the scene")
+    Traceback (most recent call last):
+    ...
+    ValueError: defualt: cannot read the scene: no such file, and no shipped scene 'defualt'; ...
+    """
+    found = resource_file(kind, path_or_name)
+    if found is None:
+        raise error(f"{path_or_name}: {action}: {not_found_hint(kind, path_or_name)}")
+    return found
 
 
 _SINGULAR = {"scenes": "scene", "pipelines": "pipeline", "mappings": "mapping",
@@ -131,11 +172,8 @@ def read_pipeline_toml(path: str | os.PathLike[str]) -> tuple[dict[str, Any], st
 
     from rattle_lab.exceptions import ParameterError
 
-    if not Path(path).exists():  # a pipeline shipped with rattle_lab, by name
-        found = find_resource("pipelines", str(path))
-        if found is None:
-            raise ParameterError(f"{path}: cannot read pipeline TOML: "
-                                 f"{not_found_hint('pipelines', path)}")
+    found = resolve_resource("pipelines", path, ParameterError, "cannot read pipeline TOML")
+    if found != Path(path):  # a pipeline shipped with rattle_lab, by name
         path = found
     try:
         return tomllib.loads(Path(path).read_text(encoding="utf-8")), str(path)

@@ -12,11 +12,18 @@ of the shorter period, then 60 bisections), where ``y' -> -e y'``.
 
 Measurement chain: a vibrometer (panel relative to the striker, or absolute: plus the base
 velocity) whose decoder delays it by ``decoder_delay_s`` (a linear-phase FIR, applied as a
-fractional delay in the frequency domain after an 8 kHz low-pass), a plate accelerometer,
+fractional delay in the frequency domain after an 8 kHz low-pass) or, with ``decoder`` set to
+``"butterworth"`` or ``"bessel"``, filters it with a causal digital low-pass of that family
+(``decoder_order``, -3 dB at ``decoder_cutoff_hz``; analog prototype, bilinear transform
+prewarped at the cut-off, applied through the FFT with zero padding) followed by a pure
+fractional delay of ``decoder_delay_s`` (then the extra delay of the chain), a plate accelerometer,
 a base accelerometer; higher modes ringing after each impact (each excited by the impact's
 impulse: a velocity step ``r_j dv`` decaying with ``zeta_j``); DC offsets; white noise;
 mains hum; ADC quantisation; a microphone at ``mic_m`` with propagation delay and one floor
-reflection.  Written straight into the ``data_schema`` layout with h5py.
+reflection.  Written straight into the ``data_schema`` layout with h5py: schema version 2 with
+the chain declared as chosen (``declare_delay``: the total low-frequency group delay of the
+vibrometer, ``declare_measurand``), or schema version 1 (``schema_version=1``: nothing of the
+chain declared, as a lab without rattle_lab writes it).
 """
 
 from __future__ import annotations
@@ -59,6 +66,20 @@ class Chain:
     mic_floor_m: float = 0.9        # extra path of the floor reflection
     pa_per_m_s: float = 4.0
     declare_delay: bool = True
+    declare_measurand: bool = True
+    decoder: str = "fir"            # "fir" | "butterworth" | "bessel"
+    decoder_order: int = 4
+    decoder_cutoff_hz: float = 10000.0
+    schema_version: int = 2
+    participation_declared: bool = True
+
+    @property
+    def velocity_delay_s(self) -> float:
+        """The vibrometer's total delay at low frequency (its filter's DC group delay + the pure delay)."""
+        if self.decoder == "fir":
+            return self.decoder_delay_s
+        return iir_dc_delay_s(self.decoder, self.decoder_order, self.decoder_cutoff_hz,
+                              self.fs_hz) + self.decoder_delay_s
 
 
 @dataclass
@@ -174,6 +195,61 @@ def _delay(x: np.ndarray, fs_hz: float, delay_s: float, cutoff_hz: float) -> np.
     return np.fft.irfft(X * gain * np.exp(-2j * np.pi * f * delay_s), m)[:n]
 
 
+def _analog_poles(kind: str, order: int) -> np.ndarray:
+    """Poles of the analog low-pass prototype, -3 dB at 1 rad/s."""
+    if kind == "butterworth":
+        k = np.arange(1, order + 1)
+        return np.exp(1j * np.pi * (2 * k + order - 1) / (2 * order))
+    if kind != "bessel":
+        raise ValueError(f"unknown decoder {kind!r}")
+    # reverse Bessel polynomial theta_n(s) = sum a_k s^k, a_k = (2n-k)! / (2^(n-k) k! (n-k)!)
+    a = [math.factorial(2 * order - k) / (2 ** (order - k) * math.factorial(k)
+                                          * math.factorial(order - k)) for k in range(order + 1)]
+    poles = np.roots(a[::-1])
+
+    def mag(w: float) -> float:
+        return abs(np.prod(-poles) / np.prod(1j * w - poles))
+    lo, hi = 1e-3, 1e3                      # -3 dB frequency of the delay-normalised filter
+    for _ in range(200):
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if mag(mid) > 2 ** -0.5 else (lo, mid)
+    return poles / math.sqrt(lo * hi)
+
+
+def _digital_poles(kind: str, order: int, cutoff_hz: float, fs_hz: float) -> np.ndarray:
+    wa = 2 * fs_hz * math.tan(math.pi * cutoff_hz / fs_hz)     # prewarped cut-off
+    s = wa * _analog_poles(kind, order)
+    return (1 + s / (2 * fs_hz)) / (1 - s / (2 * fs_hz))
+
+
+def iir_response(kind: str, order: int, cutoff_hz: float, fs_hz: float, f_hz: np.ndarray) -> np.ndarray:
+    """Frequency response of the digital decoder: zeros at z = -1, unit gain at DC."""
+    z = _digital_poles(kind, order, cutoff_hz, fs_hz)
+    ejw = np.exp(2j * np.pi * np.asarray(f_hz) / fs_hz)
+    h = np.ones(ejw.shape, dtype=complex)
+    for zk in z:
+        h *= (ejw + 1) / (ejw - zk) * (1 - zk) / 2
+    return h
+
+
+def iir_dc_delay_s(kind: str, order: int, cutoff_hz: float, fs_hz: float) -> float:
+    """Group delay at DC of the digital decoder: sum Re 1/(1 - z_k) - n/2 samples."""
+    z = _digital_poles(kind, order, cutoff_hz, fs_hz)
+    return float(np.sum(np.real(1 / (1 - z))) - order / 2) / fs_hz
+
+
+def _iir(x: np.ndarray, chain: Chain) -> np.ndarray:
+    """The causal decoder and the extra pure delay, through the FFT (zero padded, lead-in mirrored)."""
+    fs = chain.fs_hz
+    lead = min(x.size, 4096)
+    xx = np.r_[x[lead:0:-1], x]                 # the decoder was running before the record
+    m = 1 << int(math.ceil(math.log2(xx.size + 8192)))
+    f = np.fft.rfftfreq(m, 1 / fs)
+    h = iir_response(chain.decoder, chain.decoder_order, chain.decoder_cutoff_hz, fs, f)
+    y = np.fft.irfft(np.fft.rfft(xx, m) * h * np.exp(-2j * np.pi * f * chain.decoder_delay_s), m)
+    return y[lead:lead + x.size]
+
+
 def _quantise(x: np.ndarray, full_scale: float, bits: int) -> tuple[np.ndarray, float]:
     lsb = 2 * full_scale / 2 ** bits
     counts = np.clip(np.round(x / lsb), -2 ** (bits - 1), 2 ** (bits - 1) - 1)
@@ -202,15 +278,17 @@ def measure(plant: Plant, chain: Chain, W: float, levels: np.ndarray, rng: np.ra
             ring_v[i0:i0 + tau.size] += r * dv * env * np.cos(wj * tau)
             ring_a[i0:i0 + tau.size] += -r * dv * wj * env * np.sin(wj * tau)
         # the velocity step spread over one sample: a contact pulse of area dv in the accelerometer
+        # (linear interpolation of a delta at t_i: the centroid of the two samples is t_i)
         frac = i0 - t_i * fs
         if i0 - 1 >= 0:
-            acc[i0 - 1] += dv * fs * (1 - frac)
+            acc[i0 - 1] += dv * fs * frac
         if i0 < acc.size:
-            acc[i0] += dv * fs * frac
+            acc[i0] += dv * fs * (1 - frac)
     vel = v + (ring_v if chain.ring_in_velocity else 0.0) + (v_b if chain.measurand == "panel_absolute" else 0.0)
     hum = chain.hum_v_m_s * np.sin(2 * math.pi * chain.hum_hz * ts + 0.3)
     vel = vel + hum + chain.offset_v_m_s + chain.noise_v_m_s * rng.standard_normal(ts.size)
-    vel = _delay(vel, fs, chain.decoder_delay_s, 8000.0)
+    vel = _delay(vel, fs, chain.decoder_delay_s, 8000.0) if chain.decoder == "fir" else \
+        _iir(vel, chain)
     vel, _ = _quantise(vel, 2.0, chain.adc_bits)
     plate = acc + ring_a + a_b + chain.offset_a_ms2 + chain.noise_a_ms2 * rng.standard_normal(ts.size)
     plate, _ = _quantise(plate, 2000.0, chain.adc_bits)
@@ -235,7 +313,8 @@ def write_campaign(path: Path, plant: Plant, chain: Chain, runs: list[dict], see
     rng = np.random.default_rng(seed)
     truth = Truth()
     with h5py.File(path, "w") as fh:
-        fh.attrs.update({"schema": "rattle_record", "schema_version": 2,
+        v2 = chain.schema_version >= 2
+        fh.attrs.update({"schema": "rattle_record", "schema_version": chain.schema_version,
                          "campaign_id": f"independent-{seed}", "source": "measured",
                          "writer": "tests/independent_campaign.py"})
         rig = fh.create_group("rig")
@@ -249,7 +328,9 @@ def write_campaign(path: Path, plant: Plant, chain: Chain, runs: list[dict], see
                           "plate_width_m": 0.2286, "plate_thickness_m": plant.f_s_hz / strip,
                           "plate_material": "aluminium", "edge_conditions": "CFCF",
                           "striker_x_m": 0.127, "striker_y_m": 0.1143,
-                          "mic_distance_m": chain.mic_m, "modal_participation": plant.q})
+                          "mic_distance_m": chain.mic_m})
+        if v2 and chain.participation_declared:
+            rig.attrs["modal_participation"] = plant.q
         runs_g = fh.create_group("runs")
         for spec in runs:
             W = 2 * math.pi * spec["freq_hz"]
@@ -265,10 +346,11 @@ def write_campaign(path: Path, plant: Plant, chain: Chain, runs: list[dict], see
             ch = g.create_group("channels")
             common = {"sample_rate_hz": chain.fs_hz, "start_time_s": 0.0}
             d = ch.create_dataset("velocity", data=chans["velocity"].astype(np.float32))
-            d.attrs.update({"quantity": "plate_velocity", "units": "m/s",
-                            "measurand": chain.measurand, **common})
-            if chain.declare_delay:
-                d.attrs["group_delay_s"] = chain.decoder_delay_s
+            d.attrs.update({"quantity": "plate_velocity", "units": "m/s", **common})
+            if v2 and chain.declare_measurand:
+                d.attrs["measurand"] = chain.measurand
+            if v2 and chain.declare_delay:
+                d.attrs["group_delay_s"] = chain.velocity_delay_s
             for name, qty, units in (("plate", "plate_acceleration", "m/s^2"),
                                      ("base", "base_acceleration", "m/s^2"),
                                      ("mic", "sound_pressure", "Pa")):

@@ -177,9 +177,13 @@ def test_fit_takes_the_participation_from_the_record(stores):
     assert proc.returncode == 0, proc.stderr
     res = json.loads(proc.stdout)
     assert res["participation"] == {"value": 1.2, "source": "rig modal_participation"}
-    # (the hand-built record does not say what its vibrometer measures: flagged per run)
+    # (the hand-built record does not say what its vibrometer measures: flagged per run;
+    # issue 28: inferred from the data where it can be, its delay measured where undeclared)
     assert not [f for f in res["data_quality"] if "participation" in f]
-    assert all(f.endswith(": velocity_measurand_undeclared") for f in res["data_quality"])
+    assert res["data_quality"] and all(
+        re.match(r"\S+: (velocity_measurand_undeclared|measurand_inferred: |"
+                 r"measurand_undetermined: |channel_delay_estimated: )", f)
+        for f in res["data_quality"]), res["data_quality"]
     # the synthetic thresholds follow eq. 3.4 with 1 % noise: the gap to 2 % (issue target)
     assert res["fits"]["grazing"]["gap_m"]["value"] == pytest.approx(truth.gap_m, rel=0.02)
 

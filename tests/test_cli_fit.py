@@ -23,7 +23,7 @@ from rattle_lab.fit import load_pipeline
 from rattle_lab.workflow import fit_store
 from rattle_lab.store import ingest
 from rattle_lab.records import write_record
-from rattle_lab.records._errors import StoreError
+from rattle_lab.store import StoreError
 from rattle_lab.fit._results import read_results
 from record_factory import run_cli, run_cli_on_terminal
 

@@ -19,10 +19,10 @@ from hypothesis import strategies as st
 from record_factory import FS_HZ, N_SAMPLES, make_record, replace_channel, write
 
 from rattle_lab.exceptions import OutputError, ParameterError
-from rattle_lab.store import (CATALOGUE_COLUMNS, file_hash, ingest, input_key,
+from rattle_lab.store import (CATALOGUE_COLUMNS, StoreError, file_hash, ingest, input_key,
                                open_stored_record, read_catalogue)
 from rattle_lab.records import (ClippingWarning, DuplicateRunError, NaNGapError, NaNGapWarning,
-                                StoreError, UncalibratedWarning)
+                                UncalibratedWarning)
 from rattle_lab.records._quality import ChannelChecker, QualityLimits, TimestampChecker
 from rattle_lab.records._units import G0_MS2
 

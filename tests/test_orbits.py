@@ -484,6 +484,7 @@ def test_public_surface_is_pinned() -> None:
         "write_sweeps_csv", "lyapunov_exponent", "lyapunov_from_result", "tangent_log_growth",
         "regime_map", "basin_map", "disturbance_threshold", "disturbance_map",
         "SweepThresholds", "sweep_thresholds",
+        "SWEEP_PARAMS", "LYAPUNOV_MODES",   # issue 25: the sweep command's choices, for the CLI
     ]
     for name in analysis.__all__:
         assert getattr(analysis, name).__doc__

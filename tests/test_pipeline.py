@@ -256,9 +256,19 @@ def test_dask_local_cluster_equals_serial(synthetic_campaign_record: Path, tmp_p
     assert _diff(_as_plain(a), _as_plain(b)) == []
 
 
+def test_the_fingerprint_is_taken_on_first_use_only() -> None:
+    # importing the module reads no source file (issue 25); the first call hashes them and
+    # later calls return that value without hashing again (the digest function is gone)
+    code = ("import rattle_lab.workflow.pipeline as p; assert p._FINGERPRINT is None; "
+            "f = p.code_fingerprint(); p._source_digest = None; "
+            "assert p.code_fingerprint() == f; print(f)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == code_fingerprint()   # the same sources as this process
+
+
 def _set_fingerprint(value: str) -> str:
     """Run on a worker: pretend it runs other code; return the fingerprint it had."""
-    old = pipeline_module._FINGERPRINT
+    old = pipeline_module.code_fingerprint()   # taken on first use
     pipeline_module._FINGERPRINT = value
     return old
 
@@ -369,5 +379,6 @@ def test_a_product_cached_by_other_code_is_a_clear_error(tmp_path: Path) -> None
                                         r"this rattle_lab .*run the stage again"):
         read_cached(store, "thresholds")
     # a moved class also re-keys the cached stages (3: ImpactLog gained velocity_note; 4: its
-    # velocity offset, ringing share and ringing ratio; 5: its ring_modes)
-    assert pipeline_module.CACHE_FORMAT == 5
+    # velocity offset, ringing share and ringing ratio; 5: its ring_modes; 6, 7: the channel
+    # timing and measurand fields of issue 28)
+    assert pipeline_module.CACHE_FORMAT == 7

@@ -70,7 +70,8 @@ PACKAGES: dict[str, list[str]] = {
         "LyapunovResult", "AttractorMap", "DisturbanceMap", "classify_impacts", "sweep_values",
         "sweep", "sweep_up_down", "write_sweeps_csv", "lyapunov_exponent",
         "lyapunov_from_result", "tangent_log_growth", "regime_map", "basin_map",
-        "disturbance_threshold", "disturbance_map", "SweepThresholds", "sweep_thresholds"
+        "disturbance_threshold", "disturbance_map", "SweepThresholds", "sweep_thresholds",
+        "SWEEP_PARAMS", "LYAPUNOV_MODES"
     ],
     "rattle_lab.cli": [
         "COMMAND_MODULES", "build_parser", "main"
@@ -80,7 +81,11 @@ PACKAGES: dict[str, list[str]] = {
         "a_weight", "a_weighting_db", "campaign_ring_modes", "cross_correlation_delay",
         "detect_impacts", "impact_pattern",
         "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
-        "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle"
+        "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle",
+        # issue 25: what the fit imports from detect
+        "RINGING_RESIDUAL_RATIO", "base_velocity_at", "onto_grid", "detect_shock",
+        # issue 28: the channel timing the fit checks
+        "DelayEstimate", "delay_contradicted", "measurand_share",
     ],
     "rattle_lab.explorer": [
         "Explorer", "Histories", "compute_histories", "save_histories", "impacts_path",
@@ -102,7 +107,8 @@ PACKAGES: dict[str, list[str]] = {
         "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun",
         "ThresholdTable", "TransientRun", "ParticipationInfo",
         "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
-        "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K"
+        "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K",
+        "FIT_KEYS", "SOUND_KEYS"
     ],
     "rattle_lab.model.modal": [
         "CONTACT_NAMES", "MIC_CORNER_HZ", "THESIS_HERTZ_N_M15", "THESIS_PLATE",
@@ -112,7 +118,7 @@ PACKAGES: dict[str, list[str]] = {
         "contact_from_name", "infinite_plate_impedance", "measured_peak", "microphone",
         "modal_channels", "plate_surface", "plate_system",
         "predicted_spl_slope", "rayleigh_pressure", "rayleigh_zeta", "residual_pressure",
-        "simulate_modal"
+        "simulate_modal", "C_AIR_M_S", "Contact", "peak_per_impact"
     ],
     "rattle_lab.model.plate": [
         "Plate", "PlateMode", "PlateModes", "TableMode", "EDGE_ORDER", "DEFAULT_N_TERMS",
@@ -123,25 +129,39 @@ PACKAGES: dict[str, list[str]] = {
     "rattle_lab.plot": [
         "FIGURE_SUFFIXES", "check_figure_path", "save_figure", "plot_time_history", "plot_sweeps",
         "plot_bifurcation_sets", "plot_attractor_map", "plot_disturbance_map",
-        "smooth_region", "db_slope_guide", "power_law_guide"
+        "smooth_region", "db_slope_guide", "power_law_guide", "BIFURCATION_LINESTYLES"
     ],
     "rattle_lab.workflow": [
         "STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline", "run_pipeline",
         "detect_runs", "fit_store", "write_report", "build_report_content", "build_pages",
-        "gather", "ReportData", "SECTIONS"
+        "gather", "ReportData", "SECTIONS", "shock_lines"
     ],
     "rattle_lab.records": [
         "read", "write_record", "detect_format", "load_schema", "validate_tree", "load_mapping",
         "MappingSpec", "Record", "Rig", "Sensor", "Run", "Channel", "Truth", "ImpactTable",
         "ThresholdTable", "Skipped", "Origin", "ArraySource", "ArrayData", "GeneratedData",
         "Finding", "QualityLimits", "FLAGS", "FATAL_FLAGS", "SI_UNITS", "scale_to_si",
-        "MappingError", "DuplicateRunError", "StoreError", "DataQualityError", "NaNGapError",
+        # StoreError moved to rattle_lab.store (issue 25)
+        "MappingError", "DuplicateRunError", "DataQualityError", "NaNGapError",
         "InfValueError", "ClippingError", "DropoutError", "SampleRateMismatchError",
         "NonMonotonicTimestampsError", "EmptyChannelError", "NaNGapWarning", "InfValueWarning",
         "ClippingWarning", "DropoutWarning", "SampleRateMismatchWarning",
-        "NonMonotonicTimestampsWarning", "EmptyChannelWarning", "UncalibratedWarning"
+        "NonMonotonicTimestampsWarning", "EmptyChannelWarning", "UncalibratedWarning",
+        # issue 25: what the store and the fit import from records
+        "write_tree", "record_to_tree", "record_from_tree", "load_group", "as_source",
+        "DEFAULT_CHUNK_SAMPLES", "LinkPolicy", "link_policy", "ChannelChecker", "TimestampChecker",
+        "Participation", "PlateF1", "plate_model_f1", "resolve_participation",
+        "channel_time_offset_s", "FLAG_PARTICIPATION_ASSUMED", "FLAG_MEASURAND_UNDECLARED",
+        "FLAG_MEASURAND_ABSOLUTE"
     ],
-    "rattle_lab.report": ["write_pdf", "render_pages", "ReportResult", "ReportContent", "PAGES"],
+    "rattle_lab.report": [
+        "write_pdf", "render_pages", "ReportResult", "ReportContent", "PAGES",
+        "RigContent", "RecordInfo", "ChannelInfo", "ThresholdContent", "GrazingCurve",
+        "PatternContent", "SplContent", "SplCurve", "WaveformContent", "WaveformColumn",
+        "Trace", "WAVEFORM_QUANTITIES", "AcousticsContent", "ModelContent", "SweepComparison",
+        "Field", "ShockContent", "ShockRun", "ShockTrace",
+        "TEXT_WIDTH", "fmt", "wrapped", "pdf_output"
+    ],
     "rattle_lab.rig": [
         "load_scene", "parse_scene", "synthesize", "write_synthetic", "Scene", "SceneError",
         "StageCounter", "Synthesis", "RunSummary", "Modal", "Piece", "RunMotion", "schedule",
@@ -159,7 +179,8 @@ PACKAGES: dict[str, list[str]] = {
     ],
     "rattle_lab.model.sdf": [
         "SDFParams", "SDFState", "SimImpacts", "Crossings", "DenseSamples", "SimResult",
-        "simulate", "flow", "particular_coeffs", "particular_state", "homogeneous_transition"
+        "simulate", "flow", "particular_coeffs", "particular_state", "homogeneous_transition",
+        "simulate_pieces", "jit_kernel", "signals_deferred", "KERNELS", "cold_kernels", "warm_cache"
     ],
     "rattle_lab.store": [
         "ingest", "read_catalogue", "open_stored_record", "IngestReport", "InputResult",
@@ -168,7 +189,8 @@ PACKAGES: dict[str, list[str]] = {
         "has_path", "read_results", "write_results", "StoredResults", "CACHE_GROUP",
         "read_cache_keys", "record_cache_keys", "read_cached", "write_cached", "output_digest",
         "input_hashes", "provenance_log", "verify_store", "check_linked_inputs", "Mismatch",
-        "record_attrs_count", "REINGEST_ADVICE", "reingest_advice"
+        "record_attrs_count", "REINGEST_ADVICE", "reingest_advice",
+        "StoreError", "RESULTS_VERSION", "record_attrs"
     ],
 }
 

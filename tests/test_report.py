@@ -20,7 +20,7 @@ from rattle_lab.exceptions import OutputError, ParameterError, RattleLabError
 from rattle_lab.fit import (DownRestitution, FitSummary, Fits, GrazingParameter, GrazingSummary,
                             RatioRestitution)
 from rattle_lab.store import read_results
-from rattle_lab.records._errors import StoreError
+from rattle_lab.store import StoreError
 from rattle_lab.report import ReportResult
 from rattle_lab.workflow import build_pages, gather, write_report
 from rattle_lab.fit import band_quantile, grazing_band_ms2
@@ -402,7 +402,7 @@ def test_negative_hysteresis_is_flagged(stores: dict[str, Path], tmp_path: Path)
 def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -> None:
     from matplotlib.lines import Line2D
 
-    from rattle_lab.plot._bifsets import _LINESTYLES
+    from rattle_lab.plot import BIFURCATION_LINESTYLES
     from rattle_lab.report._pages_model import model_pages
     from rattle_lab.workflow._report._content_model import model_content
 
@@ -427,7 +427,7 @@ def test_bifurcation_page_styles_follow_model_bifsets(stores: dict[str, Path]) -
     kinds = [k for k in ("saddle-node", "period-doubling", "secondary-grazing") if k in legend]
     assert kinds, legend.keys()
     for kind in kinds:
-        probe = Line2D([], [], ls=_LINESTYLES[kind])
+        probe = Line2D([], [], ls=BIFURCATION_LINESTYLES[kind])
         assert legend[kind].get_linestyle() == probe.get_linestyle(), kind
     # where the 1/1 and 1/2 shadings overlap (a blended colour), the legend names it
     sets = captured["sets"]

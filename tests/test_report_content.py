@@ -50,7 +50,7 @@ ALLOWED: dict[str, set[str] | None] = {
     "rattle_lab.report._common": None, "rattle_lab.report._content_types": None,
     "rattle_lab.report._render": None,
     # a style table, shared with `model bifsets` (not smooth_region: that computes)
-    "rattle_lab.plot._bifsets": {"_LINESTYLES"},
+    "rattle_lab.plot": {"BIFURCATION_LINESTYLES"},
     # writing the PDF: the atomic writer and the error for a bad output name
     "rattle_lab._atomic": {"atomic_path"}, "rattle_lab.exceptions": {"ParameterError"},
 }

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import runpy
 import subprocess
 import sys
 import zipfile
@@ -11,7 +12,8 @@ import h5py
 import pytest
 from conftest import CHECKOUT, RATTLE_LAB
 
-from rattle_lab._resources import RESOURCE_KINDS, find_resource, resource_names
+from rattle_lab._resources import (RESOURCE_KINDS, find_resource, resolve_resource, resource_file,
+                                  resource_names)
 from rattle_lab.workflow.pipeline import load_pipeline_file
 from rattle_lab.records import load_mapping
 from rattle_lab.rig import load_scene
@@ -47,6 +49,45 @@ def test_unknown_names_and_paths_are_not_resolved() -> None:
     assert find_resource("scenes", "synthetic/thesis_cfcf_1p3mm") is None
     with pytest.raises(KeyError):
         find_resource("no_such_kind", "x")
+
+
+def test_resolve_resource_prefers_a_file_and_names_what_is_shipped(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert resource_file("pipelines", "full_campaign") == CHECKOUT / "pipelines" / "full_campaign.toml"
+    (tmp_path / "full_campaign").write_text("x", encoding="utf-8")
+    assert resource_file("pipelines", "full_campaign") == Path("full_campaign")  # the file wins
+    assert resource_file("pipelines", "no_such_pipeline") is None
+    with pytest.raises(LookupError, match=r"^spl_studdy: cannot read: no such file, and no shipped "
+                                          r"pipeline 'spl_studdy'; shipped: .*\(closest: 'spl_study'\)$"):
+        resolve_resource("pipelines", "spl_studdy", LookupError, "cannot read")
+    with pytest.raises(LookupError, match=r"^sub/x.toml: cannot read: No such file or directory$"):
+        resolve_resource("pipelines", "sub/x.toml", LookupError, "cannot read")
+
+
+def test_setup_py_copies_the_resource_list(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """setup.py's build hook (what ``pip install .`` runs) copies every resource file of the
+    checkout into ``rattle_lab/data/<kind>/``: its list is :data:`RESOURCE_KINDS`."""
+    setuptools = pytest.importorskip("setuptools")
+    from setuptools.command import build_py
+
+    captured: dict[str, object] = {}
+    monkeypatch.setattr(setuptools, "setup", lambda **kw: captured.update(kw))
+    monkeypatch.setattr(build_py.build_py, "run", lambda self: None)   # the package's own files
+    runpy.run_path(str(CHECKOUT / "setup.py"), run_name="setup_probe")
+    hook = captured["cmdclass"]["build_py"]  # type: ignore[index]
+    command = hook.__new__(hook)
+    command.build_lib = str(tmp_path)
+    command.editable_mode = False
+    command.run()
+    data = tmp_path / "rattle_lab" / "data"
+    assert sorted(p.name for p in data.iterdir()) == sorted(RESOURCE_KINDS)
+    for kind, files in SHIPPED.items():
+        copied = sorted(p.name for p in (data / kind).iterdir())
+        assert copied == files, kind
+        folder, _ = RESOURCE_KINDS[kind]
+        for name in files:
+            assert (data / kind / name).read_bytes() == (CHECKOUT / folder / name).read_bytes()
 
 
 def test_loaders_take_names(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

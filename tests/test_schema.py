@@ -35,11 +35,18 @@ def test_records_public_surface_is_pinned():
         "MappingSpec", "Record", "Rig", "Sensor", "Run", "Channel", "Truth", "ImpactTable",
         "ThresholdTable", "Skipped", "Origin", "ArraySource", "ArrayData", "GeneratedData",
         "Finding", "QualityLimits", "FLAGS", "FATAL_FLAGS", "SI_UNITS", "scale_to_si",
-        "MappingError", "DuplicateRunError", "StoreError", "DataQualityError", "NaNGapError",
+        # StoreError moved to rattle_lab.store (issue 25)
+        "MappingError", "DuplicateRunError", "DataQualityError", "NaNGapError",
         "InfValueError", "ClippingError", "DropoutError", "SampleRateMismatchError",
         "NonMonotonicTimestampsError", "EmptyChannelError", "NaNGapWarning", "InfValueWarning",
         "ClippingWarning", "DropoutWarning", "SampleRateMismatchWarning",
-        "NonMonotonicTimestampsWarning", "EmptyChannelWarning", "UncalibratedWarning"]
+        "NonMonotonicTimestampsWarning", "EmptyChannelWarning", "UncalibratedWarning",
+        # issue 25: what the store and the fit import from records
+        "write_tree", "record_to_tree", "record_from_tree", "load_group", "as_source",
+        "DEFAULT_CHUNK_SAMPLES", "LinkPolicy", "link_policy", "ChannelChecker", "TimestampChecker",
+        "Participation", "PlateF1", "plate_model_f1", "resolve_participation",
+        "channel_time_offset_s", "FLAG_PARTICIPATION_ASSUMED", "FLAG_MEASURAND_UNDECLARED",
+        "FLAG_MEASURAND_ABSOLUTE"]
     assert all(hasattr(rattle_lab.records, name) for name in rattle_lab.records.__all__)
 
 

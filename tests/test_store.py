@@ -18,7 +18,7 @@ from record_factory import RATTLE_LAB, make_record, run_cli, write
 from rattle_lab._atomic import TMP_MARKER, atomic_write_text, remove_stale_temporaries
 from rattle_lab.cli import main
 from rattle_lab.exceptions import DataError, FileFormatError
-from rattle_lab.records import StoreError
+from rattle_lab.store import StoreError
 from rattle_lab.records._h5 import LinkError
 from rattle_lab.store import (STORE_VERSION, check_linked_inputs, ingest, open_stored_record,
                               read_catalogue, verify_store)

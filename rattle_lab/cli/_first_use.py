@@ -29,7 +29,7 @@ def compile_if_cold(command: str | None, model_command: str | None = None) -> bo
     if command not in KERNEL_COMMANDS or (command == "model"
                                           and model_command in NO_KERNEL_MODEL_COMMANDS):
         return False
-    from rattle_lab.model.sdf._compiled import KERNELS, cold_kernels, warm_cache
+    from rattle_lab.model.sdf import KERNELS, cold_kernels, warm_cache
 
     if not cold_kernels():
         return False

@@ -162,7 +162,7 @@ def as_table(summary: FitSummary) -> str:
     for tr in summary.transients:
         lines.append(f"  transient {tr.input_key}/{tr.run_id}: one shock per channel, the cause "
                      "first")
-        from rattle_lab.workflow._report._shocks import shock_lines
+        from rattle_lab.workflow import shock_lines
 
         lines += shock_lines(tr.channels, indent="    ")
     return "\n".join(lines)

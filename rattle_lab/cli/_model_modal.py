@@ -87,7 +87,7 @@ def _run_modal_impact(args: argparse.Namespace) -> int:
     t = np.arange(n) / args.fs
     ch = modal_channels(system, contact, t, mic_xyz_m=None if args.mic is None else tuple(args.mic))
     from rattle_lab.model.modal import measured_peak, microphone
-    from rattle_lab.model.modal._sound import C_AIR_M_S, peak_per_impact
+    from rattle_lab.model.modal import C_AIR_M_S, peak_per_impact
 
     mic_xyz = (0.5 * plate.a_m, 0.5 * plate.b_m, 0.3) if args.mic is None else tuple(args.mic)
     delay = math.dist(mic_xyz, (system.striker_xi * plate.a_m, system.striker_eta * plate.b_m, 0.0)) / C_AIR_M_S

@@ -83,7 +83,7 @@ def _num(x: float) -> float | None:
 
 def _run_orbits(args: argparse.Namespace) -> int:
     from rattle_lab.model.analysis.orbits import one_over_n_orbits
-    from rattle_lab.model.sdf._types import SDFParams
+    from rattle_lab.model.sdf import SDFParams
 
     ns = parse_n(args.n)
     params = SDFParams(F=parse_float("--F", args.F), omega=parse_float("--omega", args.omega),

@@ -150,7 +150,7 @@ def _fmt(x: float) -> str:
 # ---------------------------------------------------------------------------
 
 def _run_sweep(args: argparse.Namespace) -> int:
-    from rattle_lab.model.analysis._sweep import (
+    from rattle_lab.model.analysis import (
         LYAPUNOV_MODES,
         SWEEP_PARAMS,
         sweep,
@@ -158,7 +158,7 @@ def _run_sweep(args: argparse.Namespace) -> int:
         sweep_values,
         write_sweeps_csv,
     )
-    from rattle_lab.model.sdf._types import SDFParams
+    from rattle_lab.model.sdf import SDFParams
     from rattle_lab.plot import check_figure_path, plot_sweeps
 
     param = _choice("--param", args.param, SWEEP_PARAMS)
@@ -252,7 +252,7 @@ def _run_map(args: argparse.Namespace) -> int:
     if kind == "disturbance":
         return _run_disturbance(args, zeta, e, common)
     from rattle_lab.model.analysis.maps import basin_map, regime_map
-    from rattle_lab.model.sdf._types import SDFParams
+    from rattle_lab.model.sdf import SDFParams
     from rattle_lab.plot import check_figure_path, plot_attractor_map
 
     opts: dict[str, Any] = dict(

@@ -39,7 +39,7 @@ def _run(args: argparse.Namespace) -> int:
                                          for m in mismatches]}, indent=2))
     else:
         from rattle_lab.store import reingest_advice
-        from rattle_lab.store._layout import record_attrs
+        from rattle_lab.store import record_attrs
 
         attrs = record_attrs(args.store) if bad else {}
         advised: set[str] = set()

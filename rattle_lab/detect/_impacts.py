@@ -32,7 +32,7 @@
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
@@ -40,6 +40,8 @@ import numpy as np
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, detrended_abs, n_samples_of, robust_sigma
 from ._flights import RingingProblem, flight_velocities, ringing_problem
+from ._timing import (MAX_COARSE_LAG_S, MAX_EXTRA_GUARD_S, DelayEstimate, channel_delay,
+                      coarse_lag, delay_significant, settled_span, shift_earlier, step_error)
 
 
 @dataclass(frozen=True)
@@ -212,6 +214,37 @@ class ImpactLog:
     ringing_problem : RingingProblem or None
         Where the run rings and its flight model measured no share: its part of the
         campaign's search for ringing modes (not compared, not kept in caches).
+    velocity_delay_s, velocity_delay_stderr_s : float
+        The vibrometer's delay after the accelerometer measured from the impacts (median
+        over them of the velocity step's centroid less the contact pulse's) and its
+        standard error, s; what remains after any declared ``group_delay_s``.  NaN without
+        both channels or with fewer than 5 impacts.
+    velocity_delay_n : int
+        Impacts it was measured from.
+    velocity_delay_applied_s : float
+        The part of it the velocity fits were evaluated with (0 where the declared delay
+        stands), s.
+    step_guard_s : float
+        Extra guard the velocity fits kept from each jump because the chain's step response
+        (pooled over the impacts, :func:`rattle_lab.detect._timing.step_error`) had not
+        settled at their near ends, s (0: it had).
+    velocity_delay_window_s : float
+        How far the delay estimate moved when the fits moved out by ``step_guard_s`` (the
+        centroids' dependence on their windows: a systematic error of the estimate), s.
+    e_per_delay_s : float
+        Median over the impacts of ``d e / d delay`` at the instant used, 1/s (NaN where the
+        delay was declared or not measured): what an error of the delay does to ``e``.
+    e_window_change : float
+        ``|median change of e|`` over the impacts when the fits moved out by
+        ``step_guard_s`` (0 when they did not): how much of the chain's step response the
+        nearer fits read, a measure of what the moved fits may still read.
+    e_measurand_diff : float
+        Where the vibrometer's measurand is neither declared nor established from the data
+        and the relative reading is kept: the mean ``e`` of the absolute reading (the base
+        velocity taken off) less the relative reading's (0 elsewhere).  The fit widens e's
+        interval by it (:func:`rattle_lab.fit._chain.measurand_systematic`).
+    e_measurand_alt_se : float
+        The standard error of the absolute reading's median e there (NaN elsewhere).
     """
 
     t_s: np.ndarray
@@ -229,6 +262,16 @@ class ImpactLog:
     ringing_ratio: float = float("nan")
     ring_modes: tuple[tuple[float, float], ...] = ()
     ringing_problem: RingingProblem | None = field(default=None, compare=False, repr=False)
+    velocity_delay_s: float = float("nan")
+    velocity_delay_stderr_s: float = float("nan")
+    velocity_delay_n: int = 0
+    velocity_delay_applied_s: float = 0.0
+    step_guard_s: float = 0.0
+    velocity_delay_window_s: float = float("nan")
+    e_per_delay_s: float = float("nan")
+    e_window_change: float = 0.0
+    e_measurand_diff: float = 0.0
+    e_measurand_alt_se: float = float("nan")
 
     def __post_init__(self) -> None:   # (pairs come back from a cache as lists)
         object.__setattr__(self, "ring_modes",
@@ -423,10 +466,39 @@ def jump_velocities(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: in
     at the rigid impact time; ``v_in = p(t)``, ``v_out = q(t)``.  Evaluating the fits at
     the centroid matters: the relative velocity changes by up to ``omega_s**2 h`` per second
     (~470 m/s^2 on a 1.3 mm gap at 96 Hz), so a tenth of a sample at 20 kHz is 2 mm/s.
+    With ``accel`` the time is the contact pulse's centroid (:func:`pulse_centroid`), and
+    the velocities are evaluated there: right only where the two channels are on one time
+    base (:func:`detect_impacts` measures and removes what remains between them).
 
     Returns ``(t, v_in, v_out)``; ``t`` is NaN where a side has no samples (the
     velocities are then the fits at the middle of the region, NaN on the empty side).
     """
+    jf = _jump_fits(v, j_lo, j_hi, lo_lim, hi_lim, n_fit=n_fit, n_guard=n_guard,
+                    degree=degree, omega_per_sample=omega_per_sample, accel=accel)
+    t = jf.t_a if np.isfinite(jf.t_a) else jf.t_v
+    vi, vo = jf.at(t if np.isfinite(t) else jf.t_half)
+    return t, vi, vo
+
+
+@dataclass(frozen=True)
+class _JumpFits:
+    """The fits either side of one jump and its two centroids (sample units)."""
+
+    t_v: float                 # the velocity step's centroid (NaN: a side without samples)
+    t_a: float                 # the contact pulse's centroid (NaN: none or not found)
+    t_half: float              # middle of the half-height region
+    p: _LocalFit | None
+    q: _LocalFit | None
+
+    def at(self, t: float) -> tuple[float, float]:
+        nan = float("nan")
+        return (float(self.p(t)[0]) if self.p is not None else nan,
+                float(self.q(t)[0]) if self.q is not None else nan)
+
+
+def _jump_fits(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: int, *,
+               n_fit: int, n_guard: int, degree: int, omega_per_sample: float | None = None,
+               accel: np.ndarray | None = None) -> _JumpFits:
     pre_lo, pre_hi, post_lo, post_hi = _fit_windows(j_lo, j_hi, lo_lim, hi_lim, n_fit, n_guard)
     nan = float("nan")
     fits = []
@@ -436,28 +508,29 @@ def jump_velocities(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: in
         fits.append(_LocalFit(np.arange(lo, hi + 1.0), v[lo:hi + 1], deg, omega_per_sample)
                     if hi >= lo else None)
     p, q = fits
+    t_half = 0.5 * (j_lo + j_hi) - 0.5
     if p is None or q is None:
-        t_half = 0.5 * (j_lo + j_hi) - 0.5
-        return (nan, float(p(t_half)[0]) if p is not None else nan,
-                float(q(t_half)[0]) if q is not None else nan)
+        return _JumpFits(nan, nan, t_half, p, q)
     k = np.arange(pre_hi, post_lo + 1.0)
     pk, qk = p(k), q(k)
     step = (v[pre_hi:post_lo + 1] - pk) / (qk - pk)
     # centroid of ds over [a, b]: b - integral of s (trapezoid; s(a) ~ 0, s(b) ~ 1)
     t = float(post_lo - (np.sum(step) - 0.5 * (step[0] + step[-1])))
     t = min(max(t, float(pre_hi)), float(post_lo))
+    t_a = nan
     if accel is not None:
         n_pad = post_lo - j_hi
         t_a = pulse_centroid(accel, int(round(t)), n_pad + (j_hi - j_lo + 1) // 2, lo_lim,
                              n_fit=n_fit, degree=degree, omega_per_sample=omega_per_sample)
-        if np.isfinite(t_a) and pre_hi <= t_a <= post_lo:
-            t = t_a
-    return t, float(p(t)[0]), float(q(t)[0])
+        if not (np.isfinite(t_a) and pre_hi <= t_a <= post_lo):
+            t_a = nan
+    return _JumpFits(t, t_a, t_half, p, q)
 
 
 def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: object = None,
                    params: ImpactParams | None = None, start_time_s: float = 0.0,
-                   excitation_freq_hz: float | None = None) -> ImpactLog:
+                   excitation_freq_hz: float | None = None,
+                   velocity_delay_declared: bool = False) -> ImpactLog:
     """Find impacts in a vibrometer velocity and/or plate acceleration record.
 
     Parameters
@@ -476,6 +549,16 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         Excitation frequency, Hz.  With ``params.fit_basis == "sine"`` the velocity fits on
         either side of an impact use the forced-mode basis at this frequency (see
         :func:`jump_velocities`); without it they are polynomials.
+    velocity_delay_declared : bool
+        Whether the velocity's time base already has its declared filter delay taken off
+        (``group_delay_s``).  With both channels the vibrometer's delay relative to the
+        accelerometer is measured from the impacts (:func:`rattle_lab.detect._timing.channel_delay`):
+        undeclared, it is applied where it is beyond its uncertainty
+        (:func:`rattle_lab.detect._timing.delay_significant`: the velocity fits are evaluated
+        at the impact time plus it) and left at zero otherwise; declared, the declaration
+        stands and the measurement only checks it (the fit flags a contradiction,
+        :func:`rattle_lab.fit._chain.velocity_delay_flags`).  Either way it is in
+        :attr:`ImpactLog.velocity_delay_s`.
 
     Returns
     -------
@@ -514,6 +597,18 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         floor = params.sigma_floor_rel * float(np.max(np.abs(a), initial=0.0))
         cfs.append(characteristic(a, floor, n_detrend, jump=False))
         names.append("acceleration")
+    lag, step_guard_s, e_slope, e_window = 0, 0.0, float("nan"), 0.0
+    if v is not None and a is not None:
+        # issue 28: a decoder can delay the velocity by many samples; its events are brought
+        # onto the accelerometer's (whole samples) before the two are paired
+        lag = coarse_lag(cfs[0], cfs[1], int(round(MAX_COARSE_LAG_S * fs_hz)), params.off)
+        # (a velocity jump's characteristic function sits on the later of its two samples:
+        # a lag of one is that, or a delay the centroids measure without the shift)
+        lag = lag if abs(lag) > 1 else 0
+        if lag:
+            v = shift_earlier(v, lag)
+            floor = params.sigma_floor_rel * float(np.max(np.abs(v), initial=0.0))
+            cfs[0] = characteristic(v, floor, n_detrend, jump=True)
     cf = cfs[0] if len(cfs) == 1 else 0.5 * (cfs[0] + cfs[1])
     n_sep = n_samples_of(params.min_separation_s, fs_hz, name="min_separation_s")
     trig = trigger_onsets(cf, params.on, params.off, n_sep)
@@ -532,6 +627,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         n_guard = n_samples_of(params.sine_guard_s, fs_hz, name="sine_guard_s")
     t_idx, onsets, v_in, v_out, strength, pads = [], [], [], [], [], []
     spans: list[tuple[int, int, int, int]] = []
+    jfits: list[_JumpFits] = []
     for j, (start, peak, end) in enumerate(trig):
         j_lo, j_hi = start, end
         if v is not None:
@@ -552,13 +648,111 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         lo_lim = trig[j - 1][2] + 1 if j > 0 else 0
         hi_lim = trig[j + 1][0] - 1 if j + 1 < len(trig) else v.size - 1
         spans.append((j_lo, j_hi, lo_lim, hi_lim))
-        t_jump, vi, vo = jump_velocities(v, j_lo, j_hi, lo_lim, hi_lim, n_fit=n_fit,
-                                         n_guard=n_guard, degree=degree,
-                                         omega_per_sample=omega, accel=a)
-        if np.isfinite(t_jump):
-            t_idx[-1] = t_jump
-        v_in.append(vi)
-        v_out.append(vo)
+        jfits.append(_jump_fits(v, j_lo, j_hi, lo_lim, hi_lim, n_fit=n_fit, n_guard=n_guard,
+                                degree=degree, omega_per_sample=omega, accel=a))
+    # issue 28: the velocity steps' centroids against the contact pulses' measure what is
+    # left of the vibrometer's delay after the declared one (the first moment of any
+    # filter's impulse response is its low-frequency group delay): the fits are evaluated
+    # at the impact time plus it, the impact time stays the accelerometer's
+    delay = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits]) \
+        if v is not None and a is not None else DelayEstimate(float("nan"), float("nan"), 0)
+    delay = replace(delay, value=delay.value + lag)
+    delay_first = delay.value
+    # the velocity is read at the impact time plus d_use in the shifted velocity's samples
+    # (plus lag in its own): -lag where the declared delay stands
+    d_use = -float(lag)
+    # measured and undeclared: applied only where it is beyond its uncertainty and the
+    # per-impact values agree to under a sample (a delay the data cannot tell from zero, or
+    # centroids scattered by the sampling or by the plate's higher modes ringing in the
+    # vibrometer, moved 5-12 samples on the independent generator, is left at zero; the fit
+    # still carries its uncertainty into e's interval,
+    # :func:`rattle_lab.fit._chain.delay_systematic`)
+    measured = bool(np.isfinite(delay.value)) and not velocity_delay_declared
+    applied = measured and delay.resolved and delay_significant(delay)
+    if applied:
+        d_use = delay.value - lag
+    def t_eval_of(jf: _JumpFits) -> float:
+        if np.isfinite(jf.t_a):
+            return jf.t_a + d_use
+        return jf.t_v if np.isfinite(jf.t_v) else jf.t_half
+
+    if v is not None and jfits:
+        # issue 28: the chain's step response as the record shows it: where it has not
+        # settled at the fit windows' near ends (a decoder's overshoot and ringing), the
+        # fits move out by what it needs
+        t_ev = np.array([t_eval_of(jf) for jf in jfits])
+        n_pad0 = max(hi - lo + 1 for lo, hi, _, _ in spans) + n_guard
+        n_extra_max = int(round(MAX_EXTRA_GUARD_S * fs_hz))
+        taus, med, noise = step_error(v, t_ev, [(jf.p, jf.q) for jf in jfits],
+                                      [(lo_l, hi_l) for _, _, lo_l, hi_l in spans],
+                                      n_pad0 + n_extra_max)
+        first, last = settled_span(taus, med, noise)
+        need = []
+        for te, (j_lo, j_hi, lo_l, hi_l) in zip(t_ev, spans):
+            _, pre_hi, post_lo, _ = _fit_windows(j_lo, j_hi, lo_l, hi_l, n_fit, n_guard)
+            if np.isfinite(te):
+                need.append(max(0.0, pre_hi - (te + first) + 1, (te + last) - post_lo + 1))
+        extra = int(np.ceil(np.median(need))) if need else 0
+        if not applied:
+            # a declared chain, or a delay the data cannot tell from zero, keeps the fits
+            # where they were (the plate's higher modes ringing in the vibrometer also leave
+            # the step unsettled, and the flight model that deals with them was tuned on
+            # these windows)
+            extra = 0
+        if extra > n_extra_max:
+            # not settled within MAX_EXTRA_GUARD_S: not a decoder's step response but the
+            # plate's higher modes ringing in the vibrometer (the flight model's business)
+            extra = 0
+        first_fits = jfits
+        if extra > 0:
+            step_guard_s = extra / fs_hz
+            pads = [pd + extra for pd in pads]
+            jfits = [replace(_jump_fits(v, j_lo, j_hi, lo_l, hi_l, n_fit=n_fit,
+                                        n_guard=n_guard + extra, degree=degree,
+                                        omega_per_sample=omega, accel=None),
+                             t_a=jf.t_a)
+                     for jf, (j_lo, j_hi, lo_l, hi_l) in zip(jfits, spans)]
+            # the step's centroid over the wider span holds more of a ringing decoder's tail
+            est = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits])
+            if np.isfinite(est.value):
+                delay = replace(est, value=est.value + lag)
+                d_use = est.value
+        if measured:
+            # how much e moves per sample of delay: the fits read a quarter sample either
+            # side of the instant used (the median over the impacts)
+            slopes = []
+            for jf in jfits:
+                te = t_eval_of(jf)
+                if np.isfinite(te):
+                    (pi1, qo1), (pi0, qo0) = jf.at(te + 0.25), jf.at(te - 0.25)
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        slopes.append((-qo1 / pi1 + qo0 / pi0) / 0.5)
+            sl = np.asarray(slopes, dtype=float)
+            sl = sl[np.isfinite(sl)]
+            e_slope = float(np.median(sl)) * fs_hz if sl.size else float("nan")
+        if first_fits is not jfits:
+            # what moving the fits out of the unsettled step changed in e: the part of the
+            # chain's step response the first fits read (a systematic error of their own)
+            moved = []
+            for jf0, jf in zip(first_fits, jfits):
+                te = t_eval_of(jf)
+                if np.isfinite(te):
+                    (pi0, qo0), (pi1, qo1) = jf0.at(te), jf.at(te)
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        moved.append(-qo1 / pi1 + qo0 / pi0)
+            mv = np.asarray(moved, dtype=float)
+            mv = mv[np.isfinite(mv)]
+            e_window = abs(float(np.median(mv))) if mv.size else float("nan")
+        for i, jf in enumerate(jfits):
+            if np.isfinite(jf.t_a):
+                t_idx[i], t_eval = jf.t_a, jf.t_a + d_use
+            elif np.isfinite(jf.t_v):
+                t_idx[i], t_eval = jf.t_v - d_use, jf.t_v
+            else:
+                t_eval = jf.t_half
+            vi, vo = jf.at(t_eval)
+            v_in.append(vi)
+            v_out.append(vo)
     vin = np.asarray(v_in, dtype=float)
     vout = np.asarray(v_out, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -568,14 +762,14 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     if v is not None and excitation_freq_hz is not None:
         # a shaker run: the plate meets the striker at the gap, cycle after cycle
         speed = float(np.nanmedian(np.abs(vin[keep]))) if keep.any() else float("nan")
-        offset = velocity_offset(v, np.asarray(t_idx, dtype=float)[keep], fs_hz, speed)
+        offset = velocity_offset(v, np.asarray(t_idx, dtype=float)[keep] + d_use, fs_hz, speed)
         vin, vout = vin - offset, vout - offset
         with np.errstate(divide="ignore", invalid="ignore"):
             e = np.where(vin != 0, -vout / vin, np.nan)
     note, share, ratio = "", float("nan"), float("nan")
     problem: RingingProblem | None = None
     model = params.velocity_model
-    k_keep = np.asarray(t_idx, dtype=float)[keep]
+    k_keep = np.asarray(t_idx, dtype=float)[keep] + d_use     # in the velocity's time
     pad_keep = np.asarray(pads, dtype=float)[keep] if v is not None else np.zeros(0)
     carried = False   # ImpactParams.ring_modes applied
     if params.ring_modes and v is not None and excitation_freq_hz is not None:
@@ -587,7 +781,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         # missing impact would leave its jump and its ringing out of the run-wide model
         src = np.isfinite(vin) & np.isfinite(vout)
         flights = flight_velocities(v, fs_hz, excitation_freq_hz,
-                                    np.asarray(t_idx, dtype=float)[src],
+                                    np.asarray(t_idx, dtype=float)[src] + d_use,
                                     np.asarray(pads, dtype=float)[src], vin[src], vout[src],
                                     list(params.ring_modes), carried=True)
         got = np.zeros(vin.size, dtype=bool)
@@ -635,7 +829,14 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                      channels=tuple(names), params=params, fs_hz=float(fs_hz),
                      velocity_note=note, velocity_offset_m_s=offset, ringing_share=share,
                      ringing_ratio=ratio, ring_modes=params.ring_modes if carried else (),
-                     ringing_problem=problem)
+                     ringing_problem=problem,
+                     velocity_delay_s=delay.value / fs_hz if delay.n else float("nan"),
+                     velocity_delay_stderr_s=delay.stderr / fs_hz if delay.n else float("nan"),
+                     velocity_delay_n=delay.n, velocity_delay_applied_s=(d_use + lag) / fs_hz,
+                     step_guard_s=step_guard_s,
+                     velocity_delay_window_s=abs(delay.value - delay_first) / fs_hz
+                     if delay.n else float("nan"),
+                     e_per_delay_s=e_slope, e_window_change=e_window)
 
 
 #: ``velocity_model = "auto"`` runs the flight model where the local fits' median residual

@@ -35,6 +35,10 @@ from scipy import signal
 from rattle_lab.detect._common import as_signal
 from rattle_lab.exceptions import ParameterError
 
+__all__ = ["Direction", "Threshold", "ThresholdCurve", "GAP_IMPACTS", "fundamental_amplitude",
+           "sustained_impact_time", "ramp_line", "ramp_threshold", "impact_gap_cycles",
+           "threshold_uncertainty_ms2", "crossing_level_ms2", "tabulate_thresholds"]
+
 Direction = Literal["up", "down"]
 
 

@@ -75,10 +75,8 @@ def _set(data: np.ndarray, x: np.ndarray | None, *, dt: float | None, t0: float,
 def uff_sets(store: str | os.PathLike[str], *, channels: bool = True,
              results: bool = True) -> list[dict[str, Any]]:
     """The UFF 58 datasets (pyuff dicts) of a store's runs and, if fitted, its results."""
-    from rattle_lab.store import open_stored_record, read_catalogue
-    from rattle_lab.records._errors import StoreError
     from rattle_lab.fit import FitSummary
-    from rattle_lab.fit._results import read_results
+    from rattle_lab.store import StoreError, open_stored_record, read_catalogue, read_results
 
     store = Path(store)
     catalogue = read_catalogue(store, level="runs")

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rattle_lab.model.analysis._sweep import Sweep, sweep
+from rattle_lab.model.analysis import Sweep, sweep
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.model.scaling import F_from_accel, accel_ms2_from_F
 from rattle_lab.model.sdf import SDFParams, SDFState

@@ -17,7 +17,7 @@ from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_dow
                            ringing_corrected_ratios, saddle_node_threshold_ms2)
 from ._results import RunResult, StoreFit
 from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
-from ._params import check_fit_params, load_pipeline
+from ._params import FIT_KEYS, SOUND_KEYS, check_fit_params, load_pipeline
 from ._store import analyse_run, fit_runs, json_ready, summarise_fits
 from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
                          GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
@@ -41,4 +41,5 @@ __all__ = [
     "TransientRun", "ParticipationInfo",
     "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
     "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K",
+    "FIT_KEYS", "SOUND_KEYS",
 ]

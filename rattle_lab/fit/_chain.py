@@ -12,15 +12,16 @@ thresholds that the eq. (3.4) fit takes.
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import numpy as np
 
-from rattle_lab.detect._pairing import base_velocity_at, onto_grid
-from rattle_lab.detect._shock import detect_shock
+from rattle_lab.detect import (RINGING_RESIDUAL_RATIO, DelayEstimate, base_velocity_at,
+                               delay_contradicted, detect_shock, measurand_share, onto_grid)
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.records._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
-                              channel_time_offset_s)
+from rattle_lab.records import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
+                                channel_time_offset_s)
 from rattle_lab.fit._results import RunResult
 from rattle_lab.detect.thresholds import Threshold, crossing_level_ms2
 
@@ -106,6 +107,275 @@ def relative_to_striker(run: Any, log: Any, base: Any, freq_hz: float | None) ->
     with np.errstate(divide="ignore", invalid="ignore"):
         e = np.where(vin != 0, -vout / vin, np.nan)
     return dataclasses.replace(log, v_in_m_s=vin, v_out_m_s=vout, e=e)
+
+
+#: Data-quality flag: the vibrometer's delay was not declared and was measured from the impacts.
+FLAG_DELAY_ESTIMATED = "channel_delay_estimated"
+#: Data-quality flag: the declared delay is contradicted by the impacts (the declared is used).
+FLAG_DELAY_CONTRADICTED = "channel_delay_contradicted"
+#: Data-quality flag: the measurand was not declared and was inferred from the data.
+FLAG_MEASURAND_INFERRED = "measurand_inferred"
+#: Data-quality flag: the measurand was not declared and the data cannot tell (e withheld).
+FLAG_MEASURAND_UNDETERMINED = "measurand_undetermined"
+
+
+def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
+    """Flags (with their notes) of the vibrometer's delay measured from the impacts.
+
+    Undeclared and applied (beyond its uncertainty,
+    :func:`rattle_lab.detect._timing.delay_significant`): :data:`FLAG_DELAY_ESTIMATED`;
+    declared and contradicted by the data beyond its uncertainty and a whole sample
+    (:func:`rattle_lab.detect._timing.delay_contradicted`): :data:`FLAG_DELAY_CONTRADICTED`
+    (the declaration is still used).  Nothing where there was nothing to measure (one
+    channel, too few impacts), where an undeclared delay is indistinguishable from zero
+    (its uncertainty still widens e's interval: :func:`delay_systematic`), where the
+    plate's higher modes ring in the vibrometer (its step centroid is then not a measure
+    of the delay) or where the declaration holds.
+    """
+    d, se, n = log.velocity_delay_s, log.velocity_delay_stderr_s, log.velocity_delay_n
+    if not np.isfinite(d):
+        return ()
+    fs = log.fs_hz
+    what = (f"{1e6 * d:.2f} +- {1e6 * se:.2f} us ({d * fs:.3f} samples) from {n} impacts "
+            "(velocity step centroid less contact pulse centroid, median)")
+    if not declared:
+        if not log.velocity_delay_applied_s:
+            return ()
+        return (f"{FLAG_DELAY_ESTIMATED}: the velocity lags the plate accelerometer by {what}; "
+                "the velocities are read at the impact time plus it",)
+    if log.ringing_ratio >= RINGING_RESIDUAL_RATIO:
+        # the plate's higher modes ring in the vibrometer after each impact: they move the
+        # velocity step's centroid (by up to 2 samples on the independent generator), so
+        # the data cannot check the declaration
+        return ()
+    if delay_contradicted(DelayEstimate(d * fs, se * fs, n)):
+        return (f"{FLAG_DELAY_CONTRADICTED}: after the declared group_delay_s the velocity "
+                f"still lags the plate accelerometer by {what}; the declared delay is used",)
+    return ()
+
+
+#: Least standard error, samples, a run's delay is weighted with when the runs' delays that
+#: were not applied are pooled (a MAD of exactly 0 must not give a run infinite weight).
+_POOL_FLOOR_SAMPLES = 1e-3
+
+
+def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
+    """The error of e from the runs' vibrometer delays, and notes (0 and none if none).
+
+    Two parts, in quadrature:
+
+    * runs whose undeclared delay was measured and applied: ``|d e / d delay|`` times the
+      delay's uncertainty, its standard error and the change of the estimate when the fits
+      moved out of the step's unsettled part
+      (:attr:`~rattle_lab.detect.ImpactLog.velocity_delay_window_s`) in quadrature, and in
+      quadrature with that the change of e itself when they moved
+      (:attr:`~rattle_lab.detect.ImpactLog.e_window_change`); the same chain times every
+      run alike, so this is not averaged down over runs: the median over the runs;
+    * runs whose undeclared delay was measured and left at zero (indistinguishable from it):
+      the one chain's delay pooled over those runs (inverse-variance mean ``d`` with
+      standard error ``s``); reading at zero errs by the true delay, whose root mean square
+      is ``hypot(d, s)``, times the runs' median ``|d e / d delay|``.
+
+    Declared delays add nothing here (a contradiction is flagged instead).
+    """
+    vals, deltas = [], []
+    d_u, s_u, slope_u, fs_u = [], [], [], []
+    for log in logs:
+        if log is None or not np.isfinite(log.e_per_delay_s):
+            continue
+        if log.velocity_delay_applied_s:
+            sd = float(np.hypot(np.nan_to_num(log.velocity_delay_stderr_s),
+                                np.nan_to_num(log.velocity_delay_window_s)))
+            vals.append(float(np.hypot(abs(log.e_per_delay_s) * sd,
+                                       np.nan_to_num(log.e_window_change))))
+            deltas.append(sd * log.fs_hz)
+        elif np.isfinite(log.velocity_delay_s) and np.isfinite(log.velocity_delay_stderr_s):
+            d_u.append(log.velocity_delay_s)
+            s_u.append(max(log.velocity_delay_stderr_s, _POOL_FLOOR_SAMPLES / log.fs_hz))
+            slope_u.append(abs(log.e_per_delay_s))
+            fs_u.append(log.fs_hz)
+    notes = []
+    se_a = se_u = 0.0
+    if vals:
+        se_a = float(np.median(vals))
+        notes.append(f"the vibrometer's delay was measured from the impacts and applied in "
+                     f"{len(vals)} runs; its uncertainty (median {np.median(deltas):.3f} samples: "
+                     "standard error and the estimate's dependence on the fit windows) and the "
+                     f"decoder's step response read by the velocity fits move e by {se_a:.4f} "
+                     "(median of the runs), added to the standard error")
+    if d_u:
+        w = 1.0 / np.asarray(s_u) ** 2
+        d_bar = float(np.sum(w * np.asarray(d_u)) / np.sum(w))
+        s_bar = float(1.0 / np.sqrt(np.sum(w)))
+        rms = float(np.hypot(d_bar, s_bar))
+        se_u = float(np.median(slope_u)) * rms
+        fs = float(np.median(fs_u))
+        notes.append(f"the vibrometer's delay is not declared; measured from the impacts in "
+                     f"{len(d_u)} runs it is {1e6 * d_bar:.2f} +- {1e6 * s_bar:.2f} us "
+                     f"({d_bar * fs:.3f} samples) and was left at zero (not distinguishable from "
+                     "zero, or its per-impact values scatter by a sample or more: steps the "
+                     "sampling does not resolve, or the plate's higher modes ringing in the "
+                     f"vibrometer); reading at zero moves e by up to {se_u:.4f} (root mean "
+                     "square), added to the standard error")
+    return float(np.hypot(se_a, se_u)), notes
+
+
+#: The runs' readings of e disagree where their chi-square about the weighted mean has a
+#: probability below this (e is one property of the contact, read by one vibrometer).
+_CONSISTENCY_P = 1e-3
+
+
+def _chi2_p(m: np.ndarray, s: np.ndarray) -> float:
+    """Probability of the runs' medians ``m`` (errors ``s``) scattering as much about their
+    inverse-variance mean, were they one value."""
+    from scipy.stats import chi2
+
+    w = 1.0 / np.maximum(s, 1e-12) ** 2
+    mean = float(np.sum(w * m) / np.sum(w))
+    return float(chi2.sf(float(np.sum(w * (m - mean) ** 2)), m.size - 1))
+
+
+def measurand_systematic(logs: list[Any]) -> tuple[float, str]:
+    """The error of e from runs whose vibrometer measurand could not be established.
+
+    Such runs keep the relative reading and record how far the absolute reading's e lies
+    from it (:attr:`~rattle_lab.detect.ImpactLog.e_measurand_diff`).  Across two or more
+    such runs, e (one property of the contact, read by one vibrometer) must come out the
+    same in every run for the right reading: where the relative readings agree (chi-square
+    probability above :data:`_CONSISTENCY_P`) and the absolute ones do not, the relative
+    reading is established across the runs and nothing is added.  Otherwise, were the
+    vibrometer absolute, e would move by the ratio-weighted mean of the differences over all
+    runs with ratios (0 for the runs whose measurand is known): that mean's magnitude is
+    returned, to be added to e's standard error in quadrature, so that the 95 % interval
+    spans both readings.
+    """
+    n_tot, shift = 0, 0.0
+    m0s, s0s, m1s, s1s = [], [], [], []
+    for log in logs:
+        if log is None:
+            continue
+        e = np.asarray(log.e, dtype=float)
+        n = int(np.sum(np.isfinite(e)))
+        n_tot += n
+        diff = float(getattr(log, "e_measurand_diff", 0.0) or 0.0)
+        if diff and n >= 5:
+            shift += n * diff
+            m0, s0 = _median_and_error(e)
+            m0s.append(m0)
+            s0s.append(s0)
+            m1s.append(m0 + diff)
+            s1s.append(float(getattr(log, "e_measurand_alt_se", s0)))
+    if not m0s or not n_tot:
+        return 0.0, ""
+    if len(m0s) >= 2:
+        p0 = _chi2_p(np.asarray(m0s), np.asarray(s0s))
+        p1 = _chi2_p(np.asarray(m1s), np.asarray(s1s))
+        if p0 >= _CONSISTENCY_P > p1:
+            return 0.0, (f"the vibrometer's measurand is not declared and no single run "
+                         f"establishes it; across the {len(m0s)} runs the relative readings "
+                         f"of e agree (chi-square probability {p0:.2g}) and the absolute ones "
+                         f"do not ({p1:.2g}): read as relative to the striker")
+    se = abs(shift / n_tot)
+    return se, (f"the vibrometer's measurand is neither declared nor established from the data "
+                f"in {len(m0s)} runs: they are read as relative to the striker; were it "
+                f"absolute, e would move by {shift / n_tot:+.4f}, added to the standard error")
+
+
+def infer_measurand(run: Any, log: Any, v_si: np.ndarray, fs: float, t0: float, base: Any,
+                    freq_hz: float | None) -> tuple[Any, tuple[str, ...]]:
+    """An undeclared vibrometer's measurand from the data; the log made relative if absolute.
+
+    The integrated velocity at the impacts against the base displacement there
+    (:func:`rattle_lab.detect._timing.measurand_share`).  Relative: the log unchanged;
+    absolute: the base velocity taken off (:func:`relative_to_striker`); both flagged
+    :data:`FLAG_MEASURAND_INFERRED` with the evidence.  Undetermined (impacts at one phase
+    of the base motion, too few impacts): the relative reading is kept (the convention for
+    an undeclared vibrometer) and the absolute reading's difference recorded
+    (:attr:`~rattle_lab.detect.ImpactLog.e_measurand_diff`, which widens e's interval:
+    :func:`measurand_systematic`), flagged :data:`FLAG_MEASURAND_UNDETERMINED` (or
+    :data:`FLAG_MEASURAND_UNDECLARED` where the two readings agree within their noise).
+    Only where no absolute reading can be formed (no base accelerometer, no constant
+    excitation frequency) are the run's ratios withheld, with the reason.
+    """
+    if log.n_impacts == 0:
+        return log, (FLAG_MEASURAND_UNDECLARED,)
+    if base is None or freq_hz is None:
+        why = "no base accelerometer" if base is None else "no constant excitation frequency"
+        return _undetermined(run, log, base, freq_hz, why)
+    t_v = log.t_s + log.velocity_delay_applied_s
+    share = measurand_share(v_si, fs, t0, t_v, base.read(), _fs_of(run, base), _t0_of(run, base),
+                            freq_hz, jumps_m_s=np.nan_to_num(log.v_out_m_s - log.v_in_m_s))
+    ev = (f"coefficient of the base displacement in the integrated velocity at {share.n} "
+          f"impacts {share.value:.3f} +- {share.stderr:.3f} (0: relative, 1: absolute; base "
+          f"displacement spread {1e6 * share.spread_m:.1f} um)")
+    if share.verdict == "relative":
+        return log, (f"{FLAG_MEASURAND_INFERRED}: relative to the striker: {ev}",)
+    if share.verdict == "absolute":
+        return (relative_to_striker(run, log, base, freq_hz),
+                (f"{FLAG_MEASURAND_INFERRED}: panel_absolute, made relative with the base: {ev}",))
+    return _undetermined(run, log, base, freq_hz, f"the data cannot tell: {ev}")
+
+
+#: A reading of e is not physical where its median over the run's impacts lies beyond 1 (or
+#: below 0) by more than this many of its standard errors.
+_UNPHYSICAL_SIGMAS = 4.0
+
+
+def _median_and_error(e: np.ndarray) -> tuple[float, float]:
+    """Median of the finite ratios and its standard error (``1.2533 * 1.4826 MAD / sqrt n``)."""
+    e = e[np.isfinite(e)]
+    med = float(np.median(e))
+    return med, 1.2533 * 1.4826 * float(np.median(np.abs(e - med))) / math.sqrt(e.size)
+
+
+def _physical(med: float, se: float) -> bool:
+    return -_UNPHYSICAL_SIGMAS * se <= med <= 1.0 + _UNPHYSICAL_SIGMAS * se
+
+
+def _undetermined(run: Any, log: Any, base: Any, freq_hz: float | None, why: str
+                  ) -> tuple[Any, tuple[str, ...]]:
+    """Measurand not established by the regression: by physics, else both readings kept.
+
+    A coefficient of restitution lies in [0, 1]: where exactly one reading's median e does
+    (beyond :data:`_UNPHYSICAL_SIGMAS` standard errors), that reading is the measurand
+    (:data:`FLAG_MEASURAND_INFERRED`); where neither does, nothing can be established and
+    the run's ratios are withheld.  Otherwise the relative reading is kept and the
+    absolute reading's difference recorded (``e_measurand_diff``: it widens e's interval).
+    """
+    alt = relative_to_striker(run, log, base, freq_hz) if base is not None and freq_hz else None
+    if alt is not None:
+        e0, e1 = np.asarray(log.e, dtype=float), np.asarray(alt.e, dtype=float)
+        both = np.isfinite(e0) & np.isfinite(e1)
+        if both.sum() >= 5:
+            (m0, s0), (m1, s1) = _median_and_error(e0[both]), _median_and_error(e1[both])
+            ok0, ok1 = _physical(m0, s0), _physical(m1, s1)
+            readings = (f"median e read as relative {m0:.4f} +- {s0:.4f}, as absolute "
+                        f"{m1:.4f} +- {s1:.4f}")
+            if ok0 and not ok1:
+                return log, (f"{FLAG_MEASURAND_INFERRED}: relative to the striker: the absolute "
+                             f"reading gives a coefficient of restitution outside [0, 1] "
+                             f"({readings}); {why}",)
+            if ok1 and not ok0:
+                return alt, (f"{FLAG_MEASURAND_INFERRED}: panel_absolute, made relative with "
+                             f"the base: the relative reading gives a coefficient of restitution "
+                             f"outside [0, 1] ({readings}); {why}",)
+            if not (ok0 or ok1):
+                nan = np.full(log.n_impacts, np.nan)
+                return (dataclasses.replace(log, e=nan, v_out_m_s=nan), (
+                    f"{FLAG_MEASURAND_UNDETERMINED}: {why}; neither reading gives a coefficient "
+                    f"of restitution within [0, 1] ({readings}): this run's ratios are "
+                    "withheld",))
+            diff = m1 - m0
+            kept = dataclasses.replace(log, e_measurand_diff=diff, e_measurand_alt_se=s1)
+            if abs(diff) <= math.hypot(s0, s1):
+                return kept, (f"{FLAG_MEASURAND_UNDECLARED}: {why}; read as relative (the "
+                              f"absolute reading agrees within the noise: {readings})",)
+            return kept, (f"{FLAG_MEASURAND_UNDETERMINED}: {why}; read as relative to the "
+                          f"striker ({readings}): e's interval is widened by the difference",)
+    nan = np.full(log.n_impacts, np.nan)
+    return (dataclasses.replace(log, e=nan, v_out_m_s=nan), (
+        f"{FLAG_MEASURAND_UNDETERMINED}: {why}; an absolute vibrometer cannot be made relative "
+        "here, nor the difference bounded: this run's ratios are withheld",))
 
 
 def run_chain_flags(run: Any) -> list[str]:
@@ -214,5 +484,7 @@ def _crossing_curve(thresholds: list[Threshold], freq_hz: np.ndarray) -> np.ndar
     return out
 
 
-__all__ = ["CAUSE_QUANTITIES", "SHOCK_QUANTITIES", "paired_plate_channels", "relative_to_striker",
-           "run_chain_flags", "runs_thresholds", "transient_shocks"]
+__all__ = ["CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED", "delay_systematic",
+           "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
+           "infer_measurand", "measurand_systematic", "paired_plate_channels", "relative_to_striker", "run_chain_flags",
+           "runs_thresholds", "transient_shocks", "velocity_delay_flags"]

@@ -25,7 +25,7 @@ from typing import Any
 import lmfit
 import numpy as np
 
-from rattle_lab.detect._common import robust_sigma
+from rattle_lab.detect import robust_sigma
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.model.linear import threshold_accel_unchecked
 from ._common import ParamEstimate, correlation_matrix

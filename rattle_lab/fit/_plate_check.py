@@ -25,8 +25,8 @@ import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from rattle_lab.records._chain import (FLAG_PARTICIPATION_ASSUMED, Participation, PlateF1,
-                                       plate_model_f1)
+from rattle_lab.records import (FLAG_PARTICIPATION_ASSUMED, Participation, PlateF1,
+                                plate_model_f1)
 
 #: Data-quality flag: the rig's plate model's f1 and the fitted f_s disagree.
 FLAG_PLATE_MODEL_DISAGREES = "plate_model_disagrees"

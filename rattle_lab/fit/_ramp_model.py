@@ -38,8 +38,7 @@ from typing import Literal
 import numpy as np
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.model.sdf import SDFParams, SDFState, simulate
-from rattle_lab.model.sdf._simulate import simulate_pieces
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate, simulate_pieces
 from rattle_lab.detect.thresholds import Threshold, sustained_impact_time
 from ._common import check_positive
 

@@ -38,7 +38,7 @@ import lmfit
 import numpy as np
 from scipy import stats
 
-from rattle_lab.detect._impacts import RINGING_RESIDUAL_RATIO
+from rattle_lab.detect import RINGING_RESIDUAL_RATIO
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.detect.thresholds import Threshold
 from ._common import ParamEstimate, check_positive

@@ -12,8 +12,8 @@ from typing import Any
 import numpy as np
 
 from rattle_lab.detect import ImpactLog, SoundPeaks
-from rattle_lab.store._results import (RESULTS_VERSION, StoredResults, read_results,  # noqa: F401
-                             write_results)
+from rattle_lab.store import (RESULTS_VERSION, StoredResults, read_results,  # noqa: F401
+                              write_results)
 from rattle_lab.detect.thresholds import Threshold, ThresholdCurve
 from ._summary import FitSummary
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from rattle_lab.detect._spl import spl_db
+from rattle_lab.detect import spl_db
 from rattle_lab.exceptions import ParameterError
 
 

@@ -23,15 +23,16 @@ import numpy as np
 from rattle_lab._version import __version__
 from rattle_lab.acoustics import campaign_background, run_acoustics  # [issue 17, 26]
 from rattle_lab.detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
-                      impact_pattern, impulse_train, rms_spl_db, sound_peaks)
+                               impact_pattern, impulse_train, rms_spl_db, sound_peaks)
 from rattle_lab.exceptions import RattleLabError
-from rattle_lab.records._chain import Participation, resolve_participation
+from rattle_lab.records import FLAG_MEASURAND_UNDECLARED, Participation, resolve_participation
 from rattle_lab.fit._results import RunResult, StoreFit
 from rattle_lab.store import (input_hashes, open_stored_record, read_catalogue)
 from rattle_lab.detect.thresholds import Threshold, ramp_threshold, tabulate_thresholds
-from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of,
+from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of, delay_systematic,
+                     infer_measurand, measurand_systematic,
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
-                     transient_shocks)
+                     transient_shocks, velocity_delay_flags)
 from ._grazing import GrazingFit, fit_grazing
 from ._plate_check import check_plate_model
 from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
@@ -103,9 +104,20 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     f_end = getattr(run, "freq_end_hz", None)
     f_fit = freq if (math.isfinite(freq) and 0 < freq < fs / 2
                      and (f_end is None or f_end == freq)) else None
+    delay_declared = vel is not None and getattr(vel, "group_delay_s", None) is not None
     log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=params,
-                         start_time_s=t0, excitation_freq_hz=f_fit)
-    if vel is not None and getattr(vel, "measurand", None) == "panel_absolute":
+                         start_time_s=t0, excitation_freq_hz=f_fit,
+                         velocity_delay_declared=delay_declared)
+    # issue 28: the vibrometer's delay measured from the impacts; its measurand, when the
+    # record does not say, inferred from the data
+    base["chain_flags"] = base["chain_flags"] + velocity_delay_flags(log, delay_declared)
+    measurand = getattr(vel, "measurand", None) if vel is not None else None
+    if vel is not None and measurand is None and v_si is not None:
+        log, flags = infer_measurand(run, log, v_si, fs, t0, by_q.get("base_acceleration"),
+                                     f_fit)
+        base["chain_flags"] = tuple(f for f in base["chain_flags"]
+                                    if f != FLAG_MEASURAND_UNDECLARED) + flags
+    if vel is not None and measurand == "panel_absolute":
         log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
     if log.velocity_note:   # the flight model gave no ringing share, or used some impacts only
         what = "ringing_velocities_missing" if log.ring_modes else "ringing_share_missing"
@@ -503,8 +515,17 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                      "across the runs: these ratios include them and are biased; e from the "
                      "downward thresholds does not depend on them")
         ringing_flags.append(FLAG_RINGING_UNCORRECTED)
+    # issue 28: an error of a measured vibrometer delay moves every ratio of a run alike
+    delay_se, delay_notes = delay_systematic([r.impacts for r in ok])
+    notes.extend(delay_notes)
+    # issue 28: an undeclared measurand the data could not establish: both readings inside
+    measurand_se, measurand_note = measurand_systematic([r.impacts for r in ok])
+    if measurand_note:
+        notes.append(measurand_note)
     if st.n:
-        ratio = RatioRestitution(st.mean, rs.stderr, "1", std=st.std, median=st.median, n=st.n,
+        ratio = RatioRestitution(st.mean, float(np.hypot(np.hypot(rs.stderr, delay_se),
+                                                         measurand_se)), "1", std=st.std,
+                                 median=st.median, n=st.n,
                                  n_runs=st.n_groups, notes=tuple(notes), **extra)
     else:
         missing["restitution_ratio"] = " ".join(

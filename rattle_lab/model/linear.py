@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from rattle_lab.model.scaling._checks import _nonnegative, _positive
+from rattle_lab.model._checks import _nonnegative, _positive
 
 __all__ = [
     "grazing_F",

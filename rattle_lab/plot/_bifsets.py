@@ -11,7 +11,7 @@ from rattle_lab.model.analysis.bifsets import BifurcationSets
 
 from ._figures import check_figure_path, save_figure
 
-_LINESTYLES: dict[str, Any] = {"grazing": "-", "saddle-node": "-.", "period-doubling": "--",
+BIFURCATION_LINESTYLES: dict[str, Any] = {"grazing": "-", "saddle-node": "-.", "period-doubling": "--",
                                "secondary-grazing": ":"}
 
 
@@ -65,13 +65,13 @@ def plot_bifurcation_sets(sets: BifurcationSets, path: str | Path, *, dpi: int =
         for c in sets.curves_of(n):
             if c.kind == "grazing":
                 continue  # drawn once, in black
-            ax.plot(c.omega, c.F, color=col, linestyle=_LINESTYLES[c.kind], linewidth=1.3)
+            ax.plot(c.omega, c.F, color=col, linestyle=BIFURCATION_LINESTYLES[c.kind], linewidth=1.3)
         handles.append(Patch(facecolor=col, alpha=0.15, label=f"1/{n} exists"))
         handles.append(Patch(facecolor=col, alpha=0.45, label=f"1/{n} stable"))
     ax.plot(sets.grazing.omega, sets.grazing.F, color="black", linewidth=1.6)
     handles.append(Line2D([], [], color="black", linewidth=1.6, label="grazing, eq. (3.4)"))
     for kind in ("saddle-node", "period-doubling", "secondary-grazing"):
-        handles.append(Line2D([], [], color="0.3", linestyle=_LINESTYLES[kind], label=kind))
+        handles.append(Line2D([], [], color="0.3", linestyle=BIFURCATION_LINESTYLES[kind], label=kind))
     ax.set_xlim(sets.omega[0], sets.omega[-1])
     ax.set_ylim(sets.F[0], sets.F[-1])
     ax.set_xlabel("forcing frequency omega (nondimensional)")

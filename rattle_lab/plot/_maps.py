@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.model.analysis._disturbance import DisturbanceMap
+from rattle_lab.model.analysis import DisturbanceMap
 from rattle_lab.model.analysis.maps import AttractorMap
 
 from ._figures import check_figure_path, save_figure

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.model.analysis._sweep import Sweep
+from rattle_lab.model.analysis import Sweep
 
 from ._figures import check_figure_path, save_figure
 

@@ -10,16 +10,22 @@ from ._errors import (ClippingError, ClippingWarning, DataQualityError, DropoutE
                       DropoutWarning, DuplicateRunError, EmptyChannelError, EmptyChannelWarning,
                       InfValueError, InfValueWarning, MappingError, NaNGapError, NaNGapWarning,
                       NonMonotonicTimestampsError, NonMonotonicTimestampsWarning,
-                      SampleRateMismatchError, SampleRateMismatchWarning, StoreError,
-                      UncalibratedWarning)
-from ._model import (ArrayData, ArraySource, Channel, GeneratedData, ImpactTable, Origin, Record,
-                     Rig, Run, Sensor, Skipped, ThresholdTable, Truth)
-from ._quality import FATAL_FLAGS, FLAGS, Finding, QualityLimits
+                      SampleRateMismatchError, SampleRateMismatchWarning, UncalibratedWarning)
+from ._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED, FLAG_PARTICIPATION_ASSUMED,
+                     Participation, PlateF1, channel_time_offset_s, plate_model_f1,
+                     resolve_participation)
+from ._convert import record_from_tree, record_to_tree
+from ._h5 import LinkPolicy, link_policy
+from ._model import (DEFAULT_CHUNK_SAMPLES, ArrayData, ArraySource, Channel, GeneratedData,
+                     ImpactTable, Origin, Record, Rig, Run, Sensor, Skipped, ThresholdTable, Truth,
+                     as_source)
+from ._quality import FATAL_FLAGS, FLAGS, ChannelChecker, Finding, QualityLimits, TimestampChecker
 from ._read import detect_format, read
 from ._readers.mapping import MappingSpec, load_mapping
+from ._readers.native import load_group
 from ._schema import load_schema, validate_tree
 from ._units import SI_UNITS, scale_to_si
-from ._write import write_record
+from ._write import write_record, write_tree
 
 __all__ = [
     "read",
@@ -50,7 +56,6 @@ __all__ = [
     "scale_to_si",
     "MappingError",
     "DuplicateRunError",
-    "StoreError",
     "DataQualityError",
     "NaNGapError",
     "InfValueError",
@@ -67,4 +72,23 @@ __all__ = [
     "NonMonotonicTimestampsWarning",
     "EmptyChannelWarning",
     "UncalibratedWarning",
+    # for the store and the fit (issue 25: packages import each other's public names only)
+    "write_tree",
+    "record_to_tree",
+    "record_from_tree",
+    "load_group",
+    "as_source",
+    "DEFAULT_CHUNK_SAMPLES",
+    "LinkPolicy",
+    "link_policy",
+    "ChannelChecker",
+    "TimestampChecker",
+    "Participation",
+    "PlateF1",
+    "plate_model_f1",
+    "resolve_participation",
+    "channel_time_offset_s",
+    "FLAG_PARTICIPATION_ASSUMED",
+    "FLAG_MEASURAND_UNDECLARED",
+    "FLAG_MEASURAND_ABSOLUTE",
 ]

@@ -25,10 +25,6 @@ class DuplicateRunError(SchemaError):
     """Two runs share one ``(campaign_id, run_id)`` within a file, a call or a store."""
 
 
-class StoreError(DataError):
-    """An ingest store is not a rattle_lab store, or is damaged."""
-
-
 class DataQualityError(DataError):
     """A data-quality finding that is fatal unless flagged data are allowed.
 
@@ -106,7 +102,6 @@ class UncalibratedWarning(DataQualityWarning):
 __all__ = [
     "MappingError",
     "DuplicateRunError",
-    "StoreError",
     "DataQualityError",
     "NaNGapError",
     "InfValueError",

@@ -14,15 +14,16 @@ import json
 import math
 import re
 from collections.abc import Iterable, Sequence
-from importlib import resources
 from typing import Any
 
 import jsonschema
 
+from rattle_lab._resources import find_resource
 from rattle_lab.exceptions import SchemaError
 from ._errors import DuplicateRunError
 
-SCHEMA_RESOURCE = ("rattle_lab", "data/schema/rattle_record.v1.schema.json")
+#: The schema's file among the resources of kind "schema" (:mod:`rattle_lab._resources`).
+SCHEMA_FILE = "rattle_record.v1.schema.json"
 
 #: dtypes (numpy kind + item size) a channel may have.
 CHANNEL_DTYPES = frozenset({"f4", "f8", "i1", "i2", "i4", "i8", "u1", "u2", "u4"})
@@ -36,8 +37,10 @@ V2_RUN_ATTRS = ("detect_channel", "level_peak", "freq_peak_hz", "turn_time_s")
 @functools.lru_cache(maxsize=1)
 def load_schema() -> dict[str, Any]:
     """The rattle record v1 JSON Schema, as shipped in the package."""
-    text = resources.files(SCHEMA_RESOURCE[0]).joinpath(SCHEMA_RESOURCE[1]).read_text("utf-8")
-    return json.loads(text)
+    path = find_resource("schema", SCHEMA_FILE)
+    if path is None:  # a broken installation: the wheel ships it
+        raise FileNotFoundError(f"the record schema {SCHEMA_FILE} is not installed with rattle_lab")
+    return json.loads(path.read_text("utf-8"))
 
 
 @functools.lru_cache(maxsize=1)

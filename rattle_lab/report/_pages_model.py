@@ -10,7 +10,7 @@ from typing import Any
 
 from matplotlib.figure import Figure
 
-from rattle_lab.plot._bifsets import _LINESTYLES  # the same styles as `model bifsets`' plot
+from rattle_lab.plot import BIFURCATION_LINESTYLES  # the same styles as `model bifsets`' plot
 from ._common import landscape_figure
 from ._content_types import ModelContent, SweepComparison
 
@@ -49,7 +49,7 @@ def _bifurcation_page(c: ModelContent) -> Figure:
             ax.contourf(*stable, levels=[0.5, 1.5], colors=[color], alpha=0.45)
         for curve in sets.curves_of(n):
             if curve.kind != "grazing":
-                ax.plot(curve.omega, curve.F, color=color, lw=1.3, ls=_LINESTYLES[curve.kind])
+                ax.plot(curve.omega, curve.F, color=color, lw=1.3, ls=BIFURCATION_LINESTYLES[curve.kind])
         handles += [Patch(facecolor=color, alpha=0.15, label=f"1/{n} orbit exists"),
                     Patch(facecolor=color, alpha=0.45, label=f"1/{n} orbit exists and is stable")]
     if c.both_field is not None:  # where the two shadings blend: named in the legend, hatched
@@ -59,7 +59,7 @@ def _bifurcation_page(c: ModelContent) -> Figure:
                                    "(overlap of the shadings: coexisting orbits)"))
     for kind in ("saddle-node", "period-doubling", "secondary-grazing"):
         if any(curve.kind == kind for n in sets.ns for curve in sets.curves_of(n)):
-            handles.append(Line2D([], [], color="0.3", ls=_LINESTYLES[kind], label=kind))
+            handles.append(Line2D([], [], color="0.3", ls=BIFURCATION_LINESTYLES[kind], label=kind))
     (graze,) = ax.plot(sets.grazing.omega, sets.grazing.F, color="k", lw=1.4,
                        label="grazing, eq. (3.4)")
     (on,) = ax.plot(c.omega_up, c.F_up, "^", color="tab:red", ms=7, label="measured onset")

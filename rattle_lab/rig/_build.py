@@ -16,10 +16,9 @@ from rattle_lab._progress import progress
 from rattle_lab._version import __version__
 from rattle_lab.exceptions import OutputError
 from rattle_lab.model.plate import Plate
-from rattle_lab.records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable, Truth,
-                       scale_to_si, write_record)
-from rattle_lab.model.modal._sound import C_AIR_M_S
-from rattle_lab.records._model import as_source
+from rattle_lab.records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable,
+                                Truth, as_source, scale_to_si, write_record)
+from rattle_lab.model.modal import C_AIR_M_S
 from . import _chain as cc
 from . import _modal as md
 from . import _channels as ch

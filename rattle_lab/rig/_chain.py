@@ -25,11 +25,11 @@ Background noise is each sensor's ``noise_rms``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ._chain_spec import ChainSpec
 from ._channels import convolve_causal, impulse_train, n_samples
 
 if TYPE_CHECKING:
@@ -37,62 +37,6 @@ if TYPE_CHECKING:
     from ._scene import ModelSpec
 
 TWO_PI = 2.0 * math.pi
-VIBROMETERS = ("relative", "absolute")
-ADC_BITS = (0, 16, 24)
-
-
-@dataclass(frozen=True)
-class ChainSpec:
-    """The measurement chain (see the module docstring); every default is "off"."""
-
-    decoder_delay_s: float = 0.0
-    vibrometer: str = "relative"
-    ring_velocity_per_m_s: float = 0.0
-    hum_hz: float = 50.0
-    hum_m_s: float = 0.0
-    hum_m_s2: float = 0.0
-    hum_pa: float = 0.0
-    offset_velocity_m_s: float = 0.0
-    offset_plate_m_s2: float = 0.0
-    offset_base_m_s2: float = 0.0
-    offset_mic_pa: float = 0.0
-    adc_bits: int = 0
-    floor_extra_path_m: float = 0.0
-    floor_gain: float = 0.0
-
-    @property
-    def measurand(self) -> str:
-        """The velocity channel's ``measurand`` attribute."""
-        return "panel_absolute" if self.vibrometer == "absolute" else "panel_relative_to_striker"
-
-
-def parse_chain(reader: Any) -> ChainSpec:
-    """A :class:`ChainSpec` from the scene's ``[chain]`` table reader (``_scene._Reader``)."""
-    r = reader
-    spec = ChainSpec(
-        decoder_delay_s=r.number("decoder_delay_s", 0.0, low=0.0),
-        vibrometer=r.string("vibrometer", "relative"),
-        ring_velocity_per_m_s=r.number("ring_velocity_per_m_s", 0.0, low=0.0),
-        hum_hz=r.positive("hum_hz", 50.0),
-        hum_m_s=r.number("hum_m_s", 0.0, low=0.0), hum_m_s2=r.number("hum_m_s2", 0.0, low=0.0),
-        hum_pa=r.number("hum_pa", 0.0, low=0.0),
-        offset_velocity_m_s=r.number("offset_velocity_m_s", 0.0),
-        offset_plate_m_s2=r.number("offset_plate_m_s2", 0.0),
-        offset_base_m_s2=r.number("offset_base_m_s2", 0.0),
-        offset_mic_pa=r.number("offset_mic_pa", 0.0),
-        adc_bits=r.integer("adc_bits", 0, low=0),
-        floor_extra_path_m=r.number("floor_extra_path_m", 0.0, low=0.0),
-        floor_gain=r.number("floor_gain", 0.0, low=0.0))
-    if spec.vibrometer not in VIBROMETERS:
-        r.fail(r.key("vibrometer"), spec.vibrometer, f"must be one of {VIBROMETERS}")
-    if spec.adc_bits not in ADC_BITS:
-        r.fail(r.key("adc_bits"), spec.adc_bits, "must be 0 (off), 16 or 24")
-    if spec.floor_gain > 1.0:
-        r.fail(r.key("floor_gain"), spec.floor_gain, "must be <= 1 (a reflection loses energy)")
-    r.done()
-    return spec
-
-
 def fractional_delay(x: np.ndarray, sample_rate_hz: float, delay_s: float) -> np.ndarray:
     """``x`` delayed by ``delay_s`` (linear phase, band-limited; mirrored, so no wrap step)."""
     if delay_s == 0.0:
@@ -167,4 +111,4 @@ def quantise(stored: np.ndarray, range_: float | None, bits: int) -> np.ndarray:
 
 
 __all__ = ["ChainSpec", "base_velocity", "floor_reflection", "fractional_delay", "hum_and_offset",
-           "parse_chain", "quantise", "velocity_ringing"]
+           "quantise", "velocity_ringing"]

@@ -164,7 +164,7 @@ def synthetic_campaign(*, fs_hz: float = 12800.0, duration_s: float = 1.0,
     from rattle_lab.model.analysis import saddle_node_forcing
     from rattle_lab.model.linear import threshold_accel_ms2
     from rattle_lab.records import Channel, Record, Rig, Run
-    from rattle_lab.records._model import as_source
+    from rattle_lab.records import as_source
 
     rng = np.random.default_rng(seed)
     n = int(round(duration_s * fs_hz))

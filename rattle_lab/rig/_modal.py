@@ -38,67 +38,22 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 from typing import Any
 from collections.abc import Callable
 
 import numpy as np
 
-from rattle_lab.model.modal import (ModalResult, ModalState, ModalSystem, contact_from_name, plate_system,
-                     rayleigh_pressure, residual_pressure, simulate_modal)
-from rattle_lab.model.modal._sound import C_AIR_M_S, plate_surface
-from rattle_lab.model.modal._system import Contact
+from rattle_lab.model.modal import (C_AIR_M_S, Contact, ModalResult, ModalState, ModalSystem,
+                                    contact_from_name, plate_surface, plate_system,
+                                    rayleigh_pressure, residual_pressure, simulate_modal)
 from rattle_lab.model.plate import Plate
 from rattle_lab.records import Rig
 from ._counter import StageCounter
+from ._modal_spec import ModalRigSpec
 from ._motion import Modal, RunMotion, schedule
 from ._scene import RunSpec, Scene, SceneError
 
 TWO_PI = 2.0 * math.pi
-
-
-@dataclass(frozen=True)
-class ModalRigSpec:
-    """Options of ``[model] kind = "modal"``.
-
-    Attributes
-    ----------
-    modes : int
-        Number of plate modes N (lowest N of the Ritz solver).
-    contact : str
-        "kelvin-voigt" (default), "hertz" or "rigid" (restitution ``model.e``).
-    contact_stiffness_n_m, contact_damping_n_s_m : float or None
-        Kelvin-Voigt striker (default: the thesis's truss striker, no damping).
-    hertz_n_m15 : float or None
-        Hertz constant (default: a 5 mm steel ball on aluminium).
-    striker_x_m, striker_y_m : float or None
-        Striker position on the plate (default: the centre).
-    radiation_grid : int
-        Surface elements per side in the Rayleigh integral.
-    """
-
-    modes: int = 8
-    contact: str = "kelvin-voigt"
-    contact_stiffness_n_m: float | None = None
-    contact_damping_n_s_m: float = 0.0
-    hertz_n_m15: float | None = None
-    striker_x_m: float | None = None
-    striker_y_m: float | None = None
-    radiation_grid: int = 30
-
-
-def parse_modal(reader: Any) -> ModalRigSpec:
-    """Pop the modal keys of ``[model]`` from a scene reader (``_scene._Reader``)."""
-    spec = ModalRigSpec(modes=reader.integer("modes", 8, low=1),
-                        contact=reader.string("contact", "kelvin-voigt",
-                                              choices=("kelvin-voigt", "hertz", "rigid")),
-                        contact_stiffness_n_m=reader.positive("contact_stiffness_n_m"),
-                        contact_damping_n_s_m=reader.number("contact_damping_n_s_m", 0.0, low=0.0),
-                        hertz_n_m15=reader.positive("hertz_n_m15"),
-                        striker_x_m=reader.number("striker_x_m", None, low=0.0),
-                        striker_y_m=reader.number("striker_y_m", None, low=0.0),
-                        radiation_grid=reader.integer("radiation_grid", 30, low=2))
-    return spec
 
 
 def plate_of(scene: Scene) -> Plate:
@@ -110,9 +65,16 @@ def plate_of(scene: Scene) -> Plate:
                  rho_kg_m3=p.rho_kg_m3, edges=p.edges)
 
 
+def modal_spec(scene: Scene) -> ModalRigSpec:
+    """The ``[model] kind = "modal"`` options of a modal scene."""
+    spec = scene.model.modal
+    assert spec is not None, "not a modal scene"   # parse_scene sets it with kind = "modal"
+    return spec
+
+
 def build_system(scene: Scene) -> tuple[ModalSystem, Contact]:
     """The modal system (unforced) and contact law a modal scene describes."""
-    spec: ModalRigSpec = scene.model.modal
+    spec = modal_spec(scene)
     plate = plate_of(scene)
     xs = plate.a_m / 2 if spec.striker_x_m is None else spec.striker_x_m
     ys = plate.b_m / 2 if spec.striker_y_m is None else spec.striker_y_m
@@ -229,7 +191,7 @@ def simulate_run_modal(scene: Scene, base: ModalSystem, contact: Contact, run: R
     if scene.sensor("mic") is not None:
         counter.add("acoustic")
         mic_xyz = (0.5 * plate.a_m, 0.5 * plate.b_m, scene.mic_distance_m)
-        mic = rayleigh_pressure(plate_surface(base, scene.model.modal.radiation_grid), velocity, t0 + t, mic_xyz)
+        mic = rayleigh_pressure(plate_surface(base, modal_spec(scene).radiation_grid), velocity, t0 + t, mic_xyz)
         if base.corrected:
             def deflection(tt: np.ndarray) -> np.ndarray:
                 tt = np.clip(np.asarray(tt, dtype=float), t_lo, t_hi)
@@ -275,7 +237,7 @@ def truth_extra(scene: Scene, system: ModalSystem, contact: Contact, e_mode1: li
     touches exchange energy with the other modes both ways and their ``e_mode1`` scatter
     widely), clipped to [0, 1]; the scene's ``model.e`` when the campaign has no impact.
     """
-    spec: ModalRigSpec = scene.model.modal
+    spec = modal_spec(scene)
     e_all = np.concatenate([e for e, _ in e_mode1]) if e_mode1 else np.empty(0)
     w_all = np.concatenate([v**2 for _, v in e_mode1]) if e_mode1 else np.empty(0)
     ok = np.isfinite(e_all)

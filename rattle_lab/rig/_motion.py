@@ -16,8 +16,7 @@ from typing import Any
 import numpy as np
 
 from rattle_lab.model import scaling
-from rattle_lab.model.sdf import SDFParams, SDFState, simulate
-from rattle_lab.model.sdf._flow import particular_state
+from rattle_lab.model.sdf import SDFParams, SDFState, particular_state, simulate
 from ._counter import StageCounter
 from ._scene import RunSpec
 

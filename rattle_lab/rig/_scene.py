@@ -13,12 +13,12 @@ import math
 import os
 import tomllib
 from dataclasses import dataclass, field
-from importlib import resources
-from pathlib import Path
 from typing import Any, Literal
 
-from rattle_lab._resources import find_resource, not_found_hint
+from rattle_lab._resources import find_resource, resolve_resource
 from rattle_lab.exceptions import ParameterError
+from ._chain_spec import ChainSpec, parse_chain
+from ._modal_spec import ModalRigSpec, parse_modal
 
 __all__ = ["SceneError", "Scene", "PlateSpec", "ModelSpec", "AcousticSpec", "SensorSpec",
            "RunSpec", "ArtefactSpec", "SimulationSpec", "load_scene", "parse_scene",
@@ -72,7 +72,7 @@ class ModelSpec:
     amplitude per m/s of impact velocity; ``ringing_decay_s`` its time constant.
 
     ``kind = "modal"`` (opt-in) simulates the plate with the multi-mode model instead
-    (``modal``: :class:`rattle_lab.rig._modal.ModalRigSpec`; needs a [plate]).
+    (``modal``: :class:`rattle_lab.rig._modal_spec.ModalRigSpec`; needs a [plate]).
     """
 
     gap_m: float
@@ -85,7 +85,7 @@ class ModelSpec:
     ringing_decay_s: float = 0.004
     contact_s: float = 0.0002
     kind: str = "sdf"
-    modal: Any = None    # rig._modal.ModalRigSpec when kind == "modal"
+    modal: ModalRigSpec | None = None    # when kind == "modal"
 
 
 @dataclass(frozen=True)
@@ -217,7 +217,7 @@ class Scene:
     simulation: SimulationSpec = field(default_factory=SimulationSpec)
     mic_distance_m: float = 0.3
     source: str = "<scene>"
-    chain: Any = None    # rig._chain.ChainSpec (the measurement chain, [chain]); None: ideal
+    chain: ChainSpec | None = None    # the measurement chain ([chain]); None: ideal
 
     def sensor(self, name: str) -> SensorSpec | None:
         """The sensor called ``name``, or None when the scene does not record it."""
@@ -353,7 +353,6 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
                       contact_s=mr.positive("contact_s", 0.0002))
     kind = mr.string("kind", "sdf", choices=("sdf", "modal"))
     if kind == "modal":
-        from ._modal import parse_modal
         for name in ("f_s_hz", "participation", "ringing_freqs_hz"):
             if getattr(model, name) is not None:   # the plate's modes give them
                 mr.fail(mr.key(name), getattr(model, name), 'must not be given with kind = "modal"')
@@ -458,7 +457,6 @@ def parse_scene(data: dict[str, Any], source: str = "<scene>") -> Scene:
     chain = None
     cr = top.sub("chain")
     if cr is not None:
-        from ._chain import parse_chain
         chain = parse_chain(cr)
         if model.kind == "modal" and chain.ring_velocity_per_m_s:   # the modes ring by themselves
             cr.fail(cr.key("ring_velocity_per_m_s"), chain.ring_velocity_per_m_s,
@@ -489,22 +487,15 @@ def load_scene(scene: str | os.PathLike[str]) -> Scene:
     >>> load_scene("default").campaign_id
     'demo-cfcf'
     """
-    if str(scene) == "default":
-        text = resources.files("rattle_lab").joinpath("data/scenes/default.toml").read_text("utf-8")
-        source = "default"
-    else:
-        path = Path(scene)
-        if not path.exists():  # a scene shipped with rattle_lab, by name
-            found = find_resource("scenes", str(scene))
-            if found is None:
-                raise SceneError(f"{scene}: cannot read the scene: "
-                                 f"{not_found_hint('scenes', scene)}")
-            path = found
-        source = str(path)
-        try:
-            text = path.read_text("utf-8")
-        except OSError as exc:
-            raise SceneError(f"{source}: cannot read the scene: {exc.strerror}") from exc
+    # "default": the embedded scene (whatever the folder holds); else a file, or a scene
+    # shipped with rattle_lab, by name
+    embedded = find_resource("scenes", "default") if str(scene) == "default" else None
+    path = embedded or resolve_resource("scenes", scene, SceneError, "cannot read the scene")
+    source = "default" if embedded else str(path)
+    try:
+        text = path.read_text("utf-8")
+    except OSError as exc:
+        raise SceneError(f"{source}: cannot read the scene: {exc.strerror}") from exc
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -10,6 +10,7 @@ cached products (``/pipeline_cache``) and content verification
 
 from __future__ import annotations
 
+from ._errors import StoreError
 from ._cache import (
                      CACHE_GROUP,
                      input_hashes,
@@ -31,9 +32,10 @@ from ._layout import (
                      edit_store,
                      has_path,
                      open_store,
+                     record_attrs,
                      store_lock,
 )
-from ._results import StoredResults, read_results, write_results
+from ._results import RESULTS_VERSION, StoredResults, read_results, write_results
 from ._verify import Mismatch, check_linked_inputs, record_attrs_count, verify_store
 
 __all__ = ["ingest", "read_catalogue", "open_stored_record", "IngestReport", "InputResult",
@@ -43,4 +45,4 @@ __all__ = ["ingest", "read_catalogue", "open_stored_record", "IngestReport", "In
            "CACHE_GROUP", "read_cache_keys", "record_cache_keys", "read_cached", "write_cached",
            "output_digest", "input_hashes", "provenance_log", "verify_store",
            "check_linked_inputs", "Mismatch", "record_attrs_count", "REINGEST_ADVICE",
-           "reingest_advice"]
+           "reingest_advice", "StoreError", "RESULTS_VERSION", "record_attrs"]

@@ -29,7 +29,7 @@ import h5py
 import numpy as np
 
 from rattle_lab.exceptions import DataError
-from rattle_lab.records._errors import StoreError
+from ._errors import StoreError
 
 from ._layout import edit_store, open_store
 

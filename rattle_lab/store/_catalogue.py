@@ -11,11 +11,8 @@ import h5py
 import numpy as np
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.records._errors import StoreError
-from rattle_lab.records._h5 import LinkPolicy, link_policy
-from rattle_lab.records._model import Record
-from rattle_lab.records._readers.native import load_group
-from rattle_lab.records._schema import validate_tree
+from ._errors import StoreError
+from rattle_lab.records import LinkPolicy, Record, link_policy, load_group, validate_tree
 
 from ._index import _link_problem, _open_store, _read_columns_from, _text, reingest_advice
 from ._ingest_types import CATALOGUE_COLUMNS
@@ -96,8 +93,8 @@ def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
         input is linked (``storage="link"``) and its file has moved or changed
         since it was ingested.
     """
-    from rattle_lab.records._convert import record_from_tree
-    from rattle_lab.records._model import Origin
+    from rattle_lab.records import record_from_tree
+    from rattle_lab.records import Origin
 
     store = Path(store)
     with _open_store(store) as fh:

@@ -11,10 +11,8 @@ import h5py
 import numpy as np
 
 from rattle_lab._progress import progress_bar
-from rattle_lab.records._convert import record_to_tree
-from rattle_lab.records._model import ArraySource, Channel, Record
-from rattle_lab.records._quality import ChannelChecker, Finding, QualityLimits, TimestampChecker
-from rattle_lab.records._write import write_tree
+from rattle_lab.records import (ArraySource, Channel, ChannelChecker, Finding, QualityLimits,
+                                Record, TimestampChecker, record_to_tree, write_tree)
 
 from ._ingest_types import Storage
 
@@ -162,7 +160,7 @@ def _ingest_record(out: h5py.Group, record: Record, label: str, *, storage: Stor
 
 
 def _si_name(ch: Channel) -> str:
-    from rattle_lab.records._units import SI_UNITS
+    from rattle_lab.records import SI_UNITS
 
     return SI_UNITS[ch.quantity]
 

@@ -13,7 +13,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from rattle_lab.records._errors import StoreError
+from ._errors import StoreError
 
 from ._ingest_types import CATALOGUE_COLUMNS, Storage
 from ._layout import open_store, text

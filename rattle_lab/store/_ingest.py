@@ -71,13 +71,9 @@ import numpy as np
 
 from rattle_lab._version import __version__
 from rattle_lab.exceptions import ParameterError, RattleLabWarning
-from rattle_lab.records import read
-from rattle_lab.records._errors import DuplicateRunError
-from rattle_lab.records._h5 import LinkPolicy, link_policy
-from rattle_lab.records._model import DEFAULT_CHUNK_SAMPLES
-from rattle_lab.records._quality import Finding, QualityLimits
-from rattle_lab.records._read import detect_format
-from rattle_lab.records._readers.mapping import MappingSpec, load_mapping
+from rattle_lab.records import (DEFAULT_CHUNK_SAMPLES, DuplicateRunError, Finding, LinkPolicy,
+                                MappingSpec, QualityLimits, detect_format, link_policy,
+                                load_mapping, read)
 
 from ._catalogue import _frame
 from ._channels import _catalogue_rows, _ingest_record

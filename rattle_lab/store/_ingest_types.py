@@ -12,8 +12,7 @@ from typing import Any, Literal
 
 import xxhash
 
-from rattle_lab.records._model import Skipped
-from rattle_lab.records._quality import Finding
+from rattle_lab.records import Finding, Skipped
 
 Storage = Literal["link", "copy"]
 

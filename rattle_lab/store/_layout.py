@@ -39,7 +39,7 @@ import numpy as np
 
 from rattle_lab._atomic import atomic_path
 from rattle_lab.exceptions import OutputError
-from rattle_lab.records._errors import StoreError
+from ._errors import StoreError
 
 STORE_FORMAT = "rattle_store"
 STORE_VERSION = 3

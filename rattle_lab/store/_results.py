@@ -44,7 +44,7 @@ import h5py
 import numpy as np
 
 from rattle_lab._version import __version__
-from rattle_lab.records._errors import StoreError
+from ._errors import StoreError
 
 from ._layout import check_store, edit_store, open_store
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from rattle_lab.records._errors import StoreError
+from ._errors import StoreError
 
 from ._index import reingest_advice
 from ._ingest_types import file_hash

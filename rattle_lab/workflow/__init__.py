@@ -15,12 +15,12 @@ from rattle_lab.workflow.pipeline import (STAGES, Pipeline, PipelineRun, detect_
 
 __all__ = ["STAGES", "Pipeline", "PipelineRun", "load_pipeline_file", "parse_pipeline",
            "run_pipeline", "detect_runs", "fit_store", "write_report", "build_report_content",
-           "build_pages", "gather", "ReportData", "SECTIONS"]
+           "build_pages", "gather", "ReportData", "SECTIONS", "shock_lines"]
 
 #: The report's names, imported on first use (they import matplotlib, which `rattle-lab fit`
 #: does not need: its start-up pays only for what it runs).
 _REPORT_NAMES = ("SECTIONS", "ReportData", "build_pages", "build_report_content", "gather",
-                 "write_report")
+                 "write_report", "shock_lines")
 
 
 def __getattr__(name: str) -> Any:

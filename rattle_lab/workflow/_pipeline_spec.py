@@ -69,7 +69,7 @@ def parse_pipeline(doc: Mapping[str, Any], source: str = "<pipeline>") -> Pipeli
     ParameterError
         For an unknown table, key or output (the message names it).
     """
-    from rattle_lab.fit._params import FIT_KEYS, SOUND_KEYS
+    from rattle_lab.fit import FIT_KEYS, SOUND_KEYS
     from rattle_lab.detect import ImpactParams
 
     known = {"pipeline", "simulate", "ingest", "detect", "thresholds", "fit", "report"}

@@ -16,6 +16,8 @@ from typing import Any
 from rattle_lab.exceptions import OutputError
 from rattle_lab.fit import FitSummary, Fits
 
+__all__ = ["run_demo", "truth_table"]
+
 #: What the demo writes into its output directory.
 RAW_NAME, STORE_NAME, REPORT_NAME = "raw.h5", "store.h5", "report.pdf"
 
@@ -98,7 +100,7 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
         If ``out_dir`` exists and is not a directory.
     """
     from rattle_lab.workflow.pipeline import parse_pipeline, run_pipeline
-    from rattle_lab.fit._results import read_results
+    from rattle_lab.store import read_results
     from rattle_lab.rig import load_scene, write_synthetic
 
     out = Path(out_dir)

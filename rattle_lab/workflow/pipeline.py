@@ -47,7 +47,7 @@ Per-run detection is independent across runs: with ``scheduler`` (a
 results are identical to the serial run (the same function on the same data).
 Each task checks that its worker runs the same rattle_lab code as this process
 (:func:`code_fingerprint`); a worker with another installation, or with a
-source tree edited since this process imported it, fails the stage with a
+source tree edited since this process took its fingerprint (on first use), fails the stage with a
 :class:`~rattle_lab.exceptions.ParameterError` instead of mixing results of
 different code.
 """
@@ -70,7 +70,7 @@ from rattle_lab._resources import find_resource
 from rattle_lab._version import __version__
 from rattle_lab.exceptions import OutputError, ParameterError
 from rattle_lab.store import (CACHE_GROUP, check_linked_inputs, has_path, output_digest,
-                    read_cache_keys, read_cached, record_cache_keys, store_lock, write_cached)
+                              read_cache_keys, read_cached, record_cache_keys, store_lock, write_cached)
 from ._pipeline_spec import (DEPENDS, OUTPUTS, STAGES, Pipeline, Stage, load_pipeline_file,
                              parse_pipeline)
 
@@ -78,8 +78,10 @@ from ._pipeline_spec import (DEPENDS, OUTPUTS, STAGES, Pipeline, Stage, load_pip
 #: stages whose products a store caches.  2: the classes moved with the data-flow layout and
 #: RunResult gained chain_flags and shocks.  3: ImpactLog gained velocity_note.  4: ImpactLog
 #: gained velocity_offset_m_s, ringing_share and ringing_ratio.  5: ImpactLog gained
-#: ring_modes (and ringing_problem, never cached).
-CACHE_FORMAT = 5
+#: ring_modes (and ringing_problem, never cached).  6: ImpactLog gained velocity_delay_* and
+#: step_guard_s, velocity_delay_window_s, e_per_delay_s, e_window_change (issue 28).  7: and
+#: e_measurand_diff (format 6 was briefly on main without it).
+CACHE_FORMAT = 7
 
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
@@ -97,20 +99,18 @@ def _source_digest() -> str:
     return f"{__version__}+{h.hexdigest()[:16]}"
 
 
-# The detection code is imported with this module, and the digest taken at the same moment,
-# so the fingerprint describes the code this process runs (not the files as they are later).
-from rattle_lab import fit as _fit  # noqa: E402,F401  (imports detect, thresholds, ingest, records)
-
-_FINGERPRINT = _source_digest()
+#: This process's :func:`code_fingerprint`, taken on first use (None until then).
+_FINGERPRINT: str | None = None
 
 
 def code_fingerprint() -> str:
     """Version and source digest of the rattle_lab code this process runs.
 
     ``"<version>+<16 hex digits>"``: the SHA-256 of every ``.py`` file of the
-    package (relative path and bytes), taken when :mod:`rattle_lab.workflow.pipeline`
-    was imported, together with the detection code it imports.  Two processes
-    (this one and a Dask worker) with equal fingerprints run the same code.
+    package (relative path and bytes), taken on the first call (a pipeline run maps its
+    tasks, a worker runs its first task; importing the module reads no file) and kept
+    for the life of the process.  Two processes (this one and a Dask worker) with equal
+    fingerprints run the same code.
 
     Returns
     -------
@@ -121,6 +121,9 @@ def code_fingerprint() -> str:
     >>> code_fingerprint().startswith(__version__ + "+")
     True
     """
+    global _FINGERPRINT
+    if _FINGERPRINT is None:
+        _FINGERPRINT = _source_digest()
     return _FINGERPRINT
 
 
@@ -161,9 +164,7 @@ def _is_scene(item: str) -> bool:
 
 def _scene_bytes(item: str) -> bytes:
     if item == "default":
-        from importlib import resources
-
-        return resources.files("rattle_lab").joinpath("data/scenes/default.toml").read_bytes()
+        item = str(find_resource("scenes", "default"))   # the embedded scene
     try:
         return Path(item).read_bytes()
     except OSError as exc:
@@ -219,8 +220,8 @@ def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any
     from rattle_lab.fit import analyse_run
     from rattle_lab.store import open_stored_record
 
-    if code is not None and code != _FINGERPRINT:
-        raise ParameterError(f"`scheduler`: a worker runs other rattle_lab code ({_FINGERPRINT}) "
+    if code is not None and code != code_fingerprint():
+        raise ParameterError(f"`scheduler`: a worker runs other rattle_lab code ({code_fingerprint()}) "
                              f"than the caller ({code}); install the same rattle_lab on the "
                              "workers (or restart them after editing the sources)")
 
@@ -362,7 +363,7 @@ def _map_runs(jobs: list[tuple[str, str, str]], detect: Mapping[str, Any],
         return map_tasks(detect_run, jobs, quiet=quiet, desc=desc, weights=weights,
                          detect=detect, fit=fit)
     return map_tasks(detect_run, jobs, scheduler=scheduler, quiet=quiet, desc=desc,
-                     weights=weights, detect=dict(detect), fit=dict(fit), code=_FINGERPRINT)
+                     weights=weights, detect=dict(detect), fit=dict(fit), code=code_fingerprint())
 
 
 def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],

@@ -15,6 +15,8 @@
 
 from ._disturbance import DisturbanceMap, disturbance_map, disturbance_threshold
 from ._sweep import (
+    LYAPUNOV_MODES,
+    SWEEP_PARAMS,
     Regime,
     Sweep,
     SweepPoint,
@@ -85,4 +87,6 @@ __all__ = [
     "disturbance_map",
     "SweepThresholds",
     "sweep_thresholds",
+    "SWEEP_PARAMS",
+    "LYAPUNOV_MODES",
 ]

@@ -132,7 +132,7 @@ def _run_pool(func: Callable[[T], Any], chunks: Sequence[T], workers: int, desc:
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    from rattle_lab.model.sdf._compiled import warm_cache
+    from rattle_lab.model.sdf import warm_cache
 
     warm_cache()  # load the compiled kernels here, so that forked workers inherit them
     method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"

@@ -13,9 +13,7 @@ from numpy.typing import ArrayLike
 
 from rattle_lab._version import __version__
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.model.sdf._flow import particular_coeffs
-from rattle_lab.model.sdf._simulate import simulate
-from rattle_lab.model.sdf._types import SDFParams, SDFState
+from rattle_lab.model.sdf import SDFParams, SDFState, particular_coeffs, simulate
 
 from ._dask import check_execution, chunk_rows, run_chunks
 from ._sweep import (

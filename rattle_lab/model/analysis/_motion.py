@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from rattle_lab.model.sdf._flow import homogeneous_transition, particular_coeffs
+from rattle_lab.model.sdf import homogeneous_transition, particular_coeffs
 
 #: Grid cells per ``min(2 pi / omega, 2 pi)`` (the faster of forcing and free oscillation).
 CELLS_PER_CYCLE = 16

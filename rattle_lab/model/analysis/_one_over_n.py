@@ -51,7 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from rattle_lab.model.sdf._flow import homogeneous_transition
+from rattle_lab.model.sdf import homogeneous_transition
 from . import _motion
 
 

@@ -18,8 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.model.sdf._types import SDFParams, SDFState
-from rattle_lab.model.sdf._simulate import simulate
+from rattle_lab.model.sdf import SDFParams, SDFState, simulate
 
 RegimeKind = Literal["no-impact", "periodic", "aperiodic", "unsettled"]
 

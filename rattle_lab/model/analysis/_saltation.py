@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from rattle_lab.model.sdf._flow import homogeneous_transition
+from rattle_lab.model.sdf import homogeneous_transition
 
 
 def saltation_matrix(f_minus: ArrayLike, f_plus: ArrayLike, reset: ArrayLike,

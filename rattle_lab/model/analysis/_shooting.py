@@ -24,7 +24,7 @@ from typing import Literal
 import numpy as np
 
 from rattle_lab.exceptions import ConvergenceError, ParameterError, SimulationError
-from rattle_lab.model.sdf._types import SimImpacts, SDFParams
+from rattle_lab.model.sdf import SimImpacts, SDFParams
 from . import _motion
 from ._saltation import impact_map_jacobian, impact_saltation, transition_matrix
 

@@ -67,7 +67,7 @@ from rattle_lab._progress import progress
 from rattle_lab._version import __version__
 from rattle_lab.exceptions import NumericalWarning, ParameterError, SimulationError
 from rattle_lab.model.linear import linear_impact_velocity
-from rattle_lab.model.sdf._types import SDFParams, SDFState
+from rattle_lab.model.sdf import SDFParams, SDFState
 
 from ._periods import (  # re-exported: the period detection lived here before the split
     KIND_CODES,  # noqa: F401
@@ -231,7 +231,7 @@ def _run_sweep(all_params: Sequence[SDFParams], state: SDFState, discard: int, k
     Returns the arrays of :func:`rattle_lab.model.sdf._kernel.run_sweep` for the whole
     direction (as one call would).
     """
-    from rattle_lab.model.sdf._compiled import jit_kernel, signals_deferred
+    from rattle_lab.model.sdf import jit_kernel, signals_deferred
 
     zeta = all_params[0].zeta
     F = np.array([q.F for q in all_params])

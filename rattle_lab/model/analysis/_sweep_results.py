@@ -17,7 +17,7 @@ from typing import Literal
 
 import numpy as np
 
-from rattle_lab.model.sdf._types import SDFParams, SDFState
+from rattle_lab.model.sdf import SDFParams, SDFState
 
 from ._periods import Regime
 from .lyapunov import LyapunovResult

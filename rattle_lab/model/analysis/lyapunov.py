@@ -51,8 +51,8 @@ import numba
 import numpy as np
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.model.sdf._types import TWO_PI, SDFParams, SDFState, SimResult
-from rattle_lab.model.sdf._simulate import simulate
+from rattle_lab.model._constants import TWO_PI
+from rattle_lab.model.sdf import SDFParams, SDFState, SimResult, simulate
 
 LyapunovStatus = Literal["ok", "sticking", "grazing-impact", "micro-bounce"]
 

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike
 from scipy.optimize import brentq
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.model.sdf._types import SDFParams
+from rattle_lab.model.sdf import SDFParams
 from . import _one_over_n as _on
 from ._shooting import PeriodicOrbit, find_periodic_orbit, impact_map, periodic_orbit_from_impacts
 

@@ -10,11 +10,11 @@
 
 from ._scene import ModalChannels, modal_channels
 from ._simulate import simulate_modal
-from ._sound import (MIC_CORNER_HZ, RadiatingSurface, measured_peak, microphone, plate_surface,
-                     rayleigh_pressure, residual_pressure)
+from ._sound import (C_AIR_M_S, MIC_CORNER_HZ, RadiatingSurface, measured_peak, microphone,
+                     peak_per_impact, plate_surface, rayleigh_pressure, residual_pressure)
 from ._spl import predicted_spl_slope
 from ._system import (CONTACT_NAMES, THESIS_HERTZ_N_M15, THESIS_PLATE, THESIS_STRIKER_STIFFNESS_N_M,
-                      HertzContact, KelvinVoigtContact, ModalSystem, RigidContact, contact_from_name,
+                      Contact, HertzContact, KelvinVoigtContact, ModalSystem, RigidContact, contact_from_name,
                       infinite_plate_impedance, plate_system, rayleigh_zeta)
 from ._types import ContactLog, EpisodeLog, ModalResult, ModalState
 
@@ -46,4 +46,7 @@ __all__ = [
     "rayleigh_zeta",
     "residual_pressure",
     "simulate_modal",
+    "C_AIR_M_S",
+    "Contact",
+    "peak_per_impact",
 ]

@@ -11,11 +11,14 @@ clamped (the thesis's Table 2.1 plate).  All modal data are nondimensional:
 2.19) with ``W = 1`` at the centre, or at max ``|W|`` when the centre is a node.
 """
 
+# in the order of their imports: checks and bases, the mode types, the solvers, then the
+# Plate, which uses the Ritz solver
 from ._edges import EDGE_ORDER
-from ._ritz import DEFAULT_N_TERMS, ritz_modes
+from ._modes import PlateMode, PlateModes
 from ._simply_supported import simply_supported_mode, simply_supported_modes
 from ._tables import TABLE_ASPECT_RATIOS, TableMode, table_modes
-from ._types import Plate, PlateMode, PlateModes
+from ._ritz import DEFAULT_N_TERMS, ritz_modes
+from ._plate import Plate
 
 __all__ = [
     "Plate",

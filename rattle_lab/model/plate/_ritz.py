@@ -39,18 +39,16 @@ Basis size
 
 from __future__ import annotations
 
-import functools
 import math
-from dataclasses import dataclass
 
 import numpy as np
-from numpy.polynomial import legendre
 
 from rattle_lab.exceptions import ConvergenceError, ParameterError
+from ._bases import PolyBasis, plate_bases
 from ._beam import BeamBasis, beam_basis, gauss_points
-from ._edges import check_edges, x_ends, y_ends
-from ._simply_supported import _check_aspect_ratio, _check_count
-from ._types import PlateModes
+from ._checks import check_aspect_ratio, check_count
+from ._edges import check_edges
+from ._modes import PlateModes
 
 #: First size (terms per side) of the convergence check, and the size of every check
 #: step's smallest problem.  Fixed at 12 x 12 beam functions, free-edge plates were
@@ -73,76 +71,6 @@ NODE_RTOL = 1e-6
 DEGENERATE_RTOL = 1e-8
 
 _GRID_SEARCH = 101
-
-
-_END_POWER = {"C": 2, "S": 1, "F": 0}
-
-
-@dataclass(frozen=True)
-class PolyBasis:
-    """Orthonormal polynomials on [0, 1] satisfying the geometric end conditions.
-
-    ``phi_k`` is an orthonormal combination (Cholesky of the Gram matrix) of
-    ``s^a (1 - s)^b P_k(2 s - 1)``, ``k < n``, with ``a, b`` = 2 (C), 1 (S),
-    0 (F) at ``s = 0`` and ``s = 1``.  Same interface as
-    :class:`rattle_lab.model.plate._beam.BeamBasis` (``left``, ``right``, ``len``,
-    ``evaluate``).
-
-    Attributes
-    ----------
-    left, right : str
-        End conditions at s = 0 and s = 1.
-    coef : numpy.ndarray
-        Shape (n, degree + 1): Legendre-series coefficients of each function in
-        ``u = 2 s - 1``.
-    """
-
-    left: str
-    right: str
-    coef: np.ndarray
-
-    def __len__(self) -> int:
-        return int(self.coef.shape[0])
-
-    def evaluate(self, s: np.ndarray, order: int = 0) -> np.ndarray:
-        """``(d/ds)^order phi_i(s)`` for every function i; shape (n, len(s))."""
-        u = 2.0 * np.asarray(s, dtype=float) - 1.0
-        c = self.coef
-        if order:
-            c = legendre.legder(c, m=order, scl=2.0, axis=1)
-        return c @ legendre.legvander(u, c.shape[1] - 1).T
-
-
-@functools.lru_cache(maxsize=64)
-def poly_basis(left: str, right: str, n: int) -> PolyBasis:
-    """The first ``n`` functions of :class:`PolyBasis` for the ends ``left``, ``right``."""
-    # s = (1 + u) / 2 and 1 - s = (1 - u) / 2 as Legendre series in u
-    factor = np.array([1.0])
-    for _ in range(_END_POWER[left]):
-        factor = legendre.legmul(factor, [0.5, 0.5])
-    for _ in range(_END_POWER[right]):
-        factor = legendre.legmul(factor, [0.5, -0.5])
-    deg = n - 1 + factor.size - 1
-    raw: np.ndarray = np.zeros((n, deg + 1))
-    for k in range(n):
-        unit = np.zeros(k + 1)
-        unit[k] = 1.0
-        prod = legendre.legmul(factor, unit)
-        raw[k, :prod.size] = prod
-    s, w = gauss_points()
-    vander = legendre.legvander(2.0 * s - 1.0, deg)
-    for _ in range(2):  # Gram-Schmidt by Cholesky, twice for orthonormality to rounding
-        V = raw @ vander.T
-        raw = np.linalg.solve(np.linalg.cholesky((V * w) @ V.T), raw)
-    raw.setflags(write=False)
-    return PolyBasis(left=left, right=right, coef=raw)
-
-
-def plate_bases(edges: str, nx: int, ny: int) -> tuple[BeamBasis | PolyBasis,
-                                                        BeamBasis | PolyBasis]:
-    """The Ritz bases along x and y: polynomials if an edge is free, else beam functions."""
-    kind = poly_basis if "F" in edges else beam_basis
-    return kind(*x_ends(edges), nx), kind(*y_ends(edges), ny)
 
 
 def _to_beam_terms(basis: BeamBasis | PolyBasis) -> np.ndarray:
@@ -220,8 +148,8 @@ def _n_terms_pair(n_terms: int | tuple[int, int]) -> tuple[int, int]:
     if isinstance(n_terms, tuple):
         if len(n_terms) != 2:
             raise ParameterError(f"`n_terms` must be an int or a pair of ints, was {n_terms!r}")
-        return _check_count("n_terms", n_terms[0]), _check_count("n_terms", n_terms[1])
-    k = _check_count("n_terms", n_terms)
+        return check_count("n_terms", n_terms[0]), check_count("n_terms", n_terms[1])
+    k = check_count("n_terms", n_terms)
     return k, k
 
 
@@ -375,16 +303,16 @@ def ritz_modes(aspect_ratio: float, edges: str, *, nu: float = 0.3, n_modes: int
     >>> bool(np.isclose(modes.lam[0], 35.99, rtol=1e-3))
     True
     """
-    r = _check_aspect_ratio(aspect_ratio)
+    r = check_aspect_ratio(aspect_ratio)
     edges = check_edges(edges)
     nu_f = float(nu)
     if not (-1.0 < nu_f < 0.5):
         raise ParameterError(f"`nu` must satisfy -1 < nu < 0.5, was {nu}")
     nx, ny = _n_terms_pair(DEFAULT_N_TERMS if n_terms is None else n_terms)
-    n_modes = _check_count("n_modes", n_modes)
+    n_modes = check_count("n_modes", n_modes)
     if n_modes > nx * ny:
         raise ParameterError(f"`n_modes` must be <= n_terms_x * n_terms_y = {nx * ny}, was {n_modes}")
-    n_grid = _check_count("n_grid", n_grid, minimum=2)
+    n_grid = check_count("n_grid", n_grid, minimum=2)
 
     if n_terms is None:
         nx, ny = _converged_size(r, edges, nu_f, n_modes)

@@ -3,27 +3,9 @@
 from __future__ import annotations
 
 import math
-import operator
 
-from rattle_lab.exceptions import ParameterError
-from ._types import PlateMode
-
-
-def _check_aspect_ratio(aspect_ratio: float) -> float:
-    r = float(aspect_ratio)
-    if not (r > 0 and math.isfinite(r)):
-        raise ParameterError(f"`aspect_ratio` (b/a) must be finite and > 0, was {aspect_ratio}")
-    return r
-
-
-def _check_count(name: str, value: int, minimum: int = 1) -> int:
-    try:
-        as_int = operator.index(value)
-    except TypeError:
-        raise ParameterError(f"`{name}` must be an integer >= {minimum}, was {value!r}") from None
-    if as_int < minimum:
-        raise ParameterError(f"`{name}` must be an integer >= {minimum}, was {value!r}")
-    return as_int
+from ._checks import check_aspect_ratio, check_count
+from ._modes import PlateMode
 
 
 def simply_supported_mode(m: int, n: int, aspect_ratio: float) -> PlateMode:
@@ -62,9 +44,9 @@ def simply_supported_mode(m: int, n: int, aspect_ratio: float) -> PlateMode:
     >>> bool(np.isclose(mode.lam, 2 * np.pi**2)), bool(np.isclose(mode.Q1, 4 / np.pi**2))
     (True, True)
     """
-    m = _check_count("m", m)
-    n = _check_count("n", n)
-    r = _check_aspect_ratio(aspect_ratio)
+    m = check_count("m", m)
+    n = check_count("n", n)
+    r = check_aspect_ratio(aspect_ratio)
     # Eq. (2.21) in the nondimensional form of eq. (2.25); the thesis's sqrt(D/rho) means
     # sqrt(D/(rho h_p)), the mass per area.
     lam = math.pi**2 * (m**2 + n**2 / r**2)
@@ -108,8 +90,8 @@ def simply_supported_modes(aspect_ratio: float, n_modes: int = 6) -> tuple[Plate
     >>> [(mode.m, mode.n) for mode in simply_supported_modes(1.0, 3)]
     [(1, 1), (1, 2), (2, 1)]
     """
-    r = _check_aspect_ratio(aspect_ratio)
-    k = _check_count("n_modes", n_modes)
+    r = check_aspect_ratio(aspect_ratio)
+    k = check_count("n_modes", n_modes)
     # The k lowest modes have m <= k and n <= k.
     cands = sorted((math.pi**2 * (m**2 + n**2 / r**2), m, n)
                     for m in range(1, k + 1) for n in range(1, k + 1))

@@ -8,7 +8,8 @@ import numpy.typing as npt
 
 from rattle_lab.exceptions import ParameterError
 
-from ._checks import TWO_PI, FloatOrArray, _excited_participation, _positive
+from rattle_lab.model._checks import FloatOrArray, _excited_participation, _positive
+from rattle_lab.model._constants import TWO_PI
 from ._forcing import F_from_accel, F_from_pressure, accel_ms2_from_F
 from ._plate import omega_s_rad_s, participation_factor
 from ._variables import (

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy.typing as npt
 
-from ._checks import FloatOrArray, _excited_participation, _finite, _nonnegative, _positive
+from rattle_lab.model._checks import FloatOrArray, _excited_participation, _finite, _nonnegative, _positive
 
 
 # --------------------------------------------------------------------------- forcing

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from ._checks import TWO_PI, FloatOrArray, _finite, _nonnegative, _poisson, _positive
+from rattle_lab.model._checks import FloatOrArray, _finite, _nonnegative, _poisson, _positive
+from rattle_lab.model._constants import TWO_PI
 
 
 # --------------------------------------------------------------------------- plate and frequency

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy.typing as npt
 
-from ._checks import FloatOrArray, _finite, _positive
+from rattle_lab.model._checks import FloatOrArray, _finite, _positive
 
 
 # --------------------------------------------------------------------------- impact velocity

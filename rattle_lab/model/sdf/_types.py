@@ -17,8 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rattle_lab.exceptions import ParameterError
-
-TWO_PI = 2.0 * math.pi
+from rattle_lab.model._constants import TWO_PI
 
 
 #: Smallest nonzero magnitude accepted for F, x and v: the simulator's derivative

@@ -63,7 +63,7 @@ from typing import Any, Protocol
 import h5py
 import numpy as np
 
-from rattle_lab._resources import find_resource, not_found_hint
+from rattle_lab._resources import resolve_resource
 from rattle_lab.exceptions import FileFormatError
 from .._convert import (CHANNEL_FIELDS, RIG_FIELDS, ROOT_FIELDS, RUN_FIELDS, SCHEMA_NAME,
                         SCHEMA_VERSION, SCHEMA_VERSION_CHAIN, edges_to_v1)
@@ -128,13 +128,8 @@ def load_mapping(source: str | os.PathLike[str] | Mapping[str, Any], *,
         label = label or "<mapping>"
         digest = hashlib.sha256(repr(sorted(data.items())).encode()).hexdigest()
     else:
-        path = Path(source)
-        if not path.exists():  # a mapping shipped with rattle_lab, by name
-            found = find_resource("mappings", str(source))
-            if found is None:
-                raise MappingError(f"{path}: cannot read the mapping file: "
-                                   f"{not_found_hint('mappings', path)}")
-            path = found
+        # a file, or a mapping shipped with rattle_lab, by name
+        path = resolve_resource("mappings", Path(source), MappingError, "cannot read the mapping file")
         label = str(path)
         try:
             raw = path.read_bytes()

@@ -10,6 +10,7 @@ here) and returns the frozen :class:`rattle_lab.report.ReportContent`, which
 from ._build import SECTIONS, build_pages, build_report_content, write_report
 from ._content import Missing
 from ._gather import ReportData, gather
+from ._summary import shock_lines
 
 __all__ = ["write_report", "build_report_content", "build_pages", "gather", "ReportData",
-           "SECTIONS", "Missing"]
+           "SECTIONS", "Missing", "shock_lines"]

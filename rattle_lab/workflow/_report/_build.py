@@ -9,8 +9,8 @@ from typing import Any
 from matplotlib.figure import Figure
 
 from rattle_lab._version import __version__
-from rattle_lab.report import PAGES, ReportContent, ReportResult, render_pages, write_pdf
-from rattle_lab.report._render import pdf_output
+from rattle_lab.report import (PAGES, ReportContent, ReportResult, pdf_output, render_pages,
+                               write_pdf)
 from . import _content, _content_model, _content_runs, _shocks
 from ._content import build_content
 from ._gather import ReportData, gather

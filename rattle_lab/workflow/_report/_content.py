@@ -21,9 +21,9 @@ import numpy as np
 from rattle_lab.detect import impacts_per_cycle
 from rattle_lab.fit import (Fits, GrazingSummary, SplLawSummary, band_quantile, grazing_band_ms2,
                             linear_law_band, threshold_hysteresis)
-from rattle_lab.report._content_types import (GrazingCurve, PatternContent, ReportContent,
-                                              RigContent, SplContent, SplCurve,
-                                              ThresholdContent)
+from rattle_lab.report import (GrazingCurve, PatternContent, ReportContent,
+                               RigContent, SplContent, SplCurve,
+                               ThresholdContent)
 from ._gather import ReportData
 from ._summary import report_negative_hysteresis, summary_lines, threshold_arrays
 

@@ -19,7 +19,7 @@ from rattle_lab.model import analysis
 from rattle_lab.model.scaling import (F_from_accel, accel_ms2_from_F, angular_rad_s_from_freq,
                                       omega_from_freq)
 from rattle_lab.plot import smooth_region
-from rattle_lab.report._content_types import Field, ModelContent, SweepComparison
+from rattle_lab.report import Field, ModelContent, SweepComparison
 from ._content import Missing, fits_of, not_fitted, pval, require_results
 from ._gather import ReportData
 from ._summary import threshold_arrays

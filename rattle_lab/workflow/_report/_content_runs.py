@@ -15,8 +15,8 @@ import numpy as np
 
 from rattle_lab.acoustics import energy_mean_db
 from rattle_lab.plot import db_slope_guide, power_law_guide
-from rattle_lab.report._content_types import (WAVEFORM_QUANTITIES, AcousticsContent, Trace,
-                                              WaveformColumn, WaveformContent)
+from rattle_lab.report import (WAVEFORM_QUANTITIES, AcousticsContent, Trace,
+                               WaveformColumn, WaveformContent)
 from ._content import Missing, require_results
 from ._gather import ReportData
 

@@ -19,8 +19,8 @@ import numpy as np
 
 from rattle_lab.exceptions import RattleLabError
 from rattle_lab.fit import FitSummary
-from rattle_lab.records._errors import StoreError
-from rattle_lab.report._content_types import ChannelInfo, RecordInfo
+from rattle_lab.store import StoreError
+from rattle_lab.report import ChannelInfo, RecordInfo
 
 
 @dataclass(frozen=True)

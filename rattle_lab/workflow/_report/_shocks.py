@@ -8,71 +8,20 @@ the fit summary's ``transients``); here they are only read, put into lines of te
 
 from __future__ import annotations
 
-import math
 import textwrap
 from typing import Any
 
 import numpy as np
 
-from rattle_lab.report._content_types import ShockContent, ShockRun, ShockTrace
+from rattle_lab.report import ShockContent, ShockRun, ShockTrace
 from ._content import Missing, require_results
 from ._gather import ReportData
+from ._summary import shock_lines
 
 #: Transient runs drawn (one page each); more are listed on the summary page only.
 MAX_SHOCK_PAGES = 6
 #: Characters per line of a shock page's text (7.5 pt monospace on A4 landscape).
 SHOCK_TEXT_WIDTH = 165
-
-
-def _number(x: Any) -> bool:
-    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
-
-
-def shock_lines(channels: Any, indent: str = "") -> list[str]:
-    """The shock rows of a transient run, one line per channel, then its clocks named.
-
-    Onsets and peaks are given in samples of the channel's own clock (and in seconds on
-    it); a delay in seconds only between channels on one clock, across clocks in samples
-    of each (the response's onset sample less the cause's).
-    """
-    lines = []
-    clocks: dict[str, tuple[float, list[str]]] = {}
-    cause = channels[0] if channels else {}
-    for c in channels:
-        clock, fs = c.get("clock"), c.get("fs_hz")
-        if clock is not None and _number(fs):
-            clocks.setdefault(str(clock), (float(fs), []))[1].append(str(c["channel"]))
-        where = f"clock {clock}" if clock is not None else "its clock"
-        head = f"{indent}{c.get('role', ''):<8} {c['channel']} ({c['quantity']}, {where})"
-        if not c["found"]:
-            lines.append(f"{head}: no shock above the noise")
-            continue
-        if c.get("onset_sample") is not None:
-            text = (f"{head}: onset sample {c['onset_sample']} ({c['onset_s']:.4f} s), peak "
-                    f"sample {c['peak_sample']} ({c['peak_s']:.4f} s)")
-        else:
-            text = f"{head}: onset {c['onset_s']:.4f} s, peak {c['peak_s']:.4f} s"
-        if c.get("role") == "response" and cause.get("found"):
-            n = c.get("delay_samples")
-            if _number(c.get("delay_s")):
-                text += (f"; {n:+d} samples, {1e3 * c['delay_s']:+.3f} ms after the cause"
-                         if n is not None else f"; {1e3 * c['delay_s']:+.3f} ms after the cause")
-            elif n is not None:
-                text += (f"; {n:+d} samples after the cause's onset sample (clock "
-                         f"{c.get('clock')} against {cause.get('clock')}: no delay in seconds "
-                         "across clocks)")
-        lines.append(text)
-    if len(clocks) > 1:
-        rates = [fs for fs, _ in clocks.values()]
-        spread = 100.0 * (max(rates) / min(rates) - 1.0)
-        named = "; ".join(f"{k} {fs:.6g} Hz ({', '.join(names)})"
-                          for k, (fs, names) in clocks.items())
-        lines.append(f"{indent}clocks: {named}; their rates differ by {spread:.1f} %, so "
-                     "times on different clocks are not compared")
-    elif clocks:
-        ((k, (fs, _)),) = clocks.items()
-        lines.append(f"{indent}clock {k}: {fs:.6g} Hz, shared by every channel")
-    return lines
 
 
 def _trace(row: dict[str, Any], ch: Any, span: int, cause_sample: int | None) -> ShockTrace:
@@ -121,4 +70,4 @@ def shock_content(data: ReportData) -> ShockContent:
     return ShockContent(tuple(runs))
 
 
-__all__ = ["MAX_SHOCK_PAGES", "shock_content", "shock_lines"]
+__all__ = ["MAX_SHOCK_PAGES", "shock_content"]

@@ -16,9 +16,8 @@ from typing import Any
 import numpy as np
 
 from rattle_lab.fit import (SIGNIFICANCE_K, Estimate, Fits, GrazingSummary, RatioRestitution,
-                            negative_hysteresis)
-from rattle_lab.fit import student_t_ci
-from rattle_lab.report._common import TEXT_WIDTH, fmt, wrapped
+                            negative_hysteresis, student_t_ci)
+from rattle_lab.report import TEXT_WIDTH, fmt, wrapped
 from ._gather import ReportData
 
 _COLS = (("quantity", 34), ("value", 11), ("std. error", 11), ("95 % CI", 27), ("unit", 0))
@@ -239,6 +238,57 @@ def parameter_lines(data: ReportData) -> list[str]:
     return lines
 
 
+def _number(x: Any) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def shock_lines(channels: Any, indent: str = "") -> list[str]:
+    """The shock rows of a transient run, one line per channel, then its clocks named.
+
+    Onsets and peaks are given in samples of the channel's own clock (and in seconds on
+    it); a delay in seconds only between channels on one clock, across clocks in samples
+    of each (the response's onset sample less the cause's).
+    """
+    lines = []
+    clocks: dict[str, tuple[float, list[str]]] = {}
+    cause = channels[0] if channels else {}
+    for c in channels:
+        clock, fs = c.get("clock"), c.get("fs_hz")
+        if clock is not None and _number(fs):
+            clocks.setdefault(str(clock), (float(fs), []))[1].append(str(c["channel"]))
+        where = f"clock {clock}" if clock is not None else "its clock"
+        head = f"{indent}{c.get('role', ''):<8} {c['channel']} ({c['quantity']}, {where})"
+        if not c["found"]:
+            lines.append(f"{head}: no shock above the noise")
+            continue
+        if c.get("onset_sample") is not None:
+            text = (f"{head}: onset sample {c['onset_sample']} ({c['onset_s']:.4f} s), peak "
+                    f"sample {c['peak_sample']} ({c['peak_s']:.4f} s)")
+        else:
+            text = f"{head}: onset {c['onset_s']:.4f} s, peak {c['peak_s']:.4f} s"
+        if c.get("role") == "response" and cause.get("found"):
+            n = c.get("delay_samples")
+            if _number(c.get("delay_s")):
+                text += (f"; {n:+d} samples, {1e3 * c['delay_s']:+.3f} ms after the cause"
+                         if n is not None else f"; {1e3 * c['delay_s']:+.3f} ms after the cause")
+            elif n is not None:
+                text += (f"; {n:+d} samples after the cause's onset sample (clock "
+                         f"{c.get('clock')} against {cause.get('clock')}: no delay in seconds "
+                         "across clocks)")
+        lines.append(text)
+    if len(clocks) > 1:
+        rates = [fs for fs, _ in clocks.values()]
+        spread = 100.0 * (max(rates) / min(rates) - 1.0)
+        named = "; ".join(f"{k} {fs:.6g} Hz ({', '.join(names)})"
+                          for k, (fs, names) in clocks.items())
+        lines.append(f"{indent}clocks: {named}; their rates differ by {spread:.1f} %, so "
+                     "times on different clocks are not compared")
+    elif clocks:
+        ((k, (fs, _)),) = clocks.items()
+        lines.append(f"{indent}clock {k}: {fs:.6g} Hz, shared by every channel")
+    return lines
+
+
 def summary_lines(data: ReportData, version: str) -> list[str]:
     """Text lines of the summary page (fitted values, flags, provenance), <= TEXT_WIDTH wide."""
     lines = [f"store: {data.store.name}"]
@@ -248,7 +298,6 @@ def summary_lines(data: ReportData, version: str) -> list[str]:
         lines.append(f"runs: {summ.n_runs} ({summ.n_ok} analysed, "
                      f"{len(summ.skipped)} skipped), {n_imp} impacts detected")
     if data.summary is not None and data.summary.shocks_only:
-        from ._shocks import shock_lines
 
         lines += ["", "Transient records (single shocks): no rattle fits (the grazing curve, "
                   "restitution and SPL laws need shaker runs). The shock found in each channel, "

@@ -1,8 +1,6 @@
-"""Argument checks and shared types of the scaling functions."""
+"""Argument checks and shared types of the model's functions (scaling, linear)."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 import numpy.typing as npt
@@ -10,7 +8,6 @@ import numpy.typing as npt
 from rattle_lab.exceptions import ParameterError
 
 FloatOrArray = float | npt.NDArray[np.float64]
-TWO_PI = 2.0 * math.pi
 
 
 # --------------------------------------------------------------------------- validation

@@ -1,16 +1,14 @@
-"""Result objects of the plate solvers and the :class:`Plate` description."""
+"""Result objects of the plate solvers: one mode, and the modes of the Ritz solver."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
-from rattle_lab.model import scaling
 from rattle_lab.exceptions import ParameterError
-from ._edges import check_edges
+from ._bases import plate_bases
 
 
 @dataclass(frozen=True)
@@ -83,7 +81,7 @@ class PlateModes:
         Normalised mode shapes ``W`` on the grid, shape (n_modes, n_eta, n_xi).
     coefficients : numpy.ndarray
         Ritz coefficients of the normalised shapes, shape (n_modes, n_x, n_y), on the
-        basis of :func:`rattle_lab.model.plate._ritz.plate_bases` (beam functions, or
+        basis of :func:`rattle_lab.model.plate._bases.plate_bases` (beam functions, or
         orthonormal polynomials for a plate with a free edge).
     """
 
@@ -136,8 +134,6 @@ class PlateModes:
         ParameterError
             If a coordinate is outside [0, 1].
         """
-        from ._ritz import plate_bases
-
         xi_b, eta_b = np.broadcast_arrays(np.asarray(xi, dtype=float), np.asarray(eta, dtype=float))
         for name, v in (("xi", xi_b), ("eta", eta_b)):
             if np.any(~((v >= 0) & (v <= 1))):
@@ -147,104 +143,3 @@ class PlateModes:
         Y = by.evaluate(eta_b.ravel())
         W = np.einsum("kij,ip,jp->kp", self.coefficients, X, Y)
         return np.asarray(W.reshape((len(self),) + xi_b.shape))
-
-
-def _positive_float(name: str, value: float) -> float:
-    v = float(value)
-    if not (v > 0 and math.isfinite(v)):
-        raise ParameterError(f"`{name}` must be finite and > 0, was {value}")
-    return v
-
-
-@dataclass(frozen=True)
-class Plate:
-    """A thin rectangular plate ``0 <= x <= a``, ``0 <= y <= b``.
-
-    Attributes
-    ----------
-    a_m : float
-        Side along x [m]; ``lambda`` (eq. 2.25) is scaled with it.
-    b_m : float
-        Side along y [m].
-    h_p_m : float
-        Thickness [m].
-    E_pa : float
-        Young's modulus [Pa].
-    nu : float
-        Poisson's ratio, -1 < nu < 0.5.
-    rho_kg_m3 : float
-        Density [kg/m^3].
-    edges : str
-        Four letters C (clamped), S (simply supported), F (free) for the edges
-        y=0, x=a, y=b, x=0 in that order.  ``"CFCF"``: the sides of length ``a``
-        clamped, the sides of length ``b`` free (the thesis's Table 2.1 plate).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> p = Plate(a_m=0.254, b_m=0.2286, h_p_m=1e-3, E_pa=7e10, nu=0.34, rho_kg_m3=2710.0, edges="CFCF")
-    >>> bool(np.isclose(p.aspect_ratio, 0.9))
-    True
-    >>> bool(np.isclose(p.frequency_hz(27.4), 105.45, atol=0.01))
-    True
-    """
-
-    a_m: float
-    b_m: float
-    h_p_m: float
-    E_pa: float
-    nu: float
-    rho_kg_m3: float
-    edges: str = "CFCF"
-
-    def __post_init__(self) -> None:
-        for name in ("a_m", "b_m", "h_p_m", "E_pa", "rho_kg_m3"):
-            object.__setattr__(self, name, _positive_float(name, getattr(self, name)))
-        nu = float(self.nu)
-        if not (-1.0 < nu < 0.5):
-            raise ParameterError(f"`nu` must satisfy -1 < nu < 0.5, was {self.nu}")
-        object.__setattr__(self, "nu", nu)
-        object.__setattr__(self, "edges", check_edges(self.edges))
-
-    @property
-    def aspect_ratio(self) -> float:
-        """``b / a``."""
-        return self.b_m / self.a_m
-
-    @property
-    def flexural_rigidity_nm(self) -> float:
-        """``D = E h_p**3 / (12 (1 - nu**2))`` [N m] (eq. 2.22)."""
-        return scaling.flexural_rigidity_nm(self.E_pa, self.h_p_m, self.nu)
-
-    @property
-    def mass_per_area_kg_m2(self) -> float:
-        """``rho h_p`` [kg/m^2] (eq. 2.3)."""
-        return self.rho_kg_m3 * self.h_p_m
-
-    def modes(self, n_modes: int = 6, n_terms: int | tuple[int, int] | None = None) -> PlateModes:
-        """The first modes by Rayleigh-Ritz; see :func:`rattle_lab.model.plate.ritz_modes`.
-
-        Parameters
-        ----------
-        n_modes : int
-            Number of modes, >= 1.
-        n_terms : int or (int, int) or None
-            Basis functions along x and y; None: chosen by the solver's convergence check.
-
-        Returns
-        -------
-        PlateModes
-            Nondimensional; use :meth:`frequency_hz` on ``lam`` for frequencies.
-        """
-        from ._ritz import ritz_modes
-
-        return ritz_modes(self.aspect_ratio, self.edges, nu=self.nu, n_modes=n_modes,
-                          n_terms=n_terms)
-
-    def omega_rad_s(self, lam: npt.ArrayLike) -> float | np.ndarray:
-        """Angular frequency [rad/s] of a nondimensional ``lambda`` (eq. 2.25)."""
-        return scaling.omega_s_rad_s(lam, self.a_m, self.h_p_m, self.E_pa, self.nu, self.rho_kg_m3)
-
-    def frequency_hz(self, lam: npt.ArrayLike) -> float | np.ndarray:
-        """Frequency [Hz] of a nondimensional ``lambda`` (eq. 2.25)."""
-        return scaling.f_s_hz(lam, self.a_m, self.h_p_m, self.E_pa, self.nu, self.rho_kg_m3)

@@ -1,0 +1,272 @@
+"""Issue 28: channel timing and the vibrometer's measurand identified from the record.
+
+Records from the independent generator (``tests/independent_campaign.py``: plain numpy, its
+own SDF physics; causal Butterworth and Bessel decoders built from their analog prototypes
+by the bilinear transform, checked here against the closed-form group delay at DC).
+
+Tolerances:
+* delay: the centroid of any filter's impulse response is its DC group delay, so the
+  median over a run's impacts of (velocity step centroid - contact pulse centroid) is the
+  vibrometer's delay; the estimator truncates the step's tail to its window (a bias of
+  up to 0.05 sample seen on the 10 kHz Butterworth at 25.6 kHz), so 0.1 sample is asserted.
+* e (median of the matched impacts with ``|v_in| >= 0.1 m/s``): within 3 % (the issue's
+  acceptance); v_in median within 1 %.
+* measurand coefficient (0 relative, 1 absolute): within 4 standard errors of the truth.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from independent_campaign import Chain, Plant, iir_dc_delay_s, measure, write_campaign
+from rattle_lab.detect import detect_impacts
+from rattle_lab.detect._timing import channel_delay, coarse_lag, measurand_share
+from rattle_lab.store import ingest
+from record_factory import run_cli
+
+
+def _grazing_ms2(plant: Plant, f_hz: float) -> float:
+    w = 2 * math.pi * plant.f_s_hz
+    r = f_hz / plant.f_s_hz
+    return plant.gap_m * w * w * math.sqrt((1 - r * r) ** 2 + (2 * plant.zeta * r) ** 2) / plant.q
+
+
+def _run(chain: Chain, f_hz: float = 99.0, periods: int = 60, seed: int = 2):
+    plant = Plant()
+    levels = np.full(periods, 1.5 * _grazing_ms2(plant, f_hz))
+    chans, imp = measure(plant, chain, 2 * math.pi * f_hz, levels, np.random.default_rng(seed))
+    return plant, chans, imp
+
+
+def _matched_e(log, imp, fs):
+    t_true, v_in, v_out = imp
+    es, vr = [], []
+    for t, vi in zip(t_true, v_in):
+        k = int(np.argmin(np.abs(log.t_s - t)))
+        if abs(log.t_s[k] - t) < 0.5e-3 and abs(vi) >= 0.1 and np.isfinite(log.e[k]):
+            es.append(log.e[k])
+            vr.append(abs(log.v_in_m_s[k]) / abs(vi))
+    assert len(es) >= 20
+    return float(np.median(es)), float(np.median(vr))
+
+
+def test_decoder_delay_matches_scipy_free_closed_form():
+    # the generator's decoders: group delay at DC sum Re 1/(1 - z_k) - n/2 samples, against a
+    # finite difference of the phase of their own frequency response (independent formula)
+    from independent_campaign import iir_response
+
+    for kind in ("butterworth", "bessel"):
+        for order, fc, fs in ((4, 10000.0, 25600.0), (8, 2000.0, 51200.0), (2, 20000.0, 51200.0)):
+            df = 1e-3
+            h = iir_response(kind, order, fc, fs, np.array([-df, df]))
+            tau = -(np.angle(h[1]) - np.angle(h[0])) / (2 * math.pi * 2 * df)
+            assert iir_dc_delay_s(kind, order, fc, fs) == pytest.approx(tau, rel=1e-6)
+            assert abs(iir_response(kind, order, fc, fs, np.array([fc]))[0]) == \
+                pytest.approx(2 ** -0.5, rel=1e-9)
+    # the issue's decoder: 4th-order Butterworth at 10 kHz, 25.6 kHz sampling, ~18 us
+    assert iir_dc_delay_s("butterworth", 4, 10000.0, 25600.0) == pytest.approx(18.26e-6, abs=0.01e-6)
+
+
+def test_coarse_lag_and_delay_estimators():
+    rng = np.random.default_rng(0)
+    a = np.abs(rng.standard_normal(5000))
+    a[rng.choice(5000, 30, replace=False)] += 60.0
+    assert coarse_lag(np.roll(a, 17), a, 40, 4.0) == 17
+    assert coarse_lag(np.roll(a, -5), a, 40, 4.0) == -5
+    est = channel_delay(np.arange(50) + 0.3 + 0.01 * rng.standard_normal(50), np.arange(50.0))
+    assert est.value == pytest.approx(0.3, abs=5 * est.stderr) and est.n == 50
+
+
+@pytest.mark.parametrize("chain", [
+    # the issue's chain: 18.3 us, under half a sample
+    Chain(decoder="butterworth", decoder_order=4, decoder_cutoff_hz=10000.0, decoder_delay_s=0.0,
+          ring_in_velocity=False),
+    # a slow decoder (0.4 ms, 21 samples) and 2.7 samples more, at 51.2 kHz
+    pytest.param(Chain(fs_hz=51200.0, decoder="bessel", decoder_order=8,
+                       decoder_cutoff_hz=2000.0, decoder_delay_s=2.7 / 51200.0,
+                       ring_in_velocity=False), marks=pytest.mark.slow),
+    # a ringing decoder: 8th-order Butterworth, 3 kHz, 25.6 kHz, +1.2 samples.  NOT reached:
+    # the step centroid is 0.47 sample early (truncated ringing tail), see docs/chain_timing.md
+    pytest.param(Chain(decoder="butterworth", decoder_order=8, decoder_cutoff_hz=3000.0,
+                       decoder_delay_s=1.2 / 25600.0, ring_in_velocity=False),
+                 marks=[pytest.mark.slow, pytest.mark.xfail(
+                     strict=True, reason="ringing decoder: delay estimate 0.47 sample early")]),
+], ids=["butter4-10k", "bessel8-2k-51k", "butter8-3k"])
+def test_undeclared_delay_is_measured_and_e_holds(chain):
+    plant, ch, imp = _run(chain)
+    fs = chain.fs_hz
+    log = detect_impacts(fs, velocity_m_s=ch["velocity"], accel_ms2=ch["plate"],
+                         excitation_freq_hz=99.0)
+    assert log.velocity_delay_s == pytest.approx(chain.velocity_delay_s, abs=0.1 / fs)
+    assert log.velocity_delay_applied_s == log.velocity_delay_s
+    e, vin = _matched_e(log, imp, fs)
+    assert e == pytest.approx(plant.e, rel=0.03)
+    assert vin == pytest.approx(1.0, abs=0.01)
+
+
+def test_declared_delay_is_checked():
+    chain = Chain(decoder="butterworth", decoder_order=4, decoder_cutoff_hz=10000.0,
+                  decoder_delay_s=0.0, ring_in_velocity=False)
+    plant, ch, imp = _run(chain)
+    fs = chain.fs_hz
+    # declared right (a chain whose velocity is on the accelerometer's time base, as the
+    # fit puts it with group_delay_s): what remains is within its noise, nothing applied
+    _, ch0, _ = _run(Chain(decoder_delay_s=0.0, ring_in_velocity=False))
+    log = detect_impacts(fs, velocity_m_s=ch0["velocity"], accel_ms2=ch0["plate"],
+                         excitation_freq_hz=99.0, velocity_delay_declared=True)
+    assert abs(log.velocity_delay_s) < 0.1 / fs
+    assert log.velocity_delay_applied_s == 0.0
+    # declared wrong by 2 samples (a chain 2 samples later than its declaration says): the
+    # declaration stands, the measurement contradicts it and the fit says so
+    from rattle_lab.fit._chain import velocity_delay_flags
+
+    chain2 = Chain(decoder_delay_s=2.0 / fs, ring_in_velocity=False)
+    _, ch2, _ = _run(chain2)
+    log = detect_impacts(fs, velocity_m_s=ch2["velocity"], accel_ms2=ch2["plate"],
+                         excitation_freq_hz=99.0, velocity_delay_declared=True)
+    assert log.velocity_delay_applied_s == 0.0
+    assert log.velocity_delay_s == pytest.approx(2.0 / fs, abs=0.1 / fs)
+    (flag,) = velocity_delay_flags(log, declared=True)
+    assert flag.startswith("channel_delay_contradicted: ")
+    # the same record undeclared: the 2 samples are beyond their uncertainty, applied and
+    # flagged (a log detected as declared applied nothing, and is not flagged as estimated)
+    assert velocity_delay_flags(log, declared=False) == ()
+    log = detect_impacts(fs, velocity_m_s=ch2["velocity"], accel_ms2=ch2["plate"],
+                         excitation_freq_hz=99.0)
+    assert log.velocity_delay_applied_s == pytest.approx(2.0 / fs, abs=0.1 / fs)
+    assert velocity_delay_flags(log, declared=False)[0].startswith("channel_delay_estimated: ")
+
+
+def test_measurand_share_on_exact_motion():
+    # noiseless: the plate is at the gap at every impact; an absolute vibrometer adds the
+    # base velocity.  The impacts of the first periods fall at varying phases (transient)
+    from independent_campaign import simulate
+
+    plant = Plant()
+    f = 99.0
+    W = 2 * math.pi * f
+    levels = np.full(80, 1.5 * _grazing_ms2(plant, f))
+    fs = 25600.0
+    ts, _, v, ti, vin, vout = simulate(plant, W, levels, fs)
+    a_b = levels[0] * np.sin(W * ts)
+    v_b = -levels[0] / W * np.cos(W * ts)
+    for vel, truth in ((v, 0.0), (v + v_b, 1.0)):
+        m = measurand_share(vel + 3e-3, fs, 0.0, ti, a_b, fs, 0.0, f, jumps_m_s=vout - vin)
+        assert abs(m.value - truth) < 4 * m.stderr and m.stderr < 0.1
+        assert m.verdict == ("relative" if truth == 0.0 else "absolute")
+    # impacts all at one phase of the base motion: nothing to tell them apart
+    t_same = (np.arange(40) + 0.3) / f
+    m = measurand_share(v_b, fs, 0.0, t_same, a_b, fs, 0.0, f)
+    assert m.verdict == "undetermined"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("measurand", [
+    "panel_relative_to_striker",
+    # (was xfail on the first merge, where an undetermined measurand withheld e; on chain2
+    # one run is inferred absolute and the other kept within the widened interval)
+    "panel_absolute"])
+def test_schema_v1_nothing_declared_through_the_cli(tmp_path, measurand):
+    """The issue's campaign as a lab writes it: schema v1, a causal 4th-order Butterworth
+    decoder at 10 kHz (18 us), nothing declared.  e from the ratios within 3 %, its interval
+    covers the truth, and the fit says what it estimated."""
+    plant = Plant()
+    chain = Chain(decoder="butterworth", decoder_order=4, decoder_cutoff_hz=10000.0,
+                  decoder_delay_s=0.0, ring_in_velocity=False, measurand=measurand,
+                  schema_version=1)
+    runs = [{"run_id": f"dwell_{f:g}", "protocol": "sine_dwell", "freq_hz": f,
+             "levels": np.full(80, 1.5 * _grazing_ms2(plant, f))} for f in (93.0, 99.0)]
+    path = tmp_path / "v1.h5"
+    write_campaign(path, plant, chain, runs, seed=3)
+    store = tmp_path / "s.h5"
+    ingest([path], store, quiet=True)
+    proc = run_cli("fit", str(store), "--json", "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    flags = out["data_quality"]
+    assert sum("channel_delay_estimated" in f for f in flags) == 2
+    ratio = out["fits"].get("restitution_ratio")
+    inferred = [f for f in flags if "measurand_inferred" in f]
+    undetermined = [f for f in flags if "measurand_undetermined" in f]
+    assert len(inferred) + len(undetermined) == 2
+    word = "relative to the striker" if measurand != "panel_absolute" else "panel_absolute"
+    assert all(word in f for f in inferred)
+    assert inferred, flags
+    assert ratio is not None, out["not_fitted"]
+    assert ratio["value"] == pytest.approx(plant.e, rel=0.03)
+    assert abs(ratio["value"] - plant.e) <= 1.96 * ratio["stderr"]
+
+
+# --- the review fixes: undeclared chains keep e with an honest interval -------------------
+
+def test_delay_indistinguishable_from_zero_is_not_applied_and_unresolved_steps_are_named():
+    """An undeclared delay is applied only beyond 4 standard errors; per-impact delays
+    spread over a sample (steps whose timing the sampling limits) are only known to the
+    sample.  Synthetic centroids: Gaussian scatter (closed-form median error) and the
+    clustered +-0.5 sample pattern of an unfiltered jump at three sampling phases."""
+    from rattle_lab.detect._timing import DelayEstimate, delay_significant
+
+    rng = np.random.default_rng(7)
+    ta = np.cumsum(rng.uniform(120, 140, 60))
+    small = channel_delay(ta + 0.004 + 0.05 * rng.standard_normal(60), ta)
+    assert small.resolved and not delay_significant(small)
+    # median of 60 N(0, 0.05): standard error 1.2533 * 0.05 / sqrt(60) = 0.0081 sample
+    assert small.stderr == pytest.approx(0.0081, rel=0.35)
+    decoder = channel_delay(ta + 0.476 + 0.02 * rng.standard_normal(60), ta)
+    assert decoder.resolved and delay_significant(decoder)
+    assert decoder.value == pytest.approx(0.476, abs=4 * decoder.stderr)
+    # an unfiltered jump: +0.5 at two of three phases, -0.5 at the third; the median says
+    # 0.48 with a tiny MAD, the truth is 0
+    pattern = np.tile([0.48, 0.5, -0.47], 20) + 0.01 * rng.standard_normal(60)
+    jump = channel_delay(ta + pattern, ta)
+    assert not jump.resolved and not delay_significant(jump)
+    assert jump.stderr >= 1 / math.sqrt(12)
+    assert not delay_significant(DelayEstimate(float("nan"), float("nan"), 0))
+
+
+class _Log:
+    """The ImpactLog fields the fit's chain systematics read."""
+
+    def __init__(self, e, *, d=float("nan"), se=float("nan"), applied=0.0, slope=float("nan"),
+                 diff=0.0, alt_se=float("nan"), fs=25600.0):
+        self.e = np.asarray(e, dtype=float)
+        self.velocity_delay_s, self.velocity_delay_stderr_s = d, se
+        self.velocity_delay_applied_s, self.e_per_delay_s = applied, slope
+        self.velocity_delay_window_s, self.e_window_change = 0.0, 0.0
+        self.e_measurand_diff, self.e_measurand_alt_se, self.fs_hz = diff, alt_se, fs
+
+
+def test_delay_left_at_zero_still_widens_e_by_its_pooled_uncertainty():
+    from rattle_lab.fit._chain import delay_systematic
+
+    fs = 25600.0
+    logs = [_Log([0.6] * 10, d=0.01 / fs, se=0.02 / fs, slope=0.3 * fs) for _ in range(4)]
+    se, notes = delay_systematic(logs)
+    # pooled: 0.01 +- 0.02 / sqrt(4) samples; rms hypot(0.01, 0.01); e moves 0.3 per sample
+    assert se == pytest.approx(0.3 * math.hypot(0.01, 0.01), rel=1e-9)
+    assert len(notes) == 1 and "left at zero" in notes[0]
+    assert delay_systematic([_Log([0.6] * 10)]) == (0.0, [])
+
+
+def test_undetermined_measurand_widens_or_is_established_across_runs():
+    from rattle_lab.fit._chain import measurand_systematic
+
+    rng = np.random.default_rng(3)
+    e = [0.6 + 0.01 * rng.standard_normal(40) for _ in range(3)]
+    # the absolute readings scatter from run to run (-0.2, +0.1, +0.3): the relative ones
+    # agree, so the runs establish the relative reading and nothing is added
+    logs = [_Log(x, diff=dd, alt_se=0.003) for x, dd in zip(e, (-0.2, 0.1, 0.3))]
+    se, note = measurand_systematic(logs)
+    assert se == 0.0 and "relative readings of e agree" in note
+    # absolute readings that agree as well: e could be either, the interval spans both
+    logs = [_Log(x, diff=0.05, alt_se=0.003) for x in e]
+    se, note = measurand_systematic(logs)
+    assert se == pytest.approx(0.05) and "+0.0500" in note
+    # one such run among runs whose measurand is known: its share of the ratios
+    se, _ = measurand_systematic([_Log(e[0], diff=0.05, alt_se=0.003), _Log(e[1]), _Log(e[2])])
+    assert se == pytest.approx(0.05 / 3)
+    assert measurand_systematic([_Log(x) for x in e]) == (0.0, "")
