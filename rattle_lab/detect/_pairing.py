@@ -76,20 +76,21 @@ def onto_grid(x: np.ndarray, fs_hz: float, t0_s: float, fs_target_hz: float, t0_
     return out
 
 
-def base_velocity_at(base_ms2: np.ndarray, fs_hz: float, t0_s: float, freq_hz: float,
-                     t_s: np.ndarray, periods: float = 2.0) -> np.ndarray:
-    """Base velocity [m/s] at ``t_s`` from the base acceleration: the excitation-frequency part.
+def base_motion_at(base_ms2: np.ndarray, fs_hz: float, t0_s: float, freq_hz: float,
+                   t_s: np.ndarray, periods: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """Base displacement [m] and velocity [m/s] at ``t_s``: the excitation-frequency part.
 
     Over ``+-periods / 2`` forcing periods around each instant the acceleration is fitted
-    by ``c + a cos(W t) + b sin(W t)`` and integrated: ``v = (a sin(W t) - b cos(W t)) / W``
-    (the shaker moves at the excitation frequency; a constant offset has no velocity).
-    Near the ends of the record the window is cut to the record; NaN where less than one
-    forcing period remains.
+    by ``c + a cos(W t) + b sin(W t)`` and integrated twice: ``x = -a / W**2`` and
+    ``v = -b / W`` at the instant (the shaker moves at the excitation frequency; a constant
+    offset has no velocity).  Near the ends of the record the window is cut to the record;
+    NaN where less than one forcing period remains.
     """
     base = np.asarray(base_ms2, dtype=np.float64)
     w = 2.0 * math.pi * freq_hz
     half = int(round(0.5 * periods * fs_hz / freq_hz))
-    out = np.full(np.size(t_s), np.nan)
+    x = np.full(np.size(t_s), np.nan)
+    v = np.full(np.size(t_s), np.nan)
     for i, t in enumerate(np.atleast_1d(t_s)):
         k = int(round((t - t0_s) * fs_hz))
         lo, hi = max(0, k - half), min(base.size, k + half + 1)
@@ -98,8 +99,16 @@ def base_velocity_at(base_ms2: np.ndarray, fs_hz: float, t0_s: float, freq_hz: f
         tt = t0_s + np.arange(lo, hi) / fs_hz - t
         design = np.column_stack([np.ones_like(tt), np.cos(w * tt), np.sin(w * tt)])
         _, a, b = np.linalg.lstsq(design, base[lo:hi], rcond=None)[0]
-        out[i] = -b / w     # at tt = 0: (a sin 0 - b cos 0) / W
-    return out
+        x[i] = -a / (w * w)
+        v[i] = -b / w     # at tt = 0: (a sin 0 - b cos 0) / W
+    return x, v
+
+
+def base_velocity_at(base_ms2: np.ndarray, fs_hz: float, t0_s: float, freq_hz: float,
+                     t_s: np.ndarray, periods: float = 2.0) -> np.ndarray:
+    """Base velocity [m/s] at ``t_s`` from the base acceleration: the excitation-frequency
+    part (:func:`base_motion_at`'s velocity)."""
+    return base_motion_at(base_ms2, fs_hz, t0_s, freq_hz, t_s, periods)[1]
 
 
 __all__ = ["base_velocity_at", "fractional_delay", "onto_grid"]

@@ -32,6 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._pairing import base_motion_at
+
 #: A declared delay is contradicted where the measured residual exceeds both this many
 #: standard errors and :data:`DELAY_CHECK_FLOOR_SAMPLES`.
 DELAY_CHECK_SIGMAS = 4.0
@@ -242,32 +244,6 @@ def delay_contradicted(residual: DelayEstimate) -> bool:
     return bool(np.isfinite(residual.value)
                 and abs(residual.value) > DELAY_CHECK_SIGMAS * residual.stderr
                 and abs(residual.value) > DELAY_CHECK_FLOOR_SAMPLES)
-
-
-def base_motion_at(base_ms2: np.ndarray, fs_hz: float, t0_s: float, freq_hz: float,
-                   t_s: np.ndarray, periods: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
-    """Base displacement (m) and velocity (m/s) at ``t_s``: the excitation-frequency part.
-
-    As :func:`rattle_lab.detect._pairing.base_velocity_at`: ``c + a cos(W t) + b sin(W t)``
-    fitted over ``periods`` forcing periods around each instant, integrated twice
-    (``x = -a / W**2``, ``v = -b / W`` at the instant).  NaN where under one period remains.
-    """
-    base = np.asarray(base_ms2, dtype=np.float64)
-    w = 2.0 * math.pi * freq_hz
-    half = int(round(0.5 * periods * fs_hz / freq_hz))
-    x = np.full(np.size(t_s), np.nan)
-    v = np.full(np.size(t_s), np.nan)
-    for i, t in enumerate(np.atleast_1d(t_s)):
-        k = int(round((t - t0_s) * fs_hz))
-        lo, hi = max(0, k - half), min(base.size, k + half + 1)
-        if (hi - lo) * freq_hz < fs_hz:
-            continue
-        tt = t0_s + np.arange(lo, hi) / fs_hz - t
-        design = np.column_stack([np.ones_like(tt), np.cos(w * tt), np.sin(w * tt)])
-        _, a, b = np.linalg.lstsq(design, base[lo:hi], rcond=None)[0]
-        x[i] = -a / (w * w)
-        v[i] = -b / w
-    return x, v
 
 
 def integral_at(v: np.ndarray, k: np.ndarray) -> np.ndarray:

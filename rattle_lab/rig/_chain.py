@@ -1,25 +1,6 @@
-"""A realistic measurement chain for the synthetic rig (scene table ``[chain]``, opt-in).
-
-Each effect is off by default; a scene turns on what it wants:
-
-* ``decoder_delay_s``: the vibrometer decoder's group delay (a band-limited fractional
-  delay of the velocity); the record declares it (``group_delay_s``, schema v2);
-* ``vibrometer = "absolute"``: the panel alone, the base velocity not subtracted (declared
-  as ``measurand = "panel_absolute"``; default ``"relative"``, a differential vibrometer);
-* ``ring_velocity_per_m_s``: the plate's next modes (the scene's ``ringing_freqs_hz``)
-  ringing in the vibrometer after each impact, excited by its impulse: a velocity step of
-  this many m/s per m/s of velocity change, decaying with ``ringing_decay_s``;
-* ``hum_hz`` with ``hum_m_s``, ``hum_m_s2``, ``hum_pa``: mains hum in the vibrometer, the
-  accelerometers and the microphone;
-* ``offset_velocity_m_s``, ``offset_plate_m_s2``, ``offset_base_m_s2``, ``offset_mic_pa``:
-  DC offsets;
-* ``adc_bits`` (16 or 24; 0 = off): quantisation over each channel's input range (or
-  1.25 times its largest sample when it has none);
-* ``floor_extra_path_m`` and ``floor_gain``: one floor reflection of the sound, arriving
-  ``floor_extra_path_m / c`` after the direct sound (the microphone's distance and
-  propagation delay are the ``[acoustic]`` table's).
-
-Background noise is each sensor's ``noise_rms``.
+"""A realistic measurement chain for the synthetic rig (scene table ``[chain]``, opt-in):
+applied to the channels here; what each effect is and its parser are in
+:mod:`rattle_lab.rig._chain_spec`.  Each effect is off by default.
 """
 
 from __future__ import annotations
