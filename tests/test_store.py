@@ -17,7 +17,7 @@ from record_factory import RATTLE_LAB, make_record, run_cli, write
 
 from rattle_lab._atomic import TMP_MARKER, atomic_write_text, remove_stale_temporaries
 from rattle_lab.cli import main
-from rattle_lab.exceptions import DataError, FileFormatError
+from rattle_lab.exceptions import DataError, FileFormatError, RattleLabError
 from rattle_lab.store import StoreError
 from rattle_lab.records._h5 import LinkError
 from rattle_lab.store import (STORE_VERSION, check_linked_inputs, ingest, open_stored_record,
@@ -414,3 +414,21 @@ def test_a_read_only_folder_is_one_line_exit_2(tmp_path, monkeypatch, capsys, co
     captured = capsys.readouterr()
     assert captured.err.count("\n") == 1 and "Permission denied" in captured.err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.h5"]
+
+
+def test_a_store_record_changed_after_it_was_read_is_read_and_validated_again(tmp_path):
+    # open_stored_record reads and validates a record's attributes once per process and file
+    # state (a fit opens every run of a file); a store changed in between must not be served
+    # from that memory: here a channel's sample rate made invalid after the first read
+    src = write(tmp_path, record=make_record(run_ids=("dwell_094", "dwell_095")))
+    store = tmp_path / "s.h5"
+    key = ingest([src], store).inputs[0].input_key
+    with open_stored_record(store, key) as rec:
+        first = rec.run("dwell_095").channel("mic").read()
+    with open_stored_record(store, key) as rec:  # the remembered tree, the datasets read again
+        np.testing.assert_array_equal(rec.run("dwell_095").channel("mic").read(), first)
+    with h5py.File(store, "r+") as fh:
+        runs = fh[f"records/{key}/runs/dwell_095/channels"]
+        runs["mic"].attrs["sample_rate_hz"] = -1.0
+    with pytest.raises(RattleLabError, match="sample_rate_hz"):
+        open_stored_record(store, key)

@@ -150,11 +150,15 @@ def fit_grazing_ramp(thresholds: Sequence[Threshold], *, participation: float = 
         lag = model - threshold_accel_unchecked(freq, p["gap_m"], p["f_s_hz"], p["zeta"],
                                                 participation)
         fc, ac = _per_frequency(freq, acc - lag)
-        new = fit_grazing(fc, ac, participation=participation, gap_m=p["gap_m"])
+        # the rounds need the parameters only; the profile intervals (most of a fit's cost)
+        # are computed once, for the last round's levels
+        new = fit_grazing(fc, ac, participation=participation, gap_m=p["gap_m"],
+                          conf_interval=False)
         moved = max(abs(new.params[k].value / p[k] - 1.0) for k in p)
         fit = new
         if moved < rtol:
             break
+    fit = fit_grazing(fc, ac, participation=participation, gap_m=p["gap_m"])
     return RampGrazingFit(fit, start, tuple(t.run_id for t in points), freq, acc, lag, done)
 
 

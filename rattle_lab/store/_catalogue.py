@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -81,6 +82,29 @@ def read_catalogue(store: str | os.PathLike[str],
     return pd.DataFrame(rows, columns=keys + ["n_channels", "channels", "duration_s", "flags"])
 
 
+#: Node trees of stored records this process has read and validated, by the store file's
+#: identity (device, inode, size, modification time in ns) and the input key.  A store's
+#: record is content-addressed and never rewritten in place, so a fit that opens each of
+#: a file's runs reads and validates its attributes once instead of once per run; any
+#: change to the store file (a write, a replacement) changes the identity.
+_VALIDATED_TREES: dict[tuple[Any, ...], dict[str, Any]] = {}
+_MAX_REMEMBERED = 16
+
+
+def _file_identity(store: Path, input_key: str) -> tuple[Any, ...] | None:
+    try:
+        st = store.stat()
+    except OSError:
+        return None
+    return (str(store.resolve()), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, input_key)
+
+
+def _remember(identity: tuple[Any, ...], tree: dict[str, Any]) -> None:
+    while len(_VALIDATED_TREES) >= _MAX_REMEMBERED:
+        _VALIDATED_TREES.pop(next(iter(_VALIDATED_TREES)))
+    _VALIDATED_TREES[identity] = tree
+
+
 def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
     """An ingested input as a :class:`~rattle_lab.records.Record` (read lazily).
 
@@ -108,11 +132,17 @@ def open_stored_record(store: str | os.PathLike[str], input_key: str) -> Record:
                                  f"{problem}; " + reingest_advice(
                                      _text(group.attrs["ingest_input_path"]), store,
                                      "missing" in problem))
+    identity = _file_identity(store, input_key)
+    known = _VALIDATED_TREES.get(identity) if identity is not None else None
     with link_policy(LinkPolicy(trusted=True)):  # the store's own links, to ingested inputs
-        raw = load_group(store, f"/records/{input_key}")
+        raw = load_group(store, f"/records/{input_key}",
+                         tree=copy.deepcopy(known) if known is not None else None)
     label = f"{store}: /records/{input_key}"
     try:
-        validate_tree(raw.tree, label)
+        if known is None:
+            validate_tree(raw.tree, label)
+            if identity is not None:
+                _remember(identity, copy.deepcopy(raw.tree))
         return record_from_tree(raw.tree, raw.sources,
                                 Origin(path=store, format="rattle_store", closer=raw.closer),
                                 store=True)

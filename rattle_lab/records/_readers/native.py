@@ -66,11 +66,13 @@ class _LazyH5Source:
         return self._source.read(start, stop)
 
 
-def load_group(path: Path, group: str = "/") -> RawRecord:
+def load_group(path: Path, group: str = "/", tree: dict[str, Any] | None = None) -> RawRecord:
     """Read the record stored in ``group`` of ``path`` (``"/"`` for a record file).
 
     Error paths are given from the file's root, so a record inside an ingest
-    store is named by its full HDF5 path.
+    store is named by its full HDF5 path.  ``tree`` is the group's node tree when
+    the caller has read it from the same, unchanged file before (the datasets are
+    then opened without reading every attribute again).
     """
     handle = H5Handle(path)
     try:
@@ -78,7 +80,8 @@ def load_group(path: Path, group: str = "/") -> RawRecord:
         obj = fh.get(group)
         if not isinstance(obj, h5py.Group):
             raise FileFormatError(f"{path}: {group}: no such group")
-        tree = node_tree(obj, str(path), group)
+        if tree is None:
+            tree = node_tree(obj, str(path), group)
     except BaseException:
         handle.close()
         raise
