@@ -102,6 +102,19 @@ def synthetic_campaign_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
+SMALL_CAMPAIGN = Path(__file__).resolve().parent / "data" / "small_campaign.toml"
+
+
+@pytest.fixture(scope="session")
+def small_campaign_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Path of the shortened default scene's record (``tests/data/small_campaign.toml``): for
+    the tests of plumbing (caching, Dask, progress, exit codes), where 18 s of record serve
+    as well as the default scene's 40 s."""
+    path = tmp_path_factory.mktemp("synthetic") / "small_campaign.h5"
+    write_synthetic(SMALL_CAMPAIGN, path)
+    return path
+
+
 @pytest.fixture(scope="session")
 def synthetic_threshold_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Path of the threshold-only record (slow ramps, base accelerometer only)."""
