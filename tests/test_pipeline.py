@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import pypdf
-from conftest import RATTLE_LAB
+from conftest import RATTLE_LAB, SMALL_CAMPAIGN
 
 import rattle_lab.workflow.pipeline as pipeline_module
 from rattle_lab.exceptions import ParameterError
@@ -73,8 +73,8 @@ def test_needed_stages_are_lazy() -> None:
 
 
 @pytest.mark.slow  # > 8 s (measured under load)
-def test_cache_and_exact_reruns(synthetic_campaign_record: Path, tmp_path: Path) -> None:
-    rec = [synthetic_campaign_record]
+def test_cache_and_exact_reruns(small_campaign_record: Path, tmp_path: Path) -> None:
+    rec = [small_campaign_record]
     store = tmp_path / "s.h5"
     base = {"detect": {"on": 12.0}, "fit": {"outlier_k": 5.0}}
     first = run_pipeline(_pipe(["results"], **base), rec, store=store, out_dir=tmp_path)
@@ -113,8 +113,8 @@ def test_cache_and_exact_reruns(synthetic_campaign_record: Path, tmp_path: Path)
 
 @pytest.mark.slow  # > 8 s (measured under load)
 def test_report_parameter_reruns_only_the_report_and_outside_fits_are_noticed(
-        synthetic_campaign_record: Path, tmp_path: Path) -> None:
-    rec, store = [synthetic_campaign_record], tmp_path / "s.h5"
+        small_campaign_record: Path, tmp_path: Path) -> None:
+    rec, store = [small_campaign_record], tmp_path / "s.h5"
     no_model = _pipe(["report"], report={"model": False})
     first = run_pipeline(no_model, rec, store=store, out_dir=tmp_path)
     assert first.executed == ["ingest", "detect", "thresholds", "fit", "report"]
@@ -131,8 +131,8 @@ def test_report_parameter_reruns_only_the_report_and_outside_fits_are_noticed(
 
 
 @pytest.mark.slow  # > 8 s (measured under load)
-def test_shipped_pipelines_run(synthetic_campaign_record: Path, tmp_path: Path) -> None:
-    rec = [synthetic_campaign_record]
+def test_shipped_pipelines_run(small_campaign_record: Path, tmp_path: Path) -> None:
+    rec = [small_campaign_record]
     thr = run_pipeline(load_pipeline_file(PIPELINES / "threshold_campaign.toml"), rec,
                        out_dir=tmp_path)
     assert thr.executed == ["ingest", "detect", "thresholds", "fit"]  # no report asked for
@@ -145,15 +145,16 @@ def test_shipped_pipelines_run(synthetic_campaign_record: Path, tmp_path: Path) 
     text = "".join(pg.extract_text() for pg in pypdf.PdfReader(spl.outputs["report"]).pages)
     assert "SPL first peak: slope" in text and "not requested (model=False)" in text
     full_pipe = load_pipeline_file(PIPELINES / "full_campaign.toml")
-    full = run_pipeline(full_pipe, ["default"], out_dir=tmp_path)
+    scene = str(SMALL_CAMPAIGN)  # a scene input: simulated, then the whole chain
+    full = run_pipeline(full_pipe, [scene], out_dir=tmp_path)
     assert full.executed == ["simulate", "ingest", "detect", "thresholds", "fit", "report"]
     assert set(full.outputs) == {"store", "results", "report"}
     reader = pypdf.PdfReader(full.outputs["report"])
     # summary 2 pages, rig, thresholds, patterns, waveforms, SPL, acoustics, 2 model pages
     assert len(reader.pages) == 10 and "model onset" in reader.pages[-1].extract_text()
-    again = run_pipeline(full_pipe, ["default"], out_dir=tmp_path)
+    again = run_pipeline(full_pipe, [scene], out_dir=tmp_path)
     assert again.executed == []
-    assert again.cached == ["simulate:default.h5", "ingest", "detect", "thresholds", "fit",
+    assert again.cached == ["simulate:small_campaign.h5", "ingest", "detect", "thresholds", "fit",
                             "report"]
 
 
@@ -233,7 +234,7 @@ def _pinned_cli(pinned: Path, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 @pytest.mark.slow  # > 8 s (measured under load)
-def test_dask_local_cluster_equals_serial(synthetic_campaign_record: Path, tmp_path: Path,
+def test_dask_local_cluster_equals_serial(small_campaign_record: Path, tmp_path: Path,
                                           cluster: Any, pinned_sources: Path) -> None:
     workers = set(cluster.run(code_fingerprint).values())
     probe = subprocess.run([sys.executable, "-c", "import rattle_lab.workflow.pipeline as p; "
@@ -244,7 +245,7 @@ def test_dask_local_cluster_equals_serial(synthetic_campaign_record: Path, tmp_p
     assert Path(where).is_relative_to(pinned_sources) and workers == {fingerprint}
     pipe = tmp_path / "detect_only.toml"
     pipe.write_text('[pipeline]\nname = "det"\noutputs = ["detections"]\n')
-    args = ("run", str(pipe), str(synthetic_campaign_record), "--out", str(tmp_path))
+    args = ("run", str(pipe), str(small_campaign_record), "--out", str(tmp_path))
     serial = _pinned_cli(pinned_sources, *args, "--store", str(tmp_path / "serial.h5"))
     par = _pinned_cli(pinned_sources, *args, "--store", str(tmp_path / "dask.h5"),
                       "--scheduler", cluster.scheduler.address)
@@ -252,7 +253,7 @@ def test_dask_local_cluster_equals_serial(synthetic_campaign_record: Path, tmp_p
         assert proc.returncode == 0, proc.stderr
         assert "detect: done" in proc.stderr and proc.stdout.startswith("detections\t")
     a, b = read_detections(tmp_path / "serial.h5"), read_detections(tmp_path / "dask.h5")
-    assert len(a) == 12  # every run of the default scene
+    assert len(a) == 11  # every run of the small campaign
     assert _diff(_as_plain(a), _as_plain(b)) == []
 
 
@@ -273,7 +274,7 @@ def _set_fingerprint(value: str) -> str:
     return old
 
 
-def test_workers_with_other_code_are_refused(synthetic_campaign_record: Path, tmp_path: Path,
+def test_workers_with_other_code_are_refused(small_campaign_record: Path, tmp_path: Path,
                                              cluster: Any) -> None:
     # e.g. another rattle_lab installed on the cluster, or sources edited after this process
     # imported them: the results would mix code versions, so the stage fails instead
@@ -282,7 +283,7 @@ def test_workers_with_other_code_are_refused(synthetic_campaign_record: Path, tm
     try:
         with pytest.raises(ParameterError, match=r"a worker runs other rattle_lab code "
                                                  r"\(0\.0\.0\+0+\) than the caller"):
-            run_pipeline(_pipe(["detections"]), [synthetic_campaign_record],
+            run_pipeline(_pipe(["detections"]), [small_campaign_record],
                          store=tmp_path / "s.h5", out_dir=tmp_path,
                          scheduler=cluster.scheduler.address)
     finally:
@@ -291,17 +292,17 @@ def test_workers_with_other_code_are_refused(synthetic_campaign_record: Path, tm
     assert cluster.run(code_fingerprint) == old
 
 
-def test_unreachable_scheduler_is_a_parameter_error(synthetic_campaign_record: Path,
+def test_unreachable_scheduler_is_a_parameter_error(small_campaign_record: Path,
                                                     tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     pytest.importorskip("distributed")
     monkeypatch.setattr(pipeline_module, "CONNECT_TIMEOUT_S", 1)
     with pytest.raises(ParameterError, match=r"`scheduler` 'tcp://127\.0\.0\.1:9': cannot "
                                              r"connect"):
-        run_pipeline(_pipe(["detections"]), [synthetic_campaign_record],
+        run_pipeline(_pipe(["detections"]), [small_campaign_record],
                      store=tmp_path / "s.h5", out_dir=tmp_path, scheduler="tcp://127.0.0.1:9")
     with pytest.raises(ParameterError, match="`scheduler` must be an address"):
-        run_pipeline(_pipe(["detections"]), [synthetic_campaign_record],
+        run_pipeline(_pipe(["detections"]), [small_campaign_record],
                      store=tmp_path / "s.h5", out_dir=tmp_path, scheduler=" ")
 
 
