@@ -7,15 +7,53 @@ It depends only on NumPy, SciPy and numba (compiled loudness), not on the rest o
 package apart from its exceptions, so that every stage after ``records`` may use it.
 """
 
-from ._ecma418 import Ecma418, ecma418, ecma418_available
-from ._episodes import campaign_background, episode_psychoacoustics
-from ._filters import (NOMINAL_THIRD_OCTAVE_HZ, apply_weighting, band_edges_hz, band_gain,
-                       band_mean_squares, weighting_db, weighting_response)
-from ._impulsiveness import Onsets, adjustment_db, find_onsets, laf_db, prominence
-from ._levels import (P_REF_PA, SoundLevels, energy_mean_db, fast_time_weighted, rattle_episodes,
-                      sound_levels)
-from ._loudness import Loudness, loudness
-from ._run import RunAcoustics, channel_calibration, run_acoustics
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ._ecma418 import Ecma418, ecma418, ecma418_available
+    from ._episodes import campaign_background, episode_psychoacoustics
+    from ._filters import (NOMINAL_THIRD_OCTAVE_HZ, apply_weighting, band_edges_hz, band_gain,
+                           band_mean_squares, weighting_db, weighting_response)
+    from ._impulsiveness import Onsets, adjustment_db, find_onsets, laf_db, prominence
+    from ._levels import (P_REF_PA, SoundLevels, energy_mean_db, fast_time_weighted, rattle_episodes,
+                          sound_levels)
+    from ._loudness import Loudness, loudness
+    from ._run import RunAcoustics, channel_calibration, run_acoustics
+
+#: public name -> submodule that defines it; loaded on first use, so that a stage that needs
+#: one corner of the package (ingest reads microphone calibrations) does not import SciPy's
+#: signal package (about a second) with the filters
+_LAZY: dict[str, str] = {
+    "Ecma418": "_ecma418",
+    "ecma418": "_ecma418",
+    "ecma418_available": "_ecma418",
+    "campaign_background": "_episodes",
+    "episode_psychoacoustics": "_episodes",
+    "NOMINAL_THIRD_OCTAVE_HZ": "_filters",
+    "apply_weighting": "_filters",
+    "band_edges_hz": "_filters",
+    "band_gain": "_filters",
+    "band_mean_squares": "_filters",
+    "weighting_db": "_filters",
+    "weighting_response": "_filters",
+    "Onsets": "_impulsiveness",
+    "adjustment_db": "_impulsiveness",
+    "find_onsets": "_impulsiveness",
+    "laf_db": "_impulsiveness",
+    "prominence": "_impulsiveness",
+    "P_REF_PA": "_levels",
+    "SoundLevels": "_levels",
+    "energy_mean_db": "_levels",
+    "fast_time_weighted": "_levels",
+    "rattle_episodes": "_levels",
+    "sound_levels": "_levels",
+    "Loudness": "_loudness",
+    "loudness": "_loudness",
+    "RunAcoustics": "_run",
+    "channel_calibration": "_run",
+    "run_acoustics": "_run",
+}
 
 __all__ = [
     "Loudness", "NOMINAL_THIRD_OCTAVE_HZ", "P_REF_PA", "RunAcoustics", "SoundLevels",
@@ -25,3 +63,16 @@ __all__ = [
     "Ecma418", "Onsets", "adjustment_db", "campaign_background", "ecma418", "ecma418_available",
     "episode_psychoacoustics", "find_onsets", "laf_db", "prominence",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'rattle_lab.acoustics' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
