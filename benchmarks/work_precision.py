@@ -2,7 +2,7 @@
 
 Run ``python benchmarks/work_precision.py [--quick]``.  For each case, every
 method's impact log is compared with an independent 40-digit reference (the
-mpmath closed form of :mod:`rattle_lab.model.sdf._reference`), and a table of run
+mpmath closed form of :mod:`tests/sdf_reference.py <sdf_reference>`), and a table of run
 time, largest impact-time and impact-velocity error, and missed / spurious
 impacts is printed; a work-precision plot goes to
 ``benchmarks/out/work_precision.png`` and the numbers to
@@ -15,7 +15,7 @@ Methods:
   warm-up call; the first call (numba compile or cache load) is reported apart;
 * ``rk4-thesis`` at h = T/50, T/200 (the thesis's), T/1000, T/5000;
 * ``solve_ivp`` RK45 and DOP853 at rtol = atol = 1e-3, 1e-6, 1e-9, 1e-12, with a
-  terminal event and restarts (:func:`rattle_lab.model.sdf._reference.scipy_impacts`).
+  terminal event and restarts (:func:`sdf_reference.scipy_impacts` in ``tests/``).
 
 What is compared (also printed above the table): impacts with ``v_in >= V_MIN``
 in the leading window over which the reference itself is well conditioned:
@@ -44,10 +44,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests"))  # the independent references live with the tests
 
 import mpmath
 
-from rattle_lab.model.sdf._reference import mpmath_impacts, scipy_impacts
+from sdf_reference import mpmath_impacts, scipy_impacts  # noqa: E402
 from rattle_lab.model.sdf._rk4_thesis import run_rk4_thesis
 
 OUT = Path(__file__).resolve().parent / "out"

@@ -1,4 +1,4 @@
-"""Tests of the independent references in ``rattle_lab.model.sdf._reference``.
+"""Tests of the independent references in ``tests/sdf_reference.py``.
 
 The closed form is checked against ``mpmath.odefun`` (Taylor series at the
 working precision), the impact search against an analytic grazing impact, the
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.model.sdf._reference import (
+from sdf_reference import (
     check_closed_form_against_odefun,
     closed_form_xv,
     mpmath_impacts,

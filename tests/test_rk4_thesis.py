@@ -1,7 +1,7 @@
 """Tests of the thesis's RK4 integrator (Appendix A.1 ``evolve``), against independent references.
 
 References: the closed-form linear solution evaluated in mpmath
-(:func:`rattle_lab.model.sdf._reference.closed_form_xv`, itself checked against
+(:func:`sdf_reference.closed_form_xv`, itself checked against
 ``mpmath.odefun`` in ``test_reference.py``), ``solve_ivp`` DOP853 at rtol 1e-12
 (checked against the mpmath reference there to 1e-9), and the analytic release
 time from the stop.
@@ -18,7 +18,7 @@ import pytest
 from scipy.optimize import brentq
 
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.model.sdf._reference import closed_form_xv, scipy_impacts
+from sdf_reference import closed_form_xv, scipy_impacts
 from rattle_lab.model.sdf._rk4_thesis import run_rk4_thesis
 
 # A run that never reaches the stop: |x| < 0.5 throughout.

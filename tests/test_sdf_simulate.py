@@ -1,6 +1,6 @@
 """The exact event-driven simulator: references, grazing, chatter, sticking, invariants.
 
-Reference for impacts: :func:`rattle_lab.model.sdf._reference.mpmath_impacts`, an
+Reference for impacts: :func:`sdf_reference.mpmath_impacts`, an
 independent event-driven solver that evaluates the closed form at 30 digits and
 locates impacts with its own root scan.  Tolerance for impact times and
 velocities: 1e-11.  The double-precision closed form has an absolute error of a
@@ -19,7 +19,7 @@ import pytest
 
 from rattle_lab.exceptions import ParameterError, SimulationError
 from rattle_lab.model.sdf import SDFParams, SDFState, particular_state, simulate
-from rattle_lab.model.sdf._reference import mpmath_impacts
+from sdf_reference import mpmath_impacts
 
 REF_CASES = {
     "1/1 orbit": (0.2, 1.0, 0.05, 0.6, 0.0, 0.0, 0.0, 40.0),

@@ -1,7 +1,7 @@
 """Independent high-precision references for impact sequences of the SDF oscillator.
 
-Used by the tests and the benchmarks to judge the simulators; not part of the
-public API.  Two references, sharing no code with the simulators:
+Used by the tests and the benchmarks to judge the simulators (a test helper, not a
+test module; it is not shipped with the package).  Two references, sharing no code with the simulators:
 
 * :func:`mpmath_impacts`: event-driven, with the closed-form solution between
   events evaluated in mpmath at ``dps`` digits, and an impact search that
