@@ -12,10 +12,16 @@ Treat the files as read-only: they are shared by every test in the session.
   ``/truth/thresholds``.
 * ``synthetic_noisy_record``: ``synthetic/noisy_lab.toml``: fan tone, strong shaker
   harmonics, strong noise, input ranges close to the signals.
+* ``small_campaign_record``: ``tests/data/small_campaign.toml``, the default scene shortened
+  to 18 s for the tests of plumbing.
+
+Real records measured by others are found in one place, :data:`REALDATA`
+(:func:`realdata` skips a test when its file is absent).
 """
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -26,6 +32,19 @@ from rattle_lab.rig import write_synthetic
 
 CHECKOUT = Path(__file__).resolve().parents[1]
 SCENES = CHECKOUT / "synthetic"
+#: The real records measured by others (``shared/realdata`` beside the checkout, see its
+#: README; not committed): ``RATTLE_LAB_REALDATA`` points elsewhere.
+REALDATA = Path(os.environ.get("RATTLE_LAB_REALDATA",
+                               CHECKOUT.parent / "shared" / "realdata")).resolve()
+
+
+def realdata(relative: str) -> Path:
+    """The real record ``relative`` to :data:`REALDATA`; the test is skipped if it is absent."""
+    path = REALDATA / relative
+    if not path.is_file():
+        pytest.skip(f"real data not available: {path} (set RATTLE_LAB_REALDATA to the "
+                    "shared/realdata folder)")
+    return path
 
 
 def find_entry_point(name: str = "rattle-lab") -> Path:

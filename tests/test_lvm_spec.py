@@ -22,7 +22,7 @@ import pytest
 from rattle_lab.exceptions import FileFormatError
 from rattle_lab.records import read
 from rattle_lab.records._readers.lvm import LvmHeaderWarning, parse_lvm
-from test_realdata_ingest import realdata
+from conftest import realdata
 
 # two channels of unequal length and rate per segment (ragged columns), two writes
 A_PER_SEG, B_PER_SEG = 6, 3

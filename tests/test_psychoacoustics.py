@@ -236,7 +236,7 @@ def test_real_clap_is_one_prominent_impulse():
 
     from rattle_lab.records import read
 
-    from test_realdata_ingest import realdata
+    from conftest import realdata
 
     root = Path(__file__).resolve().parents[1]
     path = realdata("clap/rir_clap.wav")   # the existing helper (RATTLE_LAB_REALDATA)

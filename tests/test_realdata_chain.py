@@ -24,24 +24,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import realdata
 
 from rattle_lab.records import read
 from rattle_lab.records._readers.lvm import LvmHeaderWarning, parse_lvm
 from record_factory import run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
-REALDATA = (ROOT / ".." / "shared" / "realdata").resolve()
 MAPPINGS = ROOT / "data_schema" / "mappings"
 
-pytestmark = pytest.mark.skipif(not REALDATA.is_dir(),
-                                reason=f"real records not available: {REALDATA} is absent")
-
-
-def _real(rel: str) -> Path:
-    path = REALDATA / rel
-    if not path.is_file():
-        pytest.skip(f"real record {path} is absent")
-    return path
 
 
 def _bracket(x: np.ndarray, fs: float, t0: float, quiet: slice, after: int) -> tuple[float, float]:
@@ -59,7 +50,7 @@ def _fit(store: Path, *extra: str) -> dict:
 
 
 def test_droptable_one_shock_per_channel_at_its_onset(tmp_path):
-    lvm = _real("droptable/Test_001.lvm")
+    lvm = realdata("droptable/Test_001.lvm")
     store = tmp_path / "drop.h5"
     proc = run_cli("ingest", str(lvm), "--mapping", str(MAPPINGS / "droptable_lvm.toml"),
                    "-o", str(store))
@@ -89,7 +80,7 @@ def test_droptable_one_shock_per_channel_at_its_onset(tmp_path):
 
 
 def test_hammer_folder_detects_on_the_force_and_pairs_the_response(tmp_path):
-    npy = _real("hammer/measurements_1.npy")
+    npy = realdata("hammer/measurements_1.npy")
     hits = tmp_path / "hits"
     hits.mkdir()
     data = np.load(npy)
@@ -127,7 +118,7 @@ def test_hammer_folder_detects_on_the_force_and_pairs_the_response(tmp_path):
 
 
 def test_forced_shock_lvm_without_x_column_reads():
-    lvm = _real("forced_shock/vibration_0.2.lvm")
+    lvm = realdata("forced_shock/vibration_0.2.lvm")
     parsed = parse_lvm(lvm)
     names = [c.name for c in parsed.channels]
     # X_Columns No, but an empty first field under X_Value on every row: nothing shifts
@@ -163,7 +154,7 @@ def test_forced_shock_one_shock_per_accelerometer_none_in_the_sine(tmp_path):
     above 0.1 % of its peak (sample 6294) to its peak (6600).  The file's two Delta_X
     disagree by 3.4 % (0.1 s at 4 s), so the comparison is in samples of one acquisition.
     """
-    lvm = _real("forced_shock/vibration_0.2.lvm")
+    lvm = realdata("forced_shock/vibration_0.2.lvm")
     store = tmp_path / "forced.h5"
     # the quality scan flags the commanded pulse's exact zeros as clipping (and the two
     # clocks): ingested with the flags kept

@@ -19,24 +19,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import realdata
 
 from rattle_lab.detect import (ImpactParams, cross_correlation_delay, detect_impacts,
                                sound_peaks)
 from rattle_lab.records import read
 
 ROOT = Path(__file__).resolve().parents[1]
-REALDATA = (ROOT / ".." / "shared" / "realdata").resolve()
 MAPPINGS = ROOT / "data_schema" / "mappings"
 SHOCK = ImpactParams(on=100.0, off=10.0, min_separation_s=0.5)
 
-pytestmark = pytest.mark.skipif(not REALDATA.is_dir(),
-                                reason=f"real records not available: {REALDATA} is absent")
 
 
 def _read(rel: str, mapping: str):
-    path = REALDATA / rel
-    if not path.is_file():
-        pytest.skip(f"real record {path} is absent")
+    path = realdata(rel)
     with warnings.catch_warnings():   # uncalibrated / assumed units are flagged by the reader
         warnings.simplefilter("ignore")
         return read(path, mapping=MAPPINGS / mapping)

@@ -7,26 +7,17 @@ in ``data_schema/mappings/``.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import realdata
 
 from rattle_lab.store import ingest, open_stored_record, read_catalogue
 from rattle_lab.records import UncalibratedWarning, read
 
 REPO = Path(__file__).resolve().parents[1]
-REALDATA = Path(os.environ.get("RATTLE_LAB_REALDATA", REPO.parent / "shared" / "realdata"))
 MAPPINGS = REPO / "data_schema" / "mappings"
-
-
-def realdata(relative: str) -> Path:
-    path = REALDATA / relative
-    if not path.is_file():
-        pytest.skip(f"real data not available: {path} (set RATTLE_LAB_REALDATA to the "
-                    "shared/realdata folder)")
-    return path
 
 
 def _unchanged(path: Path):
