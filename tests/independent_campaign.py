@@ -66,6 +66,7 @@ class Chain:
     mic_floor_m: float = 0.9        # extra path of the floor reflection
     pa_per_m_s: float = 4.0
     declare_delay: bool = True
+    declare_filter: bool = False    # the decoder's family, order, cut-off and rate (schema v2)
     declare_measurand: bool = True
     decoder: str = "fir"            # "fir" | "butterworth" | "bessel"
     decoder_order: int = 4
@@ -351,6 +352,10 @@ def write_campaign(path: Path, plant: Plant, chain: Chain, runs: list[dict], see
                 d.attrs["measurand"] = chain.measurand
             if v2 and chain.declare_delay:
                 d.attrs["group_delay_s"] = chain.velocity_delay_s
+            if v2 and chain.declare_filter:   # a digital decoder at the record's rate
+                d.attrs.update({"filter_type": chain.decoder, "filter_order": chain.decoder_order,
+                                "filter_cutoff_hz": chain.decoder_cutoff_hz,
+                                "filter_sample_rate_hz": chain.fs_hz})
             for name, qty, units in (("plate", "plate_acceleration", "m/s^2"),
                                      ("base", "base_acceleration", "m/s^2"),
                                      ("mic", "sound_pressure", "Pa")):

@@ -45,7 +45,8 @@ def test_records_public_surface_is_pinned():
         "write_tree", "record_to_tree", "record_from_tree", "load_group", "as_source",
         "DEFAULT_CHUNK_SAMPLES", "LinkPolicy", "link_policy", "ChannelChecker", "TimestampChecker",
         "Participation", "PlateF1", "plate_model_f1", "resolve_participation",
-        "channel_time_offset_s", "FLAG_PARTICIPATION_ASSUMED", "FLAG_MEASURAND_UNDECLARED",
+        "channel_time_offset_s", "declared_delay_s", "filter_group_delay_s", "FILTER_TYPES",
+        "FLAG_PARTICIPATION_ASSUMED", "FLAG_MEASURAND_UNDECLARED",
         "FLAG_MEASURAND_ABSOLUTE"]
     assert all(hasattr(rattle_lab.records, name) for name in rattle_lab.records.__all__)
 

@@ -149,7 +149,8 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
         # the data cannot check the declaration
         return ()
     if delay_contradicted(DelayEstimate(d * fs, se * fs, n)):
-        return (f"{FLAG_DELAY_CONTRADICTED}: after the declared group_delay_s the velocity "
+        return (f"{FLAG_DELAY_CONTRADICTED}: after the declared delay (group_delay_s, or the "
+                f"declared filter's) the velocity "
                 f"still lags the plate accelerometer by {what}; the declared delay is used",)
     return ()
 

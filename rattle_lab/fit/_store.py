@@ -25,7 +25,8 @@ from rattle_lab.acoustics import campaign_background, run_acoustics  # [issue 17
 from rattle_lab.detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
                                impact_pattern, impulse_train, rms_spl_db, sound_peaks)
 from rattle_lab.exceptions import RattleLabError
-from rattle_lab.records import FLAG_MEASURAND_UNDECLARED, Participation, resolve_participation
+from rattle_lab.records import (FLAG_MEASURAND_UNDECLARED, Participation, declared_delay_s,
+                                resolve_participation)
 from rattle_lab.fit._results import RunResult, StoreFit
 from rattle_lab.store import (input_hashes, open_stored_record, read_catalogue)
 from rattle_lab.detect.thresholds import Threshold, ramp_threshold, tabulate_thresholds
@@ -104,7 +105,7 @@ def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Map
     f_end = getattr(run, "freq_end_hz", None)
     f_fit = freq if (math.isfinite(freq) and 0 < freq < fs / 2
                      and (f_end is None or f_end == freq)) else None
-    delay_declared = vel is not None and getattr(vel, "group_delay_s", None) is not None
+    delay_declared = vel is not None and declared_delay_s(vel) is not None
     log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=params,
                          start_time_s=t0, excitation_freq_hz=f_fit,
                          velocity_delay_declared=delay_declared)

@@ -11,8 +11,9 @@ from ._errors import (ClippingError, ClippingWarning, DataQualityError, DropoutE
                       InfValueError, InfValueWarning, MappingError, NaNGapError, NaNGapWarning,
                       NonMonotonicTimestampsError, NonMonotonicTimestampsWarning,
                       SampleRateMismatchError, SampleRateMismatchWarning, UncalibratedWarning)
-from ._chain import (FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED, FLAG_PARTICIPATION_ASSUMED,
-                     Participation, PlateF1, channel_time_offset_s, plate_model_f1,
+from ._chain import (FILTER_TYPES, FLAG_MEASURAND_ABSOLUTE, FLAG_MEASURAND_UNDECLARED,
+                     FLAG_PARTICIPATION_ASSUMED, Participation, PlateF1, channel_time_offset_s,
+                     declared_delay_s, filter_group_delay_s, plate_model_f1,
                      resolve_participation)
 from ._convert import record_from_tree, record_to_tree
 from ._h5 import LinkPolicy, link_policy
@@ -87,7 +88,7 @@ __all__ = [
     "PlateF1",
     "plate_model_f1",
     "resolve_participation",
-    "channel_time_offset_s",
+    "channel_time_offset_s", "declared_delay_s", "filter_group_delay_s", "FILTER_TYPES",
     "FLAG_PARTICIPATION_ASSUMED",
     "FLAG_MEASURAND_UNDECLARED",
     "FLAG_MEASURAND_ABSOLUTE",

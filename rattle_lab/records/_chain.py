@@ -9,7 +9,9 @@ What a fit needs to know about the chain and that v1 records could not say:
 * per velocity channel its ``measurand`` (:data:`MEASURANDS`) and ``sign_convention``;
 * per channel the known ``group_delay_s`` of its filters (vibrometer decoder, anti-alias),
   which :func:`channel_time_offset_s` subtracts together with ``start_time_s`` before two
-  channels are paired.
+  channels are paired; or, where the lab knows the filter's setting but not its delay, the
+  filter itself (``filter_type``, ``filter_order``, ``filter_cutoff_hz`` and, for a digital
+  filter, ``filter_sample_rate_hz``), whose delay :func:`filter_group_delay_s` computes.
 
 When the participation is neither given nor computable, 1.0 is assumed and the named
 data-quality flag :data:`FLAG_PARTICIPATION_ASSUMED` says so.
@@ -28,6 +30,10 @@ from rattle_lab.exceptions import ParameterError
 MEASURANDS = ("panel_absolute", "panel_relative_to_striker")
 #: Sign conventions of a velocity or acceleration channel.
 SIGN_CONVENTIONS = ("toward_striker_positive", "away_from_striker_positive")
+#: Low-pass filter families a channel may declare (``filter_type``).
+FILTER_TYPES = ("butterworth", "bessel")
+#: Highest ``filter_order`` accepted.
+MAX_FILTER_ORDER = 16
 
 #: Data-quality flag: no participation in the record or on the command line; 1.0 assumed.
 FLAG_PARTICIPATION_ASSUMED = "participation_assumed"
@@ -189,19 +195,96 @@ def resolve_participation(rigs: list[Any], given: float | None, given_source: st
     return Participation(first.value, first.source, flags)
 
 
+def check_filter(filter_type: Any, filter_order: Any, filter_cutoff_hz: Any,
+                 filter_sample_rate_hz: Any = None) -> str | None:
+    """What is wrong with a declared low-pass filter (None: nothing, or no filter declared).
+
+    The three attributes come together; ``filter_sample_rate_hz`` (a digital filter) needs
+    them and a cut-off below its Nyquist frequency.
+    """
+    given = [v is not None for v in (filter_type, filter_order, filter_cutoff_hz)]
+    if not any(given):
+        return ("filter_sample_rate_hz needs filter_type, filter_order and filter_cutoff_hz"
+                if filter_sample_rate_hz is not None else None)
+    if not all(given):
+        return "filter_type, filter_order and filter_cutoff_hz are declared together"
+    if filter_type not in FILTER_TYPES:
+        return f"filter_type is one of {', '.join(FILTER_TYPES)}, was {filter_type!r}"
+    if isinstance(filter_order, bool) or not isinstance(filter_order, (int, float)) or \
+            filter_order != int(filter_order) or not 1 <= filter_order <= MAX_FILTER_ORDER:
+        return f"filter_order is an integer from 1 to {MAX_FILTER_ORDER}, was {filter_order!r}"
+    if not (isinstance(filter_cutoff_hz, (int, float)) and math.isfinite(filter_cutoff_hz)
+            and filter_cutoff_hz > 0):
+        return f"filter_cutoff_hz is a frequency > 0 Hz, was {filter_cutoff_hz!r}"
+    if filter_sample_rate_hz is not None and not (
+            isinstance(filter_sample_rate_hz, (int, float))
+            and math.isfinite(filter_sample_rate_hz)
+            and filter_cutoff_hz < filter_sample_rate_hz / 2):
+        return (f"filter_sample_rate_hz must exceed twice filter_cutoff_hz "
+                f"({filter_cutoff_hz!r} Hz), was {filter_sample_rate_hz!r}")
+    return None
+
+
+def filter_group_delay_s(filter_type: str, order: int, cutoff_hz: float,
+                         sample_rate_hz: float | None = None) -> float:
+    """Low-frequency group delay, s, of a declared low-pass filter: the delay with which an
+    event (an impact's velocity step, whose centroid a low-pass keeps at ``t + tau(0)``)
+    shows in the channel.
+
+    The filter is the ``filter_type`` low-pass of ``order`` with its -3 dB point at
+    ``cutoff_hz`` (Bessel: magnitude-normalised, as a data sheet quotes it); analog, or, with
+    ``sample_rate_hz``, digital at that rate by the bilinear transform with the cut-off
+    prewarped (what ``scipy.signal.butter(..., fs=)`` designs).  For an all-pole prototype
+    with poles ``p_k`` the delay at DC is ``sum(-Re p_k / |p_k|**2)``; the bilinear transform
+    keeps it, at the prewarped cut-off ``2 fs tan(pi fc / fs)``.
+
+    >>> round(filter_group_delay_s("butterworth", 4, 10e3) * 1e6, 2)   # 1 / (wc sin(pi/8))
+    41.59
+    >>> round(filter_group_delay_s("butterworth", 4, 10e3, 25600.0) * 1e6, 2)
+    18.26
+    """
+    problem = check_filter(filter_type, order, cutoff_hz, sample_rate_hz)
+    if problem is not None:
+        raise ParameterError(problem)
+    import numpy as np
+    from scipy.signal import besselap, buttap
+
+    _, poles, _ = buttap(int(order)) if filter_type == "butterworth" else \
+        besselap(int(order), norm="mag")
+    wc = 2 * math.pi * cutoff_hz if sample_rate_hz is None else \
+        2 * sample_rate_hz * math.tan(math.pi * cutoff_hz / sample_rate_hz)
+    p = np.asarray(poles) * wc
+    return float(np.sum(-p.real / np.abs(p) ** 2))
+
+
+def declared_delay_s(channel: Any) -> float | None:
+    """The delay a channel declares, s: its ``group_delay_s``, else its declared filter's
+    (:func:`filter_group_delay_s`), else None (nothing declared)."""
+    delay = getattr(channel, "group_delay_s", None)
+    if delay is not None:
+        return float(delay)
+    kind = getattr(channel, "filter_type", None)
+    if kind is None:
+        return None
+    return filter_group_delay_s(kind, int(channel.filter_order), float(channel.filter_cutoff_hz),
+                                getattr(channel, "filter_sample_rate_hz", None))
+
+
 def channel_time_offset_s(channel: Any) -> float:
     """Seconds to add to a channel's sample times to get the time of the physical event.
 
-    ``-group_delay_s``: a filter of known group delay (vibrometer decoder, anti-alias)
-    shows an event ``group_delay_s`` late.  (``start_time_s`` is honoured by the caller's
-    time base.)
+    ``-delay``: a filter of known group delay (vibrometer decoder, anti-alias) shows an
+    event that much late (:func:`declared_delay_s`: ``group_delay_s``, or the declared
+    filter's).  (``start_time_s`` is honoured by the caller's time base.)
     """
-    delay = getattr(channel, "group_delay_s", None)
-    return -float(delay) if delay else 0.0
+    delay = declared_delay_s(channel)
+    return -delay if delay else 0.0
 
 
-__all__ = ["ASSUMED_POISSON_RATIO", "FLAG_MEASURAND_ABSOLUTE", "FLAG_MEASURAND_UNDECLARED",
+__all__ = ["ASSUMED_POISSON_RATIO", "FILTER_TYPES", "FLAG_MEASURAND_ABSOLUTE",
+           "FLAG_MEASURAND_UNDECLARED", "MAX_FILTER_ORDER",
            "FLAG_PARTICIPATION_ASSUMED", "FLAG_POISSON_ASSUMED", "MEASURANDS", "PLATE_MATERIALS",
            "Participation", "PlateF1", "SIGN_CONVENTIONS", "channel_time_offset_s",
+           "check_filter", "declared_delay_s", "filter_group_delay_s",
            "participation_from_plate", "plate_model_f1", "resolve_participation",
            "rig_participation"]

@@ -27,7 +27,8 @@ RUN_FIELDS = ("protocol", "excitation_freq_hz", "freq_end_hz", "freq_step_hz", "
 CHANNEL_FIELDS = ("quantity", "units", "sample_rate_hz", "start_time_s", "timestamps",
                   "sensitivity", "sensitivity_units", "sensor_id", "sensor_model", "sensor_serial",
                   "calibration_date", "range_min", "range_max", "units_assumed", "description",
-                  "measurand", "sign_convention", "group_delay_s", "adc_gain", "adc_offset")
+                  "measurand", "sign_convention", "group_delay_s", "adc_gain", "adc_offset",
+                  "filter_type", "filter_order", "filter_cutoff_hz", "filter_sample_rate_hz")
 #: Run attributes of an up-down run (schema v2), consumed when the reader splits it.
 UP_DOWN_FIELDS = ("level_peak", "freq_peak_hz", "turn_time_s")
 TRUTH_FIELDS = ("gap_m", "f_s_hz", "zeta", "e", "participation", "acoustic_law")
@@ -73,7 +74,8 @@ def schema_version_of(record: Record) -> int:
         for ch in run.channels:
             if ch.measurand is not None or ch.sign_convention is not None or \
                     ch.group_delay_s is not None or ch.adc_gain is not None or \
-                    ch.adc_offset is not None:
+                    ch.adc_offset is not None or ch.filter_type is not None or \
+                    ch.filter_sample_rate_hz is not None:
                 return SCHEMA_VERSION_CHAIN
     return SCHEMA_VERSION
 

@@ -215,6 +215,12 @@ class Channel:
     group_delay_s : float or None
         Known group delay of the channel's filters (vibrometer decoder, anti-alias), s:
         an event shows ``group_delay_s`` late; compensated before channels are paired.
+    filter_type, filter_order, filter_cutoff_hz, filter_sample_rate_hz : str, int, float, float or None
+        The channel's low-pass filter where its delay is not known (schema v2): family
+        (``"butterworth"`` or ``"bessel"``), order, -3 dB cut-off in Hz and, for a digital
+        filter, the rate it runs at (absent: analog).  Its low-frequency group delay
+        (:func:`~rattle_lab.records.filter_group_delay_s`) is compensated like
+        ``group_delay_s``, which takes precedence when both are given.
     adc_gain, adc_offset : float or None
         Raw ADC counts (schema v2): the stored integers are counts, and
         ``adc_gain * count + adc_offset`` is the value in :attr:`units` (``adc_gain`` > 0, in
@@ -244,10 +250,20 @@ class Channel:
     group_delay_s: float | None = None
     adc_gain: float | None = None
     adc_offset: float | None = None
+    filter_type: str | None = None
+    filter_order: int | None = None
+    filter_cutoff_hz: float | None = None
+    filter_sample_rate_hz: float | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "data", as_source(self.data))
+        from ._chain import check_filter
+
+        problem = check_filter(self.filter_type, self.filter_order, self.filter_cutoff_hz,
+                               self.filter_sample_rate_hz)
+        if problem is not None:
+            raise ParameterError(f"channel {self.name!r}: {problem}")
         if self.adc_gain is not None and not (np.isfinite(self.adc_gain) and self.adc_gain > 0):
             raise ParameterError(f"channel {self.name!r}: `adc_gain` must be finite and > 0, "
                                  f"was {self.adc_gain}")

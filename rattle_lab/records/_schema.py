@@ -20,6 +20,7 @@ import jsonschema
 
 from rattle_lab._resources import find_resource
 from rattle_lab.exceptions import SchemaError
+from ._chain import check_filter
 from ._errors import DuplicateRunError
 
 #: The schema's file among the resources of kind "schema" (:mod:`rattle_lab._resources`).
@@ -30,7 +31,8 @@ CHANNEL_DTYPES = frozenset({"f4", "f8", "i1", "i2", "i4", "i8", "u1", "u2", "u4"
 
 #: Attributes that layout version 2 adds (the measurement chain), by group.
 V2_RIG_ATTRS = ("modal_participation", "plate_poisson_ratio")
-V2_CHANNEL_ATTRS = ("measurand", "sign_convention", "group_delay_s", "adc_gain", "adc_offset")
+V2_CHANNEL_ATTRS = ("measurand", "sign_convention", "group_delay_s", "adc_gain", "adc_offset",
+                    "filter_type", "filter_order", "filter_cutoff_hz", "filter_sample_rate_hz")
 V2_RUN_ATTRS = ("detect_channel", "level_peak", "freq_peak_hz", "turn_time_s")
 
 
@@ -219,6 +221,11 @@ def _check_in_code(tree: dict[str, Any], label: str) -> None:
                                   f"({1.0 / max(f_exc, run['attrs'].get('freq_end_hz') or f_exc):.6g} s); "
                                   "a filter delay is microseconds to milliseconds (was it given "
                                   "in another unit?)")
+            problem = check_filter(attrs.get("filter_type"), attrs.get("filter_order"),
+                                   attrs.get("filter_cutoff_hz"),
+                                   attrs.get("filter_sample_rate_hz"))
+            if problem is not None:
+                raise SchemaError(f"{label}: {path}: the declared filter: {problem}")
             if "measurand" in attrs and attrs.get("quantity") != "plate_velocity":
                 raise SchemaError(f"{label}: {path}: attribute 'measurand': only a plate_velocity "
                                   f"channel has one (this is {attrs.get('quantity')!r})")
