@@ -90,7 +90,7 @@ def test_coarse_lag_and_delay_estimators():
                        decoder_cutoff_hz=2000.0, decoder_delay_s=2.7 / 51200.0,
                        ring_in_velocity=False), marks=pytest.mark.slow),
     # a ringing decoder: 8th-order Butterworth, 3 kHz, 25.6 kHz, +1.2 samples.  NOT reached:
-    # the step centroid is 0.47 sample early (truncated ringing tail), see docs/chain_timing.md
+    # the step centroid is 0.47 sample early (truncated ringing tail), see docs/explanation/chain_timing.md
     pytest.param(Chain(decoder="butterworth", decoder_order=8, decoder_cutoff_hz=3000.0,
                        decoder_delay_s=1.2 / 25600.0, ring_in_velocity=False),
                  marks=[pytest.mark.slow, pytest.mark.xfail(

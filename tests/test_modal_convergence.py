@@ -79,7 +79,8 @@ def test_band_mobility_approaches_one_over_z_where_the_plain_sum_has_none(thesis
 
 
 @pytest.mark.xfail(strict=True, reason="issue 24 target not met: the one-element correction has "
-                   "0.53/Z to 0.76/Z in the two octaves above its cut (measured, docs/modal_convergence.md)")
+                   "0.53/Z to 0.76/Z in the two octaves above its cut "
+                   "(measured, docs/explanation/modal_convergence.md)")
 def test_band_mobility_within_ten_percent_of_one_over_z(thesis16):
     Z = _z_inf(THESIS)
     assert np.all(np.abs(_band_means(thesis16, OCTAVES_HZ) * Z - 1.0) < 0.10)

@@ -6,7 +6,7 @@ amplitude-modulated at 70 Hz, is 1 asper_HMS (free frontal field).  The signals 
 here with NumPy from those definitions.  Tolerance 0.1 %: the calibration factors are
 printed with four to five significant digits, and 1 s of signal (instead of the
 standard's longer ones) moves the time averages by less than 3e-4 (measured on 1 s, 2 s
-and 5 s: docs/psychoacoustics.md).  Needs the optional package sottek-hearing-model;
+and 5 s: docs/explanation/psychoacoustics.md).  Needs the optional package sottek-hearing-model;
 each metric costs several seconds of CPU per second of sound, hence ``slow``.
 """
 

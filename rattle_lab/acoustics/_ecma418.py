@@ -15,7 +15,7 @@ reference signal                              sottek-hm     MoSQITo 1.2.1
 1 kHz, 100 % AM at 70 Hz, 60 dB: roughness    0.9999955     0.995 (``roughness_ecma``)
 ============================================  ============  ============================
 
-(5 s signals at 48 kHz, free frontal field; ``docs/psychoacoustics.md``.)  Only
+(5 s signals at 48 kHz, free frontal field; ``docs/explanation/psychoacoustics.md``.)  Only
 sottek-hearing-model gives all three metrics and reproduces all three anchors; it is
 used here.  It is an *optional* dependency (``pip install rattle-lab[ecma418]``): it
 is licensed AGPL-3.0 (rattle_lab is MIT) and pulls in PyQt6.  Without it the metrics

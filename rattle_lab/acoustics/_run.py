@@ -136,7 +136,7 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
     field_type : {"free", "diffuse"}
         Sound field of the loudness.
     with_loudness : bool
-        Compute ISO 532-1 loudness (compiled; see docs/throughput.md for its rate).
+        Compute ISO 532-1 loudness (compiled; see docs/explanation/throughput.md for its rate).
     episode_gap_s : float
         Impacts further apart than this start a new episode, s.
     ecma418_s : float
