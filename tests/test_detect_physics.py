@@ -106,7 +106,7 @@ def test_no_offset_is_taken_where_the_flights_do_not_close_at_the_gap():
     """The hand-built record draws each impact's velocity at random at fixed times, so its
     flights end at different displacements: their mean velocities disagree, the premise of
     :func:`velocity_offset` fails, and nothing is taken off (the velocities stay exact)."""
-    from rattle_lab.detect._impacts import velocity_offset
+    from rattle_lab.detect._offset import velocity_offset
 
     v, a, ti, vin, _ = _record()
     log = detect_impacts(FS, velocity_m_s=v, accel_ms2=a, excitation_freq_hz=F_HZ)

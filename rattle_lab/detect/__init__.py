@@ -6,8 +6,9 @@ Parameters are in seconds and SI units; samples are derived with
 
 from ._common import n_samples_of, parabolic_peak, robust_sigma
 from ._flights import RingingProblem, campaign_ring_modes
-from ._impacts import (RINGING_RESIDUAL_RATIO, ImpactLog, ImpactParams, detect_impacts,
-                       trigger_onsets)
+from ._impacts import ImpactLog, ImpactParams, detect_impacts
+from ._ringing import RINGING_RESIDUAL_RATIO
+from ._trigger import trigger_onsets
 from ._pairing import base_velocity_at, onto_grid
 from ._shock import detect_shock
 from ._timing import DelayEstimate, delay_contradicted, measurand_share

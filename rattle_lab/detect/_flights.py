@@ -3,7 +3,7 @@
 A vibrometer on the panel sees, besides the fundamental mode, the panel's higher modes
 that each impact excites; their velocity jumps at the impact with the fundamental's and
 rings down in a few milliseconds.  Fits of the velocity either side of an impact over a
-few milliseconds (:func:`~rattle_lab.detect._impacts.jump_velocities`) read both jumps:
+few milliseconds (:func:`~rattle_lab.detect._local_fits.jump_velocities`) read both jumps:
 on the realistic lab scene ``e`` from their ratio came out 16 % high.  This module models
 a whole run instead, all of it linear least squares around two small searches:
 

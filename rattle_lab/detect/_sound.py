@@ -20,7 +20,7 @@ from scipy import signal
 
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, n_samples_of, parabolic_peak
-from ._impacts import _LocalFit
+from ._local_fits import _LocalFit
 from ._spl import spl_db
 
 
