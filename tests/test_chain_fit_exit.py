@@ -33,15 +33,17 @@ def test_fit_with_every_run_skipped_exits_2_with_the_reasons(synthetic_threshold
     assert out["data_quality"] == []
 
 
-def test_fit_with_some_runs_analysed_exits_0(synthetic_campaign_record, tmp_path):
+def test_fit_with_some_runs_analysed_exits_0(small_campaign_record, tmp_path):
+    # the default scene shortened to 18 s (tests/data/small_campaign.toml): the same rig, ramps
+    # and fits, which is what this exit status and these notes depend on
     store = tmp_path / "store.h5"
-    ingest([synthetic_campaign_record], store, quiet=True)
+    ingest([small_campaign_record], store, quiet=True)
     proc = run_cli("fit", str(store), "--quiet")
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ""
     # the default scene's rig carries the plate's participation (about 1.24, not 1.0), and
     # the fit prints the record's own value (6 significant digits, as the table prints)
-    with h5py.File(synthetic_campaign_record, "r") as fh:
+    with h5py.File(small_campaign_record, "r") as fh:
         q = float(fh["rig"].attrs["modal_participation"])
     assert q == pytest.approx(1.24, abs=0.01)
     assert f"participation Q1/Q2 = {q:.6g} (rig modal_participation)" in proc.stdout
@@ -53,5 +55,6 @@ def test_fit_with_some_runs_analysed_exits_0(synthetic_campaign_record, tmp_path
     out = json.loads(run_cli("fit", str(store), "--json", "--quiet").stdout)
     z, ramp = out["fits"]["grazing"]["zeta"], out["fits"]["damping_ramp"]
     assert z["bias_rel"] == pytest.approx(z["value"] / ramp["value"] - 1, rel=1e-12)
-    assert z["bias_rel"] > 0.03          # the demo's 7 % (the scene's truth is 0.0085)
+    # the demo's 7 %; +14 % on this shortened scene (the scene's truth is 0.0085)
+    assert z["bias_rel"] > 0.03
     assert ramp["value"] == pytest.approx(0.0085, rel=0.01)

@@ -14,9 +14,11 @@ PIPELINES = Path(__file__).resolve().parents[1] / "pipelines"
 
 
 @pytest.fixture(scope="module")
-def bare_store(synthetic_campaign_record: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+def bare_store(small_campaign_record: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The shortened default scene, ingested and not fitted (what these tests check does not
+    depend on the record's length)."""
     store = tmp_path_factory.mktemp("clireport") / "store.h5"
-    ingest([synthetic_campaign_record], store)
+    ingest([small_campaign_record], store)
     return store
 
 
@@ -44,14 +46,14 @@ def test_report_errors_are_one_line_exit_2(case: str, bare_store: Path, tmp_path
     assert not out.exists()
 
 
-def test_run_pipeline_cli(synthetic_campaign_record: Path, tmp_path: Path) -> None:
+def test_run_pipeline_cli(small_campaign_record: Path, tmp_path: Path) -> None:
     pipe = tmp_path / "store_only.toml"
     pipe.write_text('[pipeline]\nname = "only"\noutputs = ["store"]\n')
-    proc = run_cli("run", str(pipe), str(synthetic_campaign_record), "--out", str(tmp_path))
+    proc = run_cli("run", str(pipe), str(small_campaign_record), "--out", str(tmp_path))
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == f"store\t{tmp_path / 'only.h5'}\n"
     assert "ingest: done" in proc.stderr
-    proc = run_cli("run", str(pipe), str(synthetic_campaign_record), "--out", str(tmp_path),
+    proc = run_cli("run", str(pipe), str(small_campaign_record), "--out", str(tmp_path),
                    "--quiet")
     assert proc.returncode == 0 and proc.stderr == ""
 

@@ -118,19 +118,35 @@ def _summary_json(result) -> str:  # type: ignore[no-untyped-def]
     return json.dumps(result.summary.to_dict(), sort_keys=True, default=str)
 
 
-def test_fit_store_on_local_cluster_equals_serial(cluster, tmp_path) -> None:  # type: ignore[no-untyped-def]
+@pytest.fixture(scope="module")
+def campaign_store(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """The 4-run campaign's store, shared by the tests that read it (``fit_store(...,
+    write=False)``); a test that hands it to the CLI copies it first."""
+    return _small_campaign(tmp_path_factory.mktemp("dask_campaign"))
+
+
+@pytest.fixture(scope="module")
+def serial_fit(campaign_store):  # type: ignore[no-untyped-def]
+    """The serial fit of :func:`campaign_store`, the reference of the scale-out tests."""
+    from rattle_lab.workflow import fit_store
+
+    return fit_store(campaign_store, write=False)
+
+
+def test_fit_store_on_local_cluster_equals_serial(cluster, campaign_store, serial_fit  # type: ignore[no-untyped-def]
+                                                  ) -> None:
     # Tasks open the store themselves on the worker processes; every fitted number and
     # every run's result must equal the serial run's (the same code on the same bytes).
     from rattle_lab.workflow import fit_store
 
-    store = _small_campaign(tmp_path)
-    serial = fit_store(store, write=False)
-    remote = fit_store(store, write=False, scheduler=cluster.scheduler_address)
+    serial = serial_fit
+    remote = fit_store(campaign_store, write=False, scheduler=cluster.scheduler_address)
     assert serial.summary.n_ok == 4
     assert _summary_json(remote) == _summary_json(serial)
 
 
-def test_a_worker_killed_mid_task_is_retried_nothing_lost_or_doubled(tmp_path) -> None:
+def test_a_worker_killed_mid_task_is_retried_nothing_lost_or_doubled(  # type: ignore[no-untyped-def]
+        campaign_store, serial_fit) -> None:
     # A worker process is killed (SIGKILL) while it runs a detection task: the nanny starts
     # a new one, the scheduler runs the lost task again, and the result holds every run once,
     # equal to the serial result.
@@ -144,8 +160,7 @@ def test_a_worker_killed_mid_task_is_retried_nothing_lost_or_doubled(tmp_path) -
 
     from rattle_lab.workflow import fit_store
 
-    store = _small_campaign(tmp_path)
-    serial = fit_store(store, write=False)
+    store, serial = campaign_store, serial_fit
     killed: list[int] = []
     with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0",
                       silence_logs=logging.CRITICAL) as lc, Client(lc) as client:
@@ -173,10 +188,16 @@ def test_a_worker_killed_mid_task_is_retried_nothing_lost_or_doubled(tmp_path) -
     assert _summary_json(remote) == _summary_json(serial)
 
 
-def test_cli_fit_with_a_scheduler_that_does_not_answer_is_one_line_exit_2(tmp_path) -> None:
+def test_cli_fit_with_a_scheduler_that_does_not_answer_is_one_line_exit_2(  # type: ignore[no-untyped-def]
+        campaign_store, tmp_path) -> None:
+    import shutil
+
     from record_factory import run_cli
 
-    store = _small_campaign(tmp_path, n_runs=1)
+    # the connection is tried before any run is detected: any store serves, a copy of the
+    # shared one (the command must not write to it, but a failure here should not spoil it)
+    store = tmp_path / "s.h5"
+    shutil.copyfile(campaign_store, store)
     proc = run_cli("fit", str(store), "--scheduler", "tcp://127.0.0.1:9", "--quiet")
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
