@@ -4,17 +4,54 @@ Parameters are in seconds and SI units; samples are derived with
 :func:`n_samples_of` (``round``).
 """
 
-from ._common import n_samples_of, parabolic_peak, robust_sigma
-from ._flights import RingingProblem, campaign_ring_modes
-from ._impacts import ImpactLog, ImpactParams, detect_impacts
-from ._ringing import RINGING_RESIDUAL_RATIO
-from ._trigger import trigger_onsets
-from ._pairing import base_velocity_at, onto_grid
-from ._shock import detect_shock
-from ._timing import DelayEstimate, delay_contradicted, measurand_share
-from ._patterns import PatternResult, impact_pattern, impacts_per_cycle
-from ._sound import SoundPeaks, cross_correlation_delay, impulse_train, sound_peaks
-from ._spl import P_REF_PA, a_weight, a_weighting_db, rms_spl_db, spl_db
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ._common import n_samples_of, parabolic_peak, robust_sigma
+    from ._flights import RingingProblem, campaign_ring_modes
+    from ._impacts import ImpactLog, ImpactParams, detect_impacts
+    from ._ringing import RINGING_RESIDUAL_RATIO
+    from ._trigger import trigger_onsets
+    from ._pairing import base_velocity_at, onto_grid
+    from ._shock import detect_shock
+    from ._timing import DelayEstimate, delay_contradicted, measurand_share
+    from ._patterns import PatternResult, impact_pattern, impacts_per_cycle
+    from ._sound import SoundPeaks, cross_correlation_delay, impulse_train, sound_peaks
+    from ._spl import P_REF_PA, a_weight, a_weighting_db, rms_spl_db, spl_db
+
+#: public name -> submodule that defines it; loaded on first use (SciPy's signal package, the
+#: flight model and the trigger only when detection runs)
+_LAZY: dict[str, str] = {
+    "n_samples_of": "_common",
+    "parabolic_peak": "_common",
+    "robust_sigma": "_common",
+    "RingingProblem": "_flights",
+    "campaign_ring_modes": "_flights",
+    "ImpactLog": "_impacts",
+    "ImpactParams": "_impacts",
+    "detect_impacts": "_impacts",
+    "RINGING_RESIDUAL_RATIO": "_ringing",
+    "trigger_onsets": "_trigger",
+    "base_velocity_at": "_pairing",
+    "onto_grid": "_pairing",
+    "detect_shock": "_shock",
+    "DelayEstimate": "_timing",
+    "delay_contradicted": "_timing",
+    "measurand_share": "_timing",
+    "PatternResult": "_patterns",
+    "impact_pattern": "_patterns",
+    "impacts_per_cycle": "_patterns",
+    "SoundPeaks": "_sound",
+    "cross_correlation_delay": "_sound",
+    "impulse_train": "_sound",
+    "sound_peaks": "_sound",
+    "P_REF_PA": "_spl",
+    "a_weight": "_spl",
+    "a_weighting_db": "_spl",
+    "rms_spl_db": "_spl",
+    "spl_db": "_spl",
+}
 
 __all__ = [
     "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "RingingProblem", "SoundPeaks",
@@ -24,3 +61,16 @@ __all__ = [
     "RINGING_RESIDUAL_RATIO", "base_velocity_at", "onto_grid", "detect_shock",
     "DelayEstimate", "delay_contradicted", "measurand_share",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'rattle_lab.detect' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

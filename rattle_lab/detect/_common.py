@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 
 from rattle_lab.exceptions import ParameterError
 
@@ -51,7 +50,9 @@ def detrended_abs(x: np.ndarray, n_window: int) -> np.ndarray:
     n_window = max(5, n_window | 1)
     if x.size < n_window:
         return np.abs(x - np.median(x)) if x.size else x.copy()
-    return np.abs(x - signal.savgol_filter(x, n_window, 3, mode="interp"))
+    from scipy.signal import savgol_filter  # here: `import rattle_lab.detect` stays light
+
+    return np.abs(x - savgol_filter(x, n_window, 3, mode="interp"))
 
 
 def parabolic_peak(y: np.ndarray, k: int) -> tuple[float, float]:

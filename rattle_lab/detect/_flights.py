@@ -67,7 +67,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.optimize import minimize
 
 #: A ringing pole decays at least this many times faster than the fundamental's free response.
 RING_DECAY_FACTOR = 5.0
@@ -291,6 +290,8 @@ class _Model:
             fs_grid = f0_hz * np.linspace(0.75, 1.3, 23)
             rss = [self.solve(f, sigma0)[0] for f in fs_grid]
             f1 = float(fs_grid[int(np.argmin(rss))])
+        from scipy.optimize import minimize  # here: importing detect stays light
+
         res = minimize(lambda p: self.solve(p[0], abs(p[1]))[0], np.array([f1, sigma0]),
                        method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 0.0,
                                                       "initial_simplex": [[f1, sigma0],
@@ -343,6 +344,8 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
                 return np.inf
             return model(fixed + ms).solve(fs_, sig_)[0]
         p0 = _pack(modes)
+        from scipy.optimize import minimize  # here: importing detect stays light
+
         sol = minimize(obj, p0, method="Nelder-Mead",
                        options={"maxfev": maxfev, "xatol": 1e-3, "fatol": 0.0,
                                 "initial_simplex": _simplex(p0, 0.05)})
@@ -586,6 +589,8 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
         _, f0, s0 = min(scan, key=lambda c: c[0])
         trial = modes + [(f0, s0)]
         p0 = _pack(trial)
+        from scipy.optimize import minimize  # here: importing detect stays light
+
         sol = minimize(objective, p0, method="Nelder-Mead",
                        options={"maxfev": 60 * len(trial), "xatol": 1e-3, "fatol": 0.0,
                                 "initial_simplex": _simplex(p0, 0.02)})

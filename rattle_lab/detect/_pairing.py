@@ -19,7 +19,6 @@ import math
 from fractions import Fraction
 
 import numpy as np
-from scipy import signal
 
 from rattle_lab.exceptions import ParameterError
 
@@ -59,6 +58,8 @@ def onto_grid(x: np.ndarray, fs_hz: float, t0_s: float, fs_target_hz: float, t0_
     if abs(float(ratio) - fs_target_hz / fs_hz) > 1e-9 * fs_target_hz / fs_hz:
         raise ParameterError(f"sample rates {fs_hz} Hz and {fs_target_hz} Hz are not in a ratio of "
                              f"integers up to {MAX_RATIO_TERMS}: cannot pair the channels")
+    from scipy import signal  # here: importing detect stays light
+
     y = x if ratio == 1 else signal.resample_poly(x, ratio.numerator, ratio.denominator,
                                                   padtype="line")
     # y[k] is at t0_s + k / fs_target; advance it by the fraction of a sample that puts

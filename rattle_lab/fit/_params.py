@@ -18,8 +18,9 @@ import numpy as np
 from rattle_lab._resources import read_pipeline_toml
 from rattle_lab.detect import ImpactParams
 from rattle_lab.exceptions import ParameterError
-from ._restitution import METHODS
 
+#: Methods of the fit of e to the disappearance thresholds (:func:`fit_restitution_down`).
+METHODS: tuple[str, ...] = ("ramp", "quasi-static")
 SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01, "channel": None}
 FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0,
             "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3,

@@ -42,6 +42,7 @@ from rattle_lab.detect import RINGING_RESIDUAL_RATIO
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.detect.thresholds import Threshold
 from ._common import ParamEstimate, check_positive
+from ._params import METHODS
 from ._profile import _search_coarse, profile_interval, profile_parabola
 from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
 
@@ -315,7 +316,6 @@ def saddle_node_threshold_ms2(freq_hz: np.ndarray, e: float, gap_m: float, f_s_h
 
 
 Method = Literal["ramp", "quasi-static"]
-METHODS: tuple[str, ...] = ("ramp", "quasi-static")
 
 
 @dataclass(frozen=True)
