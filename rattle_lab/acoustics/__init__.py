@@ -7,8 +7,9 @@ It depends only on NumPy, SciPy and numba (compiled loudness), not on the rest o
 package apart from its exceptions, so that every stage after ``records`` may use it.
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from rattle_lab._lazy import lazy_names
 
 if TYPE_CHECKING:
     from ._ecma418 import Ecma418, ecma418, ecma418_available
@@ -65,14 +66,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'rattle_lab.acoustics' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_names(__name__, globals(), _LAZY)

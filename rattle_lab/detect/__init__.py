@@ -4,8 +4,9 @@ Parameters are in seconds and SI units; samples are derived with
 :func:`n_samples_of` (``round``).
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from rattle_lab._lazy import lazy_names
 
 if TYPE_CHECKING:
     from ._common import n_samples_of, parabolic_peak, robust_sigma
@@ -63,14 +64,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'rattle_lab.detect' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_names(__name__, globals(), _LAZY)

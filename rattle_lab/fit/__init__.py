@@ -5,8 +5,9 @@ saddle-node) or by replaying the measured ramp through the exact simulator
 (:func:`model_threshold`; :func:`fit_zeta_ramp`, ``fit_restitution_down(method="ramp")``).
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from rattle_lab._lazy import lazy_names
 
 if TYPE_CHECKING:
     from ._bands import (SIGNIFICANCE_K, band_quantile, grazing_band_ms2, hysteresis_uncertainty_ms2,
@@ -113,14 +114,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'rattle_lab.fit' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_names(__name__, globals(), _LAZY)
