@@ -99,6 +99,23 @@ def test_third_octave_mask_iec61260_class1():
                 assert lo - 1e-9 <= gain_db <= hi + 1e-9, (x_band, f, gain_db)
 
 
+def test_band_gain_is_scipys_analog_butterworth_band_pass():
+    # reference: scipy.signal.butter(3, band, "bandpass", analog=True) evaluated by
+    # freqs_zpk (roots and products), against the closed form; a magnitude of modest
+    # dynamic range (down to 1e-12) from both in double precision: 1e-9 relative
+    from scipy import signal
+
+    f = np.geomspace(1.0, 30000.0, 4001)
+    for x_band in range(-17, 14):
+        lo, _, hi = band_edges_hz(x_band)
+        z, p, k = signal.butter(3, [2 * np.pi * lo, 2 * np.pi * hi], "bandpass", analog=True,
+                                output="zpk")
+        ref = np.abs(signal.freqs_zpk(z, p, k, worN=2 * np.pi * f)[1])
+        keep = ref > 1e-12
+        np.testing.assert_allclose(band_gain(x_band, f)[keep], ref[keep], rtol=1e-9)
+    assert band_gain(0, 0.0)[0] == 0.0
+
+
 def test_band_centres_and_labels():
     assert len(NOMINAL_THIRD_OCTAVE_HZ) == 31
     for x_band, label in zip(range(-17, 14), NOMINAL_THIRD_OCTAVE_HZ):

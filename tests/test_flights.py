@@ -321,19 +321,61 @@ def test_carried_tail_columns_are_the_direct_sum_over_every_earlier_impact():
     rng = np.random.default_rng(5)
     t_imp = np.sort(rng.uniform(0.0, 0.5, 40))
     dv = rng.uniform(0.05, 0.3, 40)
-    t = np.sort(rng.uniform(-0.01, 0.55, 500))
+    t_scattered = np.sort(rng.uniform(-0.01, 0.55, 500))
     modes = [(171.0, 21.5), (390.0, 49.0)]
-    cols = _tail_columns(_tails(t, t_imp), dv, modes)
+    fs = 2000.0   # and on a sampling grid, where each sample's column rotates from the last
+    t_grid = np.arange(-20, 1100) / fs
+    for t, cols in ((t_scattered, _tail_columns(_tails(t_scattered, t_imp), dv, modes)),
+                    (t_grid, _tail_columns(_tails(t_grid, t_imp, fs), dv, modes))):
+        _check_tails(t, t_imp, dv, modes, cols)
+
+
+def _check_tails(t, t_imp, dv, modes, cols):
     for j, (f, s) in enumerate(modes):
         tau = t[:, None] - t_imp[None, :]
         after = tau > 0
         env = np.where(after, dv[None, :] * np.exp(-s * np.where(after, tau, 0.0)), 0.0)
         ref_c = np.sum(env * np.cos(2 * np.pi * f * tau), axis=1)
         ref_s = np.sum(env * np.sin(2 * np.pi * f * tau), axis=1)
-        # 40 terms of size <= 0.3 summed in double precision: agreement to 1e-12 absolute
+        # 40 terms of size <= 0.3 summed in double precision, and up to 64 rotations by a
+        # unit-modulus step (each ~1e-16 relative): agreement to 1e-12 absolute
         np.testing.assert_allclose(cols[:, 2 * j], ref_c, rtol=0, atol=1e-12)
         np.testing.assert_allclose(cols[:, 2 * j + 1], ref_s, rtol=0, atol=1e-12)
     assert np.all(cols[t < t_imp[0]] == 0.0)
+
+
+def test_compiled_variable_projection_is_the_direct_least_squares():
+    # reference: one dense least-squares problem with every flight's two free-response
+    # columns written out (numpy lstsq, no elimination), against the model's elimination of
+    # the free amplitudes flight by flight (compiled sums).  The design here has condition
+    # number below 1e3, so both agree to ~1e-13 relative; 1e-9 leaves a wide margin.
+    from rattle_lab.detect._flights import _Model, _segments
+
+    rng = np.random.default_rng(11)
+    fs, n = 2000.0, 3000
+    k_imp = np.sort(rng.choice(np.arange(100, n - 100), 14, replace=False)).astype(float)
+    sg = _segments(n, k_imp, np.full(k_imp.size, 3.0), 60)
+    x = rng.normal(size=(sg.k.size, 5))
+    x[rng.random(x.shape) < 0.3] = 0.0      # hat-function columns are mostly zero
+    y = rng.normal(size=sg.k.size)
+    f_hz, sigma = 37.0, 9.0
+    whole = _Model(y, sg, fs, x).solve(f_hz, sigma)
+    # the searches' path: sparse forced columns, dense ringing columns added afterwards
+    added = _Model(y, sg, fs, x[:, :3]).extended(x[:, 3:4]).extended(x[:, 4:]).solve(f_hz, sigma)
+
+    tau = (sg.k - sg.ref[sg.seg]) / fs
+    z = np.zeros((sg.k.size, 2 * sg.starts.size))
+    env = np.exp(-sigma * tau)
+    z[np.arange(sg.k.size), 2 * sg.seg] = env * np.cos(2 * np.pi * f_hz * tau)
+    z[np.arange(sg.k.size), 2 * sg.seg + 1] = env * np.sin(2 * np.pi * f_hz * tau)
+    design = np.hstack([x, z])
+    assert np.linalg.cond(design) < 1e3
+    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+    r = y - design @ coef
+    for rss, beta, gamma in (whole, added):
+        np.testing.assert_allclose(rss, r @ r, rtol=1e-9)
+        np.testing.assert_allclose(beta, coef[:5], rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(gamma.ravel(), coef[5:], rtol=1e-9, atol=1e-12)
 
 
 def test_ring_modes_are_checked():

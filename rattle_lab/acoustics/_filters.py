@@ -24,11 +24,9 @@ class-1 stop-band limits and the A-weighting misses class 1 at 16-20 kHz
 
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import Literal
 
 import numpy as np
-from scipy import signal
 
 from rattle_lab.exceptions import ParameterError
 
@@ -101,19 +99,23 @@ def band_edges_hz(band_number: int) -> tuple[float, float, float]:
     return fm * G10 ** (-1.0 / 6.0), fm, fm * G10 ** (1.0 / 6.0)
 
 
-@lru_cache(maxsize=64)
-def _band_zpk(band_number: int) -> tuple[np.ndarray, np.ndarray, float]:
-    lo, _, hi = band_edges_hz(band_number)
-    z, p, k = signal.butter(3, [2 * np.pi * lo, 2 * np.pi * hi], "bandpass", analog=True,
-                            output="zpk")
-    return z, p, float(k)
+#: Order of the Butterworth low-pass prototype of each third-octave band-pass.
+BAND_ORDER = 3
 
 
 def band_gain(band_number: int, freq_hz: object) -> np.ndarray:
-    """``|H|`` of the class-1 third-order Butterworth band-pass of band ``x`` (analog)."""
-    z, p, k = _band_zpk(band_number)
-    _, h = signal.freqs_zpk(z, p, k, worN=2 * np.pi * np.atleast_1d(np.asarray(freq_hz, float)))
-    return np.abs(h)
+    """``|H|`` of the class-1 third-order Butterworth band-pass of band ``x`` (analog).
+
+    The band-pass is the Butterworth low-pass ``|H|^2 = 1 / (1 + W^(2N))`` under the
+    low-pass to band-pass transform ``W = (w^2 - w_l w_h) / (w (w_h - w_l))``, in closed
+    form (what :func:`scipy.signal.butter` with ``analog=True`` designs; the tests compare
+    the two).  Zero at 0 Hz.
+    """
+    lo, _, hi = band_edges_hz(band_number)
+    f = np.abs(np.atleast_1d(np.asarray(freq_hz, float)))
+    with np.errstate(divide="ignore", over="ignore"):
+        big_w = (f * f - lo * hi) / (f * (hi - lo))
+        return 1.0 / np.sqrt(1.0 + big_w ** (2 * BAND_ORDER))
 
 
 def band_mean_squares(x: np.ndarray, fs_hz: float) -> dict[str, float]:

@@ -216,12 +216,22 @@ class _Tails:
     last: np.ndarray      # the last impact before each sample (-1: none)
     dt: np.ndarray        # time since it, s
     t_imp: np.ndarray     # impact times, s
+    next_: np.ndarray     # each sample is its predecessor's next one (dt larger by dt_step)
+    dt_step: float        # the sampling interval, s (NaN: samples not on a grid)
 
 
-def _tails(t_s: np.ndarray, t_imp_s: np.ndarray) -> _Tails:
+def _tails(t_s: np.ndarray, t_imp_s: np.ndarray, fs_hz: float | None = None) -> _Tails:
+    """The samples at times ``t_s``; with ``fs_hz``, samples on that rate's grid
+    (``t_s = k / fs_hz``, consecutive ``k`` marked so the columns rotate from one to the next)."""
+    t_s = np.asarray(t_s, float)
     last = np.searchsorted(t_imp_s, t_s, side="right") - 1
     dt = np.where(last >= 0, t_s - t_imp_s[np.maximum(last, 0)], 0.0)
-    return _Tails(last, dt, np.asarray(t_imp_s, float))
+    next_ = np.zeros(t_s.size, dtype=bool)
+    if fs_hz is not None and t_s.size > 1:
+        steps = np.diff(t_s) * fs_hz
+        next_[1:] = np.abs(steps - 1.0) < 1e-6
+    return _Tails(np.ascontiguousarray(last, np.int64), dt, np.asarray(t_imp_s, float), next_,
+                  float("nan") if fs_hz is None else 1.0 / fs_hz)
 
 
 def _tail_columns(tails: _Tails, dv: np.ndarray, modes: list[tuple[float, float]]
@@ -232,56 +242,87 @@ def _tail_columns(tails: _Tails, dv: np.ndarray, modes: list[tuple[float, float]
     the impacts; a sample after impact ``k`` is ``C_k exp(p (t - t_k))``: exact, with no
     reach to cut the tails at.
     """
+    from ._flight_kernels import tail_columns
+
     cols = np.zeros((tails.last.size, 2 * len(modes)))
-    d = np.nan_to_num(dv)
+    d = np.ascontiguousarray(np.nan_to_num(dv), float)
     gaps = np.diff(tails.t_imp)
-    ok = tails.last >= 0
+    last = tails.last
     for j, (f_hz, s) in enumerate(modes):
-        p = complex(-s, 2.0 * np.pi * f_hz)
-        step = np.exp(p * gaps)
-        c = np.empty(d.size, dtype=complex)
-        acc = 0j
-        for k in range(d.size):
-            acc = acc * step[k - 1] + d[k] if k else complex(d[0])
-            c[k] = acc
-        z = np.zeros(tails.last.size, dtype=complex)
-        z[ok] = c[tails.last[ok]] * np.exp(p * tails.dt[ok])
-        cols[:, 2 * j], cols[:, 2 * j + 1] = z.real, z.imag
+        cols[:, 2 * j:2 * j + 2] = tail_columns(last, tails.dt, tails.next_, tails.dt_step, d,
+                                                gaps, float(f_hz), float(s))
     return cols
 
 
 class _Model:
-    """The run model on fixed segments; ``solve`` eliminates each flight's free response."""
+    """The run model on fixed segments; ``solve`` eliminates each flight's free response.
+
+    The run-wide columns are the forced response's ``x`` (kept by rows, only its nonzero
+    entries: hat functions in time) and dense columns ``r`` added by :meth:`extended`.
+    """
 
     def __init__(self, y: np.ndarray, sg: _Segments, fs_hz: float, x: np.ndarray):
-        self.y, self.sg, self.fs = y, sg, fs_hz
-        self.x = x
+        self.y, self.sg, self.fs = np.ascontiguousarray(y, float), sg, fs_hz
         self.tau = (sg.k - sg.ref[sg.seg]) / fs_hz
+        self.seg = np.ascontiguousarray(sg.seg, np.int64)
         self.n_seg = sg.starts.size
+        # consecutive samples of one flight: the free response rotates from one to the next
+        self.next_ = np.r_[False, (np.diff(sg.k) == 1) & (np.diff(sg.seg) == 0)]
+        x = np.asarray(x, float)
+        nz = x != 0.0
+        self.p = x.shape[1]
+        self.indptr = np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int64)
+        self.indices = np.nonzero(nz)[1].astype(np.int64)
+        self.values = np.ascontiguousarray(x[nz])
+        self.r = np.zeros((self.y.size, 0))
+        # what does not change with (f_s, sigma): the run-wide columns' normal equations
+        self._normal(x.T @ x, x.T @ self.y)
 
-    def free(self, f_hz: float, sigma: float) -> np.ndarray:
-        env = np.exp(-sigma * self.tau)
-        return np.column_stack([env * np.cos(2 * np.pi * f_hz * self.tau),
-                                env * np.sin(2 * np.pi * f_hz * self.tau)])
+    def _normal(self, xtx: np.ndarray, xty: np.ndarray) -> None:
+        self.xtx, self.xty = xtx, xty
+        scale = np.sqrt(np.diag(xtx).copy())
+        scale[~(scale > 0)] = 1.0
+        self.scale = scale
+
+    def extended(self, r: np.ndarray) -> _Model:
+        """The model with dense run-wide columns ``r`` added (ringing), its normal equations
+        extended rather than formed again (the searches add new ringing columns to one
+        forced response thousands of times)."""
+        from ._flight_kernels import sparse_cross
+
+        if r.shape[1] == 0:
+            return self
+        r = np.ascontiguousarray(r, float)
+        xr = np.vstack([sparse_cross(self.indptr, self.indices, self.values, self.p, r),
+                        self.r.T @ r])
+        new = object.__new__(_Model)
+        new.__dict__.update(self.__dict__)
+        new.r = np.hstack([self.r, r])
+        new._normal(np.block([[self.xtx, xr], [xr.T, r.T @ r]]),
+                    np.concatenate([self.xty, r.T @ self.y]))
+        return new
 
     def solve(self, f_hz: float, sigma: float
               ) -> tuple[float, np.ndarray, np.ndarray]:
         """``(rss, beta, gamma)``: run-wide coefficients and each segment's free amplitudes."""
-        z, x, y, st = self.free(f_hz, sigma), self.x, self.y, self.sg.starts
-        zz = np.add.reduceat(z[:, :, None] * z[:, None, :], st, axis=0)
-        zx = np.add.reduceat(z[:, :, None] * x[:, None, :], st, axis=0)
-        zy = np.add.reduceat(z * y[:, None], st, axis=0)
+        from ._flight_kernels import free_sums, residual_ss
+
+        sparse = (self.indptr, self.indices, self.values, self.p, self.r)
+        zz, zx, zy = free_sums(self.y, *sparse, self.tau, self.seg, self.next_, self.n_seg,
+                               float(f_hz), float(sigma), 1.0 / self.fs)
         zz = zz + 1e-12 * np.trace(zz, axis1=1, axis2=2)[:, None, None] * np.eye(2)
         g_zx = np.linalg.solve(zz, zx)
         g_zy = np.linalg.solve(zz, zy[:, :, None])[:, :, 0]
-        scale = np.sqrt(np.sum(x * x, axis=0))
-        scale[~(scale > 0)] = 1.0
-        a = (x.T @ x - np.einsum("sip,siq->pq", zx, g_zx)) / np.outer(scale, scale)
-        b = (x.T @ y - np.einsum("sip,si->p", zx, g_zy)) / scale
+        q = zx.shape[2]
+        zx2 = zx.reshape(-1, q)
+        scale = self.scale
+        a = (self.xtx - zx2.T @ g_zx.reshape(-1, q)) / np.outer(scale, scale)
+        b = (self.xty - zx2.T @ g_zy.reshape(-1)) / scale
         beta = np.linalg.lstsq(a, b, rcond=1e-12)[0] / scale
-        gamma = g_zy - np.einsum("sip,p->si", g_zx, beta)
-        r = y - x @ beta - np.sum(z * gamma[self.sg.seg], axis=1)
-        return float(r @ r), beta, gamma
+        gamma = np.ascontiguousarray(g_zy - g_zx @ beta)
+        rss = residual_ss(self.y, *sparse, beta, self.tau, self.seg, self.next_, gamma,
+                          float(f_hz), float(sigma), 1.0 / self.fs)
+        return float(rss), beta, gamma
 
     def search(self, f0_hz: float, sigma0: float, *, grid: bool) -> tuple[float, float]:
         """``(f_s, sigma)`` minimising the residual (Nelder-Mead; first a scan if ``grid``)."""
@@ -332,9 +373,10 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
     n = y.size
     s_max = 0.05 * fs_hz
 
+    forced = _Model(y, sub, fs_hz, xf)
+
     def model(modes: list[tuple[float, float]]) -> _Model:
-        x = np.hstack([xf, _ring_columns(pairs, dv, modes)]) if modes else xf
-        return _Model(y, sub, fs_hz, x)
+        return forced.extended(_ring_columns(pairs, dv, modes)) if modes else forced
 
     def refine(modes: list[tuple[float, float]], fixed: list[tuple[float, float]],
                fs_: float, sig_: float, maxfev: int) -> tuple[list[tuple[float, float]], float]:
@@ -425,13 +467,13 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
 
     def ring(t_s: np.ndarray, dv: np.ndarray, modes: list[tuple[float, float]]) -> np.ndarray:
         if carried:
-            return _tail_columns(_tails(t_s, t_imp), dv, modes)
+            return _tail_columns(_tails(t_s, t_imp, fs_hz), dv, modes)
         return _ring_columns(_pairs(t_s, t_imp, reach), dv, modes)
 
     dv = np.nan_to_num(v_out_local - v_in_local)
-    x0 = xf_sub if modes_given is None else np.hstack(
-        [xf_sub, ring(sub.k / fs_hz, dv, list(modes_given))])
-    model = _Model(y_all[sub.k], sub, fs_hz, x0)
+    forced_sub = _Model(y_all[sub.k], sub, fs_hz, xf_sub)
+    model = forced_sub if modes_given is None else forced_sub.extended(
+        ring(sub.k / fs_hz, dv, list(modes_given)))
     f_s, sigma = model.search(f_hz, 0.02 * omega, grid=True)
     # identifiable?  steady motion repeats the same flight: forced and free then trade off
     rss0 = model.solve(f_s, sigma)[0]
@@ -449,13 +491,14 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     if not modes:
         return replace(fallback, f_s_hz=f_s, sigma_1_s=sigma,
                        note="local fits kept: no ringing found after the impacts")
-    model = _Model(y_all[sub.k], sub, fs_hz, np.hstack([xf_sub, ring(sub.k / fs_hz, dv, modes)]))
+    model = forced_sub.extended(ring(sub.k / fs_hz, dv, modes))
     f_s, sigma = model.search(f_s, sigma, grid=False)
     xf, _ = _forced(sg.k / fs_hz, omega, t_total, keep)
     vin, vout = v_in_local, v_out_local
+    forced_all = _Model(y_all[sg.k], sg, fs_hz, xf)
     for _ in range(2):   # then with the impacts' own velocity changes weighting the ringing
         dv = np.where(np.isfinite(vout - vin), vout - vin, np.nan_to_num(dv))
-        model = _Model(y_all[sg.k], sg, fs_hz, np.hstack([xf, ring(sg.k / fs_hz, dv, modes)]))
+        model = forced_all.extended(ring(sg.k / fs_hz, dv, modes))
         vin, vout = _evaluate(model, f_s, sigma, keep, omega, t_total, k_imp)
     # (the channel may be an absolute vibrometer: judge the jump, not the velocities' signs)
     jump_local = v_out_local - v_in_local
@@ -552,17 +595,15 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
     ok = [p for p in problems if p is not None]
     if not ok:
         return ()
-    tails = [_tails(p.segments.k / p.fs_hz, p.t_imp_s) for p in ok]
-    base = [_Model(p.y, p.segments, p.fs_hz, p.forced).solve(p.f_s_hz, p.sigma_1_s)[0]
-            for p in ok]
+    tails = [_tails(p.segments.k / p.fs_hz, p.t_imp_s, p.fs_hz) for p in ok]
+    forced = [_Model(p.y, p.segments, p.fs_hz, p.forced) for p in ok]
+    base = [m.solve(p.f_s_hz, p.sigma_1_s)[0] for m, p in zip(forced, ok)]
     n_all = sum(p.y.size for p in ok)
     f_s = float(np.median([p.f_s_hz for p in ok]))
     f_lo, f_hi = 1.1 * f_s, min(6.0 * f_s, 0.2 * min(p.fs_hz for p in ok))
 
     def model(i: int, modes: list[tuple[float, float]]) -> _Model:
-        p = ok[i]
-        return _Model(p.y, p.segments, p.fs_hz,
-                      np.hstack([p.forced, _tail_columns(tails[i], p.dv, modes)]))
+        return forced[i].extended(_tail_columns(tails[i], ok[i].dv, modes))
 
     def rss(modes: list[tuple[float, float]]) -> np.ndarray:
         return np.array([model(i, modes).solve(ok[i].f_s_hz, ok[i].sigma_1_s)[0]

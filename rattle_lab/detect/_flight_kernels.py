@@ -1,0 +1,151 @@
+"""Compiled inner loops of the flight model (:mod:`rattle_lab.detect._flights`).
+
+The variable-projection searches evaluate the run model thousands of times for new
+``(f_s, sigma)`` or ringing poles; each evaluation touches every sample of the flights
+used.  These loops do it in one pass with no temporaries.  The run-wide columns come in
+two parts: the forced response's, hat functions in time that are zero on all but a few
+columns of each row (stored by rows: ``indptr``, ``indices``, ``values``), and a few dense
+columns ``r`` (the ringing).  :func:`free_sums` forms the per-flight sums of the free
+response's normal equations, :func:`residual_ss` the residual's sum of squares,
+:func:`sparse_cross` the products of the two parts, and :func:`tail_columns` the ringing
+carried on over later flights.  numba compiles them on first use and caches them on disk.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+
+#: Rows between exact evaluations in the rotations of :func:`free_response` and
+#: :func:`tail_columns` (each rotation adds a rounding error of ~1e-16 relative).
+REANCHOR = 64
+
+
+@numba.njit(cache=True, nogil=True)
+def free_response(tau: np.ndarray, next_: np.ndarray, f_hz: float, sigma: float, dt: float
+                  ) -> np.ndarray:  # pragma: no cover - compiled
+    """``exp((-sigma + 2 pi i f) tau)`` per row.  Where a row is its predecessor's next
+    sample (``next_``, ``tau`` larger by ``dt``) it is the predecessor's times
+    ``exp((-sigma + 2 pi i f) dt)`` (one complex product instead of exp, cos and sin),
+    evaluated exactly again every :data:`REANCHOR` rows."""
+    pole = complex(-sigma, 2.0 * math.pi * f_hz)
+    step = np.exp(pole * dt)
+    out = np.empty(tau.size, dtype=np.complex128)
+    run = 0
+    for i in range(tau.size):
+        if next_[i] and run < REANCHOR:
+            out[i] = out[i - 1] * step
+            run += 1
+        else:
+            out[i] = np.exp(pole * tau[i])
+            run = 0
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def free_sums(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
+              p: int, r: np.ndarray, tau: np.ndarray, seg: np.ndarray, next_: np.ndarray,
+              n_seg: int, f_hz: float, sigma: float, dt: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """Per flight ``s``: ``Z_s'Z_s`` (2x2), ``Z_s'[X_s R_s]`` (2 x (p + m)) and ``Z_s'y_s``,
+    where ``Z`` is the fundamental's free response ``exp(-sigma tau) [cos, sin](2 pi f tau)``
+    (see :func:`free_response`)."""
+    n, m = r.shape
+    zz = np.zeros((n_seg, 2, 2))
+    zx = np.zeros((n_seg, 2, p + m))
+    zy = np.zeros((n_seg, 2))
+    z = free_response(tau, next_, f_hz, sigma, dt)
+    for i in range(n):
+        z0 = z[i].real
+        z1 = z[i].imag
+        s = seg[i]
+        zz[s, 0, 0] += z0 * z0
+        zz[s, 0, 1] += z0 * z1
+        zz[s, 1, 1] += z1 * z1
+        zy[s, 0] += z0 * y[i]
+        zy[s, 1] += z1 * y[i]
+        for k in range(indptr[i], indptr[i + 1]):
+            q = indices[k]
+            zx[s, 0, q] += z0 * values[k]
+            zx[s, 1, q] += z1 * values[k]
+        for q in range(m):
+            zx[s, 0, p + q] += z0 * r[i, q]
+            zx[s, 1, p + q] += z1 * r[i, q]
+    for s in range(n_seg):
+        zz[s, 1, 0] = zz[s, 0, 1]
+    return zz, zx, zy
+
+
+@numba.njit(cache=True, nogil=True)
+def residual_ss(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
+                p: int, r: np.ndarray, beta: np.ndarray, tau: np.ndarray, seg: np.ndarray,
+                next_: np.ndarray, gamma: np.ndarray, f_hz: float, sigma: float, dt: float
+                ) -> float:  # pragma: no cover - compiled
+    """``sum (y - [X R] beta - Z gamma_seg)^2``, ``Z`` as in :func:`free_sums`."""
+    n, m = r.shape
+    z = free_response(tau, next_, f_hz, sigma, dt)
+    total = 0.0
+    for i in range(n):
+        res = y[i]
+        for k in range(indptr[i], indptr[i + 1]):
+            res -= values[k] * beta[indices[k]]
+        for q in range(m):
+            res -= r[i, q] * beta[p + q]
+        s = seg[i]
+        res -= z[i].real * gamma[s, 0] + z[i].imag * gamma[s, 1]
+        total += res * res
+    return total
+
+
+@numba.njit(cache=True, nogil=True)
+def sparse_cross(indptr: np.ndarray, indices: np.ndarray, values: np.ndarray, p: int,
+                 r: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """``X' r`` for ``X`` stored by rows (``p`` columns) and dense ``r``."""
+    n, m = r.shape
+    out = np.zeros((p, m))
+    for i in range(n):
+        for k in range(indptr[i], indptr[i + 1]):
+            q = indices[k]
+            for j in range(m):
+                out[q, j] += values[k] * r[i, j]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def tail_columns(last: np.ndarray, dt: np.ndarray, next_: np.ndarray, dt_step: float,
+                 d: np.ndarray, gaps: np.ndarray, f_hz: float, s: float
+                 ) -> np.ndarray:  # pragma: no cover - compiled
+    """``sum_{i <= last} d_i exp(p (t - t_i))``, ``p = -s + 2 pi i f``, as (real, imaginary)
+    columns: ``C_k = C_{k-1} exp(p gap_k) + d_k`` over the impacts, then each sample
+    ``C_last exp(p dt)`` (rotated from its predecessor where it is the next sample after
+    the same impact, as in :func:`free_response`); zero before the first impact."""
+    pole = complex(-s, 2.0 * math.pi * f_hz)
+    c = np.empty(d.size, dtype=np.complex128)
+    acc = 0j
+    for k in range(d.size):
+        if k:
+            acc = acc * np.exp(pole * gaps[k - 1]) + d[k]
+        else:
+            acc = complex(d[0], 0.0)
+        c[k] = acc
+    out = np.zeros((last.size, 2))
+    step = np.exp(pole * dt_step)
+    run = REANCHOR
+    e = 0j
+    for i in range(last.size):
+        if last[i] < 0:
+            run = REANCHOR
+            continue
+        if next_[i] and last[i] == last[i - 1] and run < REANCHOR:
+            e = e * step
+            run += 1
+        else:
+            e = np.exp(pole * dt[i])
+            run = 0
+        z = c[last[i]] * e
+        out[i, 0] = z.real
+        out[i, 1] = z.imag
+    return out
