@@ -76,7 +76,7 @@ def truth_table(fits: Fits, truth: Any) -> list[str]:
     return lines
 
 
-def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
+def run_demo(out_dir: str | Path, *, quiet: bool = False, scene: str | Path = "default") -> int:
     """Run the demo into ``out_dir``; print the summary table and, last, the PDF path.
 
     Writes ``raw.h5`` (the simulated record, with truth), ``store.h5`` (the
@@ -88,6 +88,9 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
         Output directory (created if needed).
     quiet : bool
         No progress bars (they are drawn on a terminal only, in any case).
+    scene : str or path-like
+        The scene simulated: ``"default"`` (the embedded default scene), a shipped scene's
+        name or a scene TOML file (see :func:`rattle_lab.rig.load_scene`).
 
     Returns
     -------
@@ -112,9 +115,10 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
     def say(line: str) -> None:
         print(line, file=sys.stderr, flush=True)
 
-    scene = load_scene("default")
-    say(f"[1/4] simulate: embedded default scene {scene.campaign_id!r} -> {raw}")
-    synthesis = write_synthetic(scene, raw, quiet=quiet)
+    what = "embedded default scene" if str(scene) == "default" else f"scene {scene}"
+    rig_scene = load_scene(scene)
+    say(f"[1/4] simulate: {what} {rig_scene.campaign_id!r} -> {raw}")
+    synthesis = write_synthetic(rig_scene, raw, quiet=quiet)
     truth = synthesis.record.truth
     assert truth is not None  # a synthetic record always carries its truth
     if store.exists():
@@ -122,7 +126,7 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False) -> int:
     # The engineer knows the plate (its first mode gives the participation factor) and the
     # drive (it holds each ramp level for piece_periods forcing periods).
     fit = {"participation": float(synthesis.modal.participation),
-           "level_hold_periods": int(scene.simulation.piece_periods)}
+           "level_hold_periods": int(rig_scene.simulation.piece_periods)}
     pipeline = parse_pipeline({
         "pipeline": {"name": "demo", "outputs": ["results", "report"]},
         "fit": fit, "report": {"model": True}}, "<demo>")
