@@ -26,6 +26,7 @@ from rattle_lab.records._chain import (FLAG_PARTICIPATION_ASSUMED, FLAG_POISSON_
                                        participation_from_plate, resolve_participation,
                                        rig_participation)
 from rattle_lab.records._model import Rig
+from rattle_lab.store import read_results
 from record_factory import make_record, run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -194,8 +195,8 @@ def test_fit_without_participation_assumes_one_and_flags_it(stores):
     assert proc.returncode == 0, proc.stderr
     assert "data-quality flag: participation_assumed" in proc.stdout
     assert re.search(r"participation Q1/Q2 = 1 \(assumed\)", proc.stdout)
-    res = json.loads(run_cli("fit", str(out["bare"]), "--pipeline", str(pipeline),
-                             "--json").stdout)
+    # what that fit wrote to the store (what --json prints: test_fit_summary)
+    res = read_results(out["bare"]).summary
     assert res["data_quality"][0] == FLAG_PARTICIPATION_ASSUMED
     assert not [f for f in res["data_quality"][1:] if "participation" in f]
     # what the flag warns of: only gap/participation is identified, the gap is 1/1.2 of truth
