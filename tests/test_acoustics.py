@@ -15,8 +15,7 @@ from rattle_lab.acoustics import (NOMINAL_THIRD_OCTAVE_HZ, band_edges_hz, band_g
                                   weighting_db)
 from rattle_lab.exceptions import ParameterError
 
-FS = 48000.0
-P0 = 20e-6
+from iso532_signals import FS, P0, iso532_signals, mosqito_loudness, stored_reference, tone
 
 # IEC 61672-1:2013 Table 3: nominal frequency, A and C weightings (dB), class-1 tolerance
 # limits (upper, lower; None = -inf).  The table's weightings are the design goals at the
@@ -41,11 +40,6 @@ IEC61672_TABLE3 = [
     (10000, 10, -2.5, -4.4, 2.0, -3.0), (12500, 11, -4.3, -6.2, 2.0, -5.0),
     (16000, 12, -6.6, -8.5, 2.5, -16.0), (20000, 13, -9.3, -11.2, 3.0, None),
 ]
-
-
-def tone(freq_hz: float, level_db: float, duration_s: float, fs_hz: float = FS) -> np.ndarray:
-    t = np.arange(round(duration_s * fs_hz)) / fs_hz
-    return np.sqrt(2.0) * P0 * 10 ** (level_db / 20) * np.sin(2 * np.pi * freq_hz * t)
 
 
 @pytest.mark.parametrize("row", IEC61672_TABLE3, ids=lambda r: f"{r[0]}Hz")
@@ -302,39 +296,6 @@ def test_compiled_nonlinear_decay_is_mosqitos_to_the_bit():
 
 # --- the compiled ISO 532-1 chain against MoSQITo (the reference implementation) -----------
 
-def _iso532_signals() -> dict[str, np.ndarray]:
-    """Synthetic signals of the kinds of ISO 532-1 annex B.4/B.5 (time-varying test signals):
-    1 kHz tones at stated levels (the anchors 40 and 60 dB, 80 dB), tone pulses of 10 and
-    100 ms at 70 dB, a 250 Hz tone rising in 10 dB steps from 30 to 80 dB, a 1 kHz tone
-    amplitude-modulated at 4 Hz, pink noise at 60 dB, a 100 Hz tone at 80 dB (the
-    low-frequency weighting) and decaying impacts in silence (rattle).  All generated here
-    with NumPy from their definitions; the standard's own recordings are not distributed."""
-    rng = np.random.default_rng(29)
-    out = {"tone_1k_40dB": tone(1000.0, 40.0, 0.6), "tone_1k_60dB": tone(1000.0, 60.0, 0.6),
-           "tone_1k_80dB": tone(1000.0, 80.0, 0.6), "tone_100_80dB": tone(100.0, 80.0, 0.6)}
-    silence = np.zeros(int(0.15 * FS))
-    for ms in (10, 100):
-        out[f"pulse_1k_{ms}ms_70dB"] = np.concatenate(
-            [silence, tone(1000.0, 70.0, ms / 1000), silence, silence])
-    out["steps_250_30_to_80dB"] = np.concatenate(
-        [tone(250.0, level, 0.1) for level in range(30, 90, 10)])
-    t = np.arange(int(0.8 * FS)) / FS
-    out["am_1k_4Hz_70dB"] = tone(1000.0, 70.0, 0.8) * (1 + np.sin(2 * np.pi * 4 * t)) / 1.5
-    spec = np.fft.rfft(rng.standard_normal(int(0.8 * FS)))
-    f = np.fft.rfftfreq(int(0.8 * FS), 1 / FS)
-    spec[1:] /= np.sqrt(f[1:])
-    spec[0] = 0
-    pink = np.fft.irfft(spec, n=int(0.8 * FS))
-    out["pink_60dB"] = pink * P0 * 10 ** (60 / 20) / np.sqrt(np.mean(pink**2))
-    hits = np.zeros(int(0.6 * FS))
-    for k, t0 in enumerate((0.05, 0.2, 0.26, 0.4)):
-        i0 = int(t0 * FS)
-        n = int(0.03 * FS)
-        hits[i0:i0 + n] += (0.5 + k) * rng.standard_normal(n) * np.exp(-np.arange(n) / (0.004 * FS))
-    out["impacts"] = hits
-    return out
-
-
 def _within_iso532_tolerance(got: np.ndarray, ref: np.ndarray) -> tuple[float, float]:
     """Shares of ``got`` outside ISO 532-1's tolerances on N(t) around ``ref``.
 
@@ -360,21 +321,31 @@ def test_compiled_loudness_equals_mosqito_within_iso532_tolerance(field_type):
     # MoSQITo's ISO 532-1 time-varying loudness (its own Python chain, with its own decay
     # step) is the reference; ours is an independent compiled implementation of the same
     # standard, so they agree to the standard's published tolerances, not to the bit.
-    from mosqito.sq_metrics import loudness_zwtv
-
+    # MoSQITo's output is stored (tests/iso532_signals.py; checked against the installed
+    # MoSQITo by the next test)
     from rattle_lab.acoustics._iso532 import time_varying_loudness
 
-    for name, p in _iso532_signals().items():
-        n_ref, spec_ref, _, _ = loudness_zwtv(p, FS, field_type=field_type)
-        n_ref = np.asarray(n_ref, dtype=float)
+    for name, p in iso532_signals().items():
+        n_ref, spec_ref_mean = stored_reference(name, field_type, p)
         n_t, spec_mean = time_varying_loudness(p, diffuse=field_type == "diffuse")
         assert n_t.shape == n_ref.shape, name
         out5, out10 = _within_iso532_tolerance(n_t, n_ref)
         assert out5 <= 0.01 and out10 == 0.0, (name, out5, out10)
         # the time-averaged specific loudness: +-5 % or +-0.1 sone/Bark (annex B, N'(z))
-        spec_ref_mean = np.mean(np.asarray(spec_ref, dtype=float), axis=1)
         tol = np.maximum(0.05 * spec_ref_mean, 0.1)
         assert np.all(np.abs(spec_mean - spec_ref_mean) <= tol), name
+
+
+@pytest.mark.parametrize("field_type", ["free", "diffuse"])
+def test_stored_mosqito_reference_is_what_mosqito_computes(field_type):
+    # the installed MoSQITo on one signal with a level step (its decay network and every
+    # band at work) gives the stored reference: the same code on the same input, so equal
+    # to rounding (1e-9 relative or 1e-9 sone allows another BLAS or libm)
+    p = iso532_signals()["steps_250_30_to_80dB"]
+    n_ref, spec_ref = stored_reference("steps_250_30_to_80dB", field_type, p)
+    n_t, spec = mosqito_loudness(p, field_type)
+    np.testing.assert_allclose(n_t, n_ref, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(spec, spec_ref, rtol=1e-9, atol=1e-9)
 
 
 def test_compiled_loudness_iso532_anchors_and_51k2_rate():
@@ -393,7 +364,7 @@ def test_loudness_sharpness_equals_mosqito_din45692():
     # gives for its reference signals)
     from mosqito.sq_metrics import loudness_zwtv, sharpness_din_from_loudness
 
-    p = _iso532_signals()["pink_60dB"]
+    p = iso532_signals()["pink_60dB"]
     _, spec, _, _ = loudness_zwtv(p, FS)
     spec_mean = np.mean(np.asarray(spec, dtype=float), axis=1)
     ref = float(sharpness_din_from_loudness(float(np.sum(spec_mean) * 0.1), spec_mean))
