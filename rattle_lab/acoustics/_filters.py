@@ -114,8 +114,8 @@ def band_gain(band_number: int, freq_hz: object) -> np.ndarray:
     lo, _, hi = band_edges_hz(band_number)
     f = np.abs(np.atleast_1d(np.asarray(freq_hz, float)))
     with np.errstate(divide="ignore", over="ignore"):
-        big_w = (f * f - lo * hi) / (f * (hi - lo))
-        return 1.0 / np.sqrt(1.0 + big_w ** (2 * BAND_ORDER))
+        w2 = ((f * f - lo * hi) / (f * (hi - lo))) ** 2
+        return 1.0 / np.sqrt(1.0 + w2 * w2 * w2)   # W^(2N), N = BAND_ORDER = 3
 
 
 def band_mean_squares(x: np.ndarray, fs_hz: float) -> dict[str, float]:

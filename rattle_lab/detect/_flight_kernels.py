@@ -1,4 +1,5 @@
-"""Compiled inner loops of the flight model (:mod:`rattle_lab.detect._flights`).
+"""Compiled inner loops of the flight model (:mod:`rattle_lab.detect._flights`) and of the
+local fits either side of an impact (:mod:`rattle_lab.detect._local_fits`).
 
 The variable-projection searches evaluate the run model thousands of times for new
 ``(f_s, sigma)`` or ringing poles; each evaluation touches every sample of the flights
@@ -149,3 +150,68 @@ def tail_columns(last: np.ndarray, dt: np.ndarray, next_: np.ndarray, dt_step: f
         out[i, 0] = z.real
         out[i, 1] = z.imag
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def sparse_gram(indptr: np.ndarray, indices: np.ndarray, values: np.ndarray, p: int,
+                y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """``(X'X, X'y)`` for ``X`` stored by rows (``p`` columns): each row's few nonzero
+    entries, in pairs."""
+    xtx = np.zeros((p, p))
+    xty = np.zeros(p)
+    for i in range(indptr.size - 1):
+        for a in range(indptr[i], indptr[i + 1]):
+            qa, va = indices[a], values[a]
+            xty[qa] += va * y[i]
+            for b in range(indptr[i], indptr[i + 1]):
+                xtx[qa, indices[b]] += va * values[b]
+    return xtx, xty
+
+
+# --- compiled local fits (detect/_local_fits): the design and its least squares -----------
+
+@numba.njit(cache=True, nogil=True)
+def local_design(k: np.ndarray, k0: float, scale: float, degree: int, w: float,
+                 periodic: bool) -> np.ndarray:  # pragma: no cover - compiled
+    """The design matrix of :class:`rattle_lab.detect._local_fits._LocalFit` at samples ``k``:
+    ``[u^degree .. u^0]`` (polynomial), or ``[1, u^j cos(w tau), u^j sin(w tau)]_j``
+    (``periodic``), ``tau = k - k0``, ``u = tau / scale``."""
+    n = k.size
+    if not periodic:
+        out = np.empty((n, degree + 1))
+        for i in range(n):
+            u = (k[i] - k0) / scale
+            x = 1.0
+            for j in range(degree, -1, -1):
+                out[i, j] = x
+                x *= u
+        return out
+    out = np.empty((n, 1 + 2 * (degree + 1)))
+    for i in range(n):
+        tau = k[i] - k0
+        u = tau / scale
+        c, s_ = math.cos(w * tau), math.sin(w * tau)
+        out[i, 0] = 1.0
+        x = 1.0
+        for j in range(degree + 1):
+            out[i, 1 + 2 * j] = x * c
+            out[i, 2 + 2 * j] = x * s_
+            x *= u
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def local_lstsq(k: np.ndarray, v: np.ndarray, k0: float, scale: float, degree: int, w: float,
+                periodic: bool) -> np.ndarray:  # pragma: no cover - compiled
+    """Least-squares coefficients of :func:`local_design` for ``v`` (LAPACK ``gelsd``, as
+    :func:`numpy.linalg.lstsq`)."""
+    a = local_design(k, k0, scale, degree, w, periodic)
+    rcond = np.finfo(np.float64).eps * max(a.shape[0], a.shape[1])   # numpy's rcond=None
+    return np.linalg.lstsq(a, v, rcond)[0]
+
+
+@numba.njit(cache=True, nogil=True)
+def local_eval(k: np.ndarray, k0: float, scale: float, degree: int, w: float, periodic: bool,
+               coef: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """The fit with coefficients ``coef`` at samples ``k``."""
+    return local_design(k, k0, scale, degree, w, periodic) @ coef

@@ -276,7 +276,9 @@ class _Model:
         self.values = np.ascontiguousarray(x[nz])
         self.r = np.zeros((self.y.size, 0))
         # what does not change with (f_s, sigma): the run-wide columns' normal equations
-        self._normal(x.T @ x, x.T @ self.y)
+        from ._flight_kernels import sparse_gram
+
+        self._normal(*sparse_gram(self.indptr, self.indices, self.values, self.p, self.y))
 
     def _normal(self, xtx: np.ndarray, xty: np.ndarray) -> None:
         self.xtx, self.xty = xtx, xty

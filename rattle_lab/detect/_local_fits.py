@@ -28,13 +28,22 @@ class _LocalFit:
         self.scale = max(1.0, float(np.abs(k - self.k0).max(initial=1.0)))
         self.degree = degree
         self.w = omega_per_sample
-        design = self._design(k)
-        n_par = design.shape[1]
+        n_par = degree + 1 if omega_per_sample is None else 3 + 2 * degree
         if k.size < n_par:   # too few samples: fall back to a low-degree polynomial
             self.w = None
             self.degree = max(0, min(degree, k.size - 1))
-            design = self._design(k)
-        self.coef = np.linalg.lstsq(design, v, rcond=None)[0]
+        # compiled where every sample is finite (numba's lstsq refuses NaN; numpy's path
+        # keeps what it gives there)
+        self.compiled = bool(np.all(np.isfinite(v)))
+        if self.compiled:
+            from ._flight_kernels import local_lstsq
+
+            self.coef = local_lstsq(np.ascontiguousarray(k, float),
+                                    np.ascontiguousarray(v, float), self.k0, self.scale,
+                                    self.degree, 0.0 if self.w is None else float(self.w),
+                                    self.w is not None)
+        else:
+            self.coef = np.linalg.lstsq(self._design(k), v, rcond=None)[0]
 
     def _design(self, k: np.ndarray) -> np.ndarray:
         tau = np.asarray(k, dtype=float) - self.k0
@@ -50,6 +59,12 @@ class _LocalFit:
 
     def __call__(self, k: np.ndarray | float) -> np.ndarray:
         kk = np.atleast_1d(np.asarray(k, dtype=float))
+        if self.compiled:
+            from ._flight_kernels import local_eval
+
+            return local_eval(np.ascontiguousarray(kk), self.k0, self.scale, self.degree,
+                              0.0 if self.w is None else float(self.w), self.w is not None,
+                              self.coef)
         return self._design(kk) @ self.coef
 
 
