@@ -225,7 +225,13 @@ def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any
                              f"than the caller ({code}); install the same rattle_lab on the "
                              "workers (or restart them after editing the sources)")
 
-    with open_stored_record(store, input_key) as record:
+    from threadpoolctl import threadpool_limits
+
+    # one BLAS thread, as on a Dask worker (which runs with one): the flight model's
+    # searches follow the last bits of their sums, and a result must not depend on where
+    # it was computed
+    with open_stored_record(store, input_key) as record, \
+            threadpool_limits(limits=1, user_api="blas"):
         return analyse_run(input_key, record.run(run_id), detect=detect, fit=fit,
                            mic_distance_m=record.rig.mic_distance_m)
 
@@ -406,7 +412,10 @@ def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
         problems += [r.impacts.ringing_problem for r in more
                      if getattr(r, "impacts", None) is not None
                      and r.impacts.ringing_problem is not None]
-        modes = campaign_ring_modes(problems)
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1, user_api="blas"):   # as detect_run's
+            modes = campaign_ring_modes(problems)
         if modes:
             again = _map_runs([jobs[i] for i in redo],
                               {**detect, "ring_modes": [list(m) for m in modes],
