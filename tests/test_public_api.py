@@ -105,7 +105,7 @@ PACKAGES: dict[str, list[str]] = {
         "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
         "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
         "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun",
-        "ThresholdTable", "TransientRun", "ParticipationInfo",
+        "TableRow", "ThresholdTable", "TransientRun", "ParticipationInfo",
         "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
         "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K",
         "FIT_KEYS", "SOUND_KEYS"

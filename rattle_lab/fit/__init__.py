@@ -28,7 +28,7 @@ if TYPE_CHECKING:
                              GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
                              RatioRestitution, SplLawSummary)
     from ._summary import (SUMMARY_SCHEMA_VERSION, FitSummary, ParticipationInfo, RunRow,
-                           SkippedRun, ThresholdTable, TransientRun)
+                           SkippedRun, TableRow, ThresholdTable, TransientRun)
 
 #: public name -> submodule that defines it; loaded on first use, so that a command that needs
 #: the parameter names only (``rattle-lab run`` checking its pipeline file) does not import
@@ -90,6 +90,7 @@ _LAZY: dict[str, str] = {
     "ParticipationInfo": "_summary",
     "RunRow": "_summary",
     "SkippedRun": "_summary",
+    "TableRow": "_summary",
     "ThresholdTable": "_summary",
     "TransientRun": "_summary",
 }
@@ -106,8 +107,8 @@ __all__ = [
     "RunResult", "StoreFit",
     "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
     "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
-    "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun", "ThresholdTable",
-    "TransientRun", "ParticipationInfo",
+    "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun", "TableRow",
+    "ThresholdTable", "TransientRun", "ParticipationInfo",
     "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
     "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K",
     "FIT_KEYS", "SOUND_KEYS",
