@@ -49,10 +49,10 @@ _MAPPING = st.dictionaries(_TEXT, _JSON, max_size=4)
 
 def _estimate_kw() -> dict[str, st.SearchStrategy]:
     return dict(value=_FLOAT, stderr=_FLOAT, unit=_TEXT, ci_low=_FLOAT, ci_high=_FLOAT,
-                notes=_NOTES)
+                notes=_NOTES, vary=st.booleans())
 
 
-_PARAM = st.builds(GrazingParameter, **_estimate_kw(), vary=st.booleans(), bias_rel=_FLOAT,
+_PARAM = st.builds(GrazingParameter, **_estimate_kw(), bias_rel=_FLOAT,
                    bias_note=_TEXT)
 _GRAZING = st.builds(
     GrazingSummary, gap_m=_PARAM, f_s_hz=_PARAM, zeta=_PARAM, participation=_PARAM,

@@ -95,7 +95,7 @@ PACKAGES: dict[str, list[str]] = {
     "rattle_lab.fit": [
         "DbLaw", "GrazingFit", "analyse_run", "check_fit_params", "fit_runs", "json_ready",
         "load_pipeline",
-        "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
+        "summarise_fits", "LinearLaw", "RestitutionFit", "RestitutionStats",
         "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
         "pooled_ringing_share", "ratios_of_runs", "restitution_from_ratios",
         "ringing_corrected_ratios", "saddle_node_threshold_ms2",
