@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from rattle_lab.exceptions import ConvergenceError, ParameterError
-from rattle_lab.fit import (fit_db_law, fit_grazing, fit_linear_law, fit_restitution_down,
+from rattle_lab.fit import (DbLawSummary, LinearLawSummary, fit_db_law, fit_grazing,
+                            fit_linear_law, fit_restitution_down,
                             fit_zeta_ramp, restitution_from_ratios,
                             saddle_node_threshold_ms2)
 from rattle_lab.fit._restitution import profile_interval, profile_parabola
@@ -289,9 +290,12 @@ def test_spl_linear_law_and_db_law():
     assert lin.slope == pytest.approx(0.45, rel=0.03)
     assert lin.slope_ci[0] < 0.45 < lin.slope_ci[1]
     assert lin.r2 > 0.99 and lin.n == 40
+    # one class per law: what the fit returns is what the store keeps
+    assert type(lin) is LinearLawSummary and lin.slope_ci == (lin.slope_ci_low, lin.slope_ci_high)
     exact = fit_db_law(v, 0.5 * v)                     # p = 0.5 v: L = 20 log10 v + 20 log10(0.5/20e-6)
     assert exact.c_db == pytest.approx(20 * np.log10(0.5 / 20e-6), abs=1e-9)
     assert exact.k_db_per_decade == pytest.approx(20.0, abs=1e-9)
+    assert type(exact) is DbLawSummary and exact.c_ci == (exact.c_ci_low, exact.c_ci_high)
 
 
 @pytest.mark.parametrize("v, p, match", [

@@ -440,8 +440,9 @@ class DownRestitution(RampDamping):
 
 @dataclass(frozen=True)
 class LinearLawSummary(_Normalised):
-    """``|p| = slope |v| + intercept`` (:class:`~rattle_lab.fit.LinearLaw`): slope Pa/(m/s),
-    intercept Pa, each with its 95 % interval; ``r2`` and the ``n`` points used."""
+    """``|p| = slope |v| + intercept``: slope Pa/(m/s), intercept Pa, each with its 95 %
+    interval; ``r2`` and the ``n`` points used.  What :func:`~rattle_lab.fit.fit_linear_law`
+    returns (:class:`~rattle_lab.fit.LinearLaw` is this class) and the store keeps."""
 
     slope: float | None
     slope_ci_low: float | None
@@ -453,6 +454,16 @@ class LinearLawSummary(_Normalised):
     n: int
     slope_unit: str = "Pa/(m/s)"
     intercept_unit: str = "Pa"
+
+    @property
+    def slope_ci(self) -> tuple[float | None, float | None]:
+        """``(slope_ci_low, slope_ci_high)``."""
+        return self.slope_ci_low, self.slope_ci_high
+
+    @property
+    def intercept_ci(self) -> tuple[float | None, float | None]:
+        """``(intercept_ci_low, intercept_ci_high)``."""
+        return self.intercept_ci_low, self.intercept_ci_high
 
     def to_dict(self) -> dict[str, Any]:
         return {"slope": self.slope, "slope_ci": [self.slope_ci_low, self.slope_ci_high],
@@ -473,8 +484,10 @@ class LinearLawSummary(_Normalised):
 
 @dataclass(frozen=True)
 class DbLawSummary(_Normalised):
-    """``L = 20 log10 v + c_db`` (:class:`~rattle_lab.fit.DbLaw`): ``c_db`` in dB re 20 uPa at
-    1 m/s with its 95 % interval, the free slope ``k_db_per_decade`` and ``n`` points."""
+    """``L = 20 log10 v + c_db``: ``c_db`` in dB re 20 uPa at 1 m/s with its 95 % interval,
+    the free slope ``k_db_per_decade`` and ``n`` points.  What
+    :func:`~rattle_lab.fit.fit_db_law` returns (:class:`~rattle_lab.fit.DbLaw` is this
+    class) and the store keeps."""
 
     c_db: float | None
     c_ci_low: float | None
@@ -482,6 +495,11 @@ class DbLawSummary(_Normalised):
     k_db_per_decade: float | None
     n: int
     unit: str = "dB re 20 uPa at 1 m/s"
+
+    @property
+    def c_ci(self) -> tuple[float | None, float | None]:
+        """``(c_ci_low, c_ci_high)``."""
+        return self.c_ci_low, self.c_ci_high
 
     def to_dict(self) -> dict[str, Any]:
         return {"c_db": self.c_db, "c_ci": [self.c_ci_low, self.c_ci_high],
