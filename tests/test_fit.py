@@ -226,6 +226,8 @@ def test_zeta_ramp_removes_the_ramp_lag():
     ({"method": "exact"}, r"`method` must be one of \('ramp', 'quasi-static'\), was 'exact'"),
     ({"gap_m": -1.0}, r"`gap_m` must be finite and > 0, was -1.0"),
     ({"zeta_stderr": -0.1}, r"`zeta_stderr` must be finite and >= 0, was -0.1"),
+    # a standard error that is not available (Estimate.stderr None) is refused the same way
+    ({"zeta_stderr": None}, r"`zeta_stderr` must be finite and >= 0, was None"),
     ({"e_bounds": (0.9, 0.1)}, r"`e_bounds` must satisfy 0 <= low < high <= 1, was \(0.9, 0.1\)"),
     ({"e_step": 0.0}, r"`e_step` must be in \(0, 0.9\], was 0.0"),
 ])

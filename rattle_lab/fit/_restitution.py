@@ -513,7 +513,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
     if method not in METHODS:
         raise ParameterError(f"`method` must be one of {METHODS}, was {method!r}")
     check_positive(gap_m=gap_m, f_s_hz=f_s_hz, zeta=zeta, participation=participation)
-    if not (np.isfinite(zeta_stderr) and zeta_stderr >= 0):
+    if zeta_stderr is None or not (np.isfinite(zeta_stderr) and zeta_stderr >= 0):
         raise ParameterError(f"`zeta_stderr` must be finite and >= 0, was {zeta_stderr}")
     points = _down_points(thresholds, f_s_hz, zeta)
     if method == "quasi-static":
