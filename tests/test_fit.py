@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from rattle_lab.exceptions import ConvergenceError, ParameterError
-from rattle_lab.fit import (fit_db_law, fit_grazing, fit_linear_law, fit_restitution_down,
+from rattle_lab.fit import (DbLawSummary, LinearLawSummary, fit_db_law, fit_grazing,
+                            fit_linear_law, fit_restitution_down,
                             fit_zeta_ramp, restitution_from_ratios,
                             saddle_node_threshold_ms2)
 from rattle_lab.fit._restitution import profile_interval, profile_parabola
@@ -58,7 +59,11 @@ def test_grazing_recovers_thesis_values_with_noise():
     assert not fit.outlier.any() and fit.unidentifiable == ()
     assert fit.correlation.shape == (3, 3)
     np.testing.assert_allclose(np.diag(fit.correlation), 1.0)
-    assert p["participation"].vary is False and np.isnan(p["participation"].stderr)
+    # one estimate type (rattle_lab.fit.Estimate), with its unit; not available is None
+    assert p["participation"].vary is False and p["participation"].stderr is None
+    assert {n: (type(e).__name__, e.unit) for n, e in p.items()} == {
+        "gap_m": ("Estimate", "m"), "f_s_hz": ("Estimate", "Hz"), "zeta": ("Estimate", "1"),
+        "participation": ("Estimate", "1")}
 
 
 def test_grazing_exact_data_exact_answer():
@@ -200,7 +205,7 @@ def test_restitution_ramp_reports_e_not_identified():
     ths = [_rig_threshold(0.6, 97.0, 16.0, 2.0, 3.0, "down")]
     fit = fit_restitution_down(ths, zeta=ZETA, e_step=0.1, **PLATE)
     assert any(note.startswith("e not identified") for note in fit.notes)
-    assert np.isnan(fit.e.ci_low) or np.isnan(fit.e.ci_high)
+    assert fit.e.ci_low is None or fit.e.ci_high is None  # None: not available
 
 
 def test_zeta_ramp_removes_the_ramp_lag():
@@ -221,6 +226,8 @@ def test_zeta_ramp_removes_the_ramp_lag():
     ({"method": "exact"}, r"`method` must be one of \('ramp', 'quasi-static'\), was 'exact'"),
     ({"gap_m": -1.0}, r"`gap_m` must be finite and > 0, was -1.0"),
     ({"zeta_stderr": -0.1}, r"`zeta_stderr` must be finite and >= 0, was -0.1"),
+    # a standard error that is not available (Estimate.stderr None) is refused the same way
+    ({"zeta_stderr": None}, r"`zeta_stderr` must be finite and >= 0, was None"),
     ({"e_bounds": (0.9, 0.1)}, r"`e_bounds` must satisfy 0 <= low < high <= 1, was \(0.9, 0.1\)"),
     ({"e_step": 0.0}, r"`e_step` must be in \(0, 0.9\], was 0.0"),
 ])
@@ -285,9 +292,12 @@ def test_spl_linear_law_and_db_law():
     assert lin.slope == pytest.approx(0.45, rel=0.03)
     assert lin.slope_ci[0] < 0.45 < lin.slope_ci[1]
     assert lin.r2 > 0.99 and lin.n == 40
+    # one class per law: what the fit returns is what the store keeps
+    assert type(lin) is LinearLawSummary and lin.slope_ci == (lin.slope_ci_low, lin.slope_ci_high)
     exact = fit_db_law(v, 0.5 * v)                     # p = 0.5 v: L = 20 log10 v + 20 log10(0.5/20e-6)
     assert exact.c_db == pytest.approx(20 * np.log10(0.5 / 20e-6), abs=1e-9)
     assert exact.k_db_per_decade == pytest.approx(20.0, abs=1e-9)
+    assert type(exact) is DbLawSummary and exact.c_ci == (exact.c_ci_low, exact.c_ci_high)
 
 
 @pytest.mark.parametrize("v, p, match", [

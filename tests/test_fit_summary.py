@@ -49,10 +49,10 @@ _MAPPING = st.dictionaries(_TEXT, _JSON, max_size=4)
 
 def _estimate_kw() -> dict[str, st.SearchStrategy]:
     return dict(value=_FLOAT, stderr=_FLOAT, unit=_TEXT, ci_low=_FLOAT, ci_high=_FLOAT,
-                notes=_NOTES)
+                notes=_NOTES, vary=st.booleans())
 
 
-_PARAM = st.builds(GrazingParameter, **_estimate_kw(), vary=st.booleans(), bias_rel=_FLOAT,
+_PARAM = st.builds(GrazingParameter, **_estimate_kw(), bias_rel=_FLOAT,
                    bias_note=_TEXT)
 _GRAZING = st.builds(
     GrazingSummary, gap_m=_PARAM, f_s_hz=_PARAM, zeta=_PARAM, participation=_PARAM,
@@ -280,3 +280,99 @@ def test_the_report_reads_old_summaries_and_names_an_unsupported_one(fitted, tmp
         else:          # a newer one: no results sections, and the reason
             assert data.summary is None and data.results is None
             assert "schema_version 99 is not supported" in data.missing["results"]
+
+
+# --- FitSummary.table: the one source of the CLI's, the demo's and the report's tables -------
+
+def _table_summary() -> FitSummary:
+    p = GrazingParameter(1.25e-3, 2e-6, "m", 1.246e-3, 1.254e-3, bias_note="ramp lag")
+    fixed = GrazingParameter(1.2, None, "1", 1.1, 1.3, vary=False)
+    g = GrazingSummary(gap_m=p, f_s_hz=GrazingParameter(96.0, 0.01, "Hz", 95.98, 96.02),
+                       zeta=GrazingParameter(0.0097, 3e-5, "1", 0.0096, 0.0098),
+                       participation=fixed, outliers_hz=(97.5,))
+    rg = RampGrazing(gap_m=Estimate(1.3e-3, 1e-6, "m"), f_s_hz=Estimate(96.0, 0.001, "Hz"),
+                     zeta=Estimate(0.0085, 1e-5, "1", 0.0084, 0.0086), lag_rel=(0.1,) * 8)
+    law = SplLawSummary(LinearLawSummary(5.0, 4.9, 5.2, 0.1, 0.09, 0.11, 0.99, 30),
+                        DbLawSummary(110.0, 109.9, 110.1, 19.8, 30))
+    return FitSummary(n_runs=3, n_ok=3, fits=Fits(
+        grazing=g, grazing_ramp=rg, spl_law_first=law,
+        restitution_ratio=RatioRestitution(0.6, 0.01, "1", n=11, median=0.61, std=0.03)),
+        not_fitted={"restitution_down": "needs  two\nthresholds"})
+
+
+def test_table_all_rows_are_the_stored_values():
+    rows = _table_summary().table()
+    got = {r.quantity: (r.value, r.stderr, r.unit) for r in rows}
+    assert list(got)[:4] == ["grazing.gap_m", "grazing.f_s_hz", "grazing.zeta",
+                             "grazing.participation (fixed)"]
+    assert got["grazing.gap_m"] == (1.25e-3, 2e-6, "m")
+    assert got["grazing_ramp.zeta"] == (0.0085, 1e-5, "1")
+    assert got["restitution_ratio.e"] == (0.6, 0.01, "1")
+    # the SPL slope's "stderr" is half its 95 % interval: (5.2 - 4.9) / 2
+    assert got["spl_law_first.slope (95% half)"] == (5.0, pytest.approx(0.15, rel=1e-12),
+                                                      "Pa/(m/s)")
+    assert got["spl_law_first.r2"] == (0.99, None, "1")
+    assert "spl_law_max.r2" not in got and not any("damping_ramp" in q for q in got)
+    assert [r.fixed for r in rows[:4]] == [False, False, False, True]
+
+
+def test_table_truth_rows_pair_each_fit_with_the_truth():
+    truth = {"gap_m": 1.3e-3, "f_s_hz": 96.0, "zeta": 0.0085, "e": 0.6}
+    rows = _table_summary().table("truth", truth=truth)
+    assert [(r.quantity, r.value, r.truth) for r in rows][:5] == [
+        ("gap", 1.25e-3, 1.3e-3), ("f_s", 96.0, 96.0), ("zeta", 0.0097, 0.0085),
+        ("gap (ramp-corrected)", 1.3e-3, 1.3e-3), ("zeta (ramp-corrected)", 0.0085, 0.0085)]
+    # a fit not made keeps its row, empty; a truth not given is NaN
+    down = next(r for r in rows if r.quantity == "e (down thresholds)")
+    assert (down.value, down.stderr, down.truth) == (None, None, 0.6)
+    assert math.isnan(rows[-1].truth) and rows[-1].stderr == pytest.approx(0.15, rel=1e-12)
+    empty = FitSummary(0, 0).table("truth", truth=truth)
+    assert [r.quantity for r in empty] == ["gap", "f_s", "zeta", "e (velocity ratios)",
+                                           "e (down thresholds)", "SPL slope, 1st peak (95%)"]
+    assert all(r.value is None for r in empty)
+    with pytest.raises(TypeError, match="needs the truth"):
+        FitSummary(0, 0).table("truth")
+    with pytest.raises(ValueError, match="unknown view"):
+        FitSummary(0, 0).table("pretty")  # type: ignore[arg-type]
+
+
+def test_table_recommended_rows():
+    rows = _table_summary().table("recommended")
+    main = {r.quantity: r for r in rows if r.section == ""}
+    # the ramp-corrected gap, in mm; its interval is Student t with len(lag_rel) - 3 = 5
+    # degrees of freedom: t(0.975, 5) = 2.5705818366147395 (tables)
+    gap = main["gap h (ramp-corrected)"]
+    assert (gap.value, gap.stderr, gap.unit) == (pytest.approx(1.3), pytest.approx(1e-3), "mm")
+    half = 2.5705818366147395 * 1e-3
+    assert gap.ci == (pytest.approx(1.3 - half, rel=1e-12), pytest.approx(1.3 + half, rel=1e-12))
+    assert main["zeta (ramp-corrected)"].ci == (0.0084, 0.0086)  # as the fit gave it
+    part = main["participation Q1/Q2"]
+    assert part.fixed and part.stderr is None and part.ci == (None, None)
+    e = main["e (velocity ratios)"]
+    half = 2.2281388519649385 * 0.01  # t(0.975, 10)
+    assert e.ci == (pytest.approx(0.6 - half, rel=1e-12), pytest.approx(0.6 + half, rel=1e-12))
+    assert e.note == "from 11 impacts; median 0.61, scatter (std) 0.03"
+    assert main["e (disappearance thresholds)"].note == "not fitted: needs two thresholds"
+    assert main["SPL law, maximum peak"].note == "not fitted: not fitted"
+    assert "zeta (ramp replay)" not in main  # neither fitted nor tried
+    # the SPL slope's std. error is the one behind its OLS t interval, n - 2 = 28 dof:
+    # t(0.975, 28) = 2.0484071417952445
+    slope = main["SPL first peak: slope"]
+    assert slope.stderr == pytest.approx(0.15 / 2.0484071417952445, rel=1e-12)
+    # the eq. (3.4) values the ramp-corrected ones supersede, with their biases, then notes
+    eq34 = [r for r in rows if r.section == "eq34"]
+    assert [r.quantity for r in eq34] == ["gap h, eq. (3.4)", "zeta, eq. (3.4)",
+                                          "f_s, eq. (3.4)", ""]
+    assert eq34[0].value == pytest.approx(1.25) and eq34[0].note == "BIASED: ramp lag"
+    assert eq34[-1].note == "note: thresholds left out as outliers at 97.5 Hz"
+
+
+@settings(max_examples=60, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(_SUMMARY)
+def test_table_takes_any_summary(summary):
+    # any summary a store can hold (missing values, NaN normalised to None) gives every view
+    for rows in (summary.table(), summary.table("recommended"),
+                 summary.table("truth", truth={})):
+        assert all(isinstance(r.quantity, str) for r in rows)
+        assert all(r.value is None or math.isfinite(r.value) for r in rows)

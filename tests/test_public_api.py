@@ -95,7 +95,7 @@ PACKAGES: dict[str, list[str]] = {
     "rattle_lab.fit": [
         "DbLaw", "GrazingFit", "analyse_run", "check_fit_params", "fit_runs", "json_ready",
         "load_pipeline",
-        "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
+        "summarise_fits", "LinearLaw", "RestitutionFit", "RestitutionStats",
         "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
         "pooled_ringing_share", "ratios_of_runs", "restitution_from_ratios",
         "ringing_corrected_ratios", "saddle_node_threshold_ms2",
@@ -105,7 +105,7 @@ PACKAGES: dict[str, list[str]] = {
         "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
         "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
         "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun",
-        "ThresholdTable", "TransientRun", "ParticipationInfo",
+        "TableRow", "ThresholdTable", "TransientRun", "ParticipationInfo",
         "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
         "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K",
         "FIT_KEYS", "SOUND_KEYS"

@@ -96,35 +96,9 @@ def as_table(summary: FitSummary) -> str:
     lines = ["quantity                          value          stderr         unit",
              "--------------------------------  -------------  -------------  ----------------"]
     fits = summary.fits
-    rows: list[tuple[str, Any, Any, str]] = []
-    if fits.grazing is not None:
-        for name, p in fits.grazing.parameters().items():
-            rows.append((f"grazing.{name}" + ("" if p.vary else " (fixed)"), p.value, p.stderr,
-                         p.unit))
-    if fits.grazing_ramp is not None:
-        for name in fits.grazing_ramp.PARAMETERS:
-            est = getattr(fits.grazing_ramp, name)
-            rows.append((f"grazing_ramp.{name}", est.value, est.stderr, est.unit))
-    if fits.damping_ramp is not None:
-        rows.append(("damping_ramp.zeta (ramp replay)", fits.damping_ramp.value,
-                     fits.damping_ramp.stderr, "1"))
-    if fits.restitution_ratio is not None:
-        rows.append(("restitution_ratio.e", fits.restitution_ratio.value,
-                     fits.restitution_ratio.stderr, "1"))
-    if fits.restitution_down is not None:
-        down = fits.restitution_down
-        rows.append((f"restitution_down.e ({down.method or '?'})", down.value, down.stderr, "1"))
-    for name in ("first", "max", "rms"):
-        law = fits.spl_law(name)
-        if law is not None:
-            lin = law.linear
-            half = None if lin.slope_ci_low is None or lin.slope_ci_high is None \
-                else (lin.slope_ci_high - lin.slope_ci_low) / 2
-            rows.append((f"spl_law_{name}.slope (95% half)", lin.slope, half, "Pa/(m/s)"))
-            rows.append((f"spl_law_{name}.r2", lin.r2, None, "1"))
-            rows.append((f"spl_law_{name}.db_offset", law.db.c_db, None, "dB re 20 uPa @1 m/s"))
-    for label, value, err, unit in rows:
-        lines.append(f"{label:<32}  {_num(value):<13}  {_num(err):<13}  {unit}")
+    for row in summary.table():
+        lines.append(f"{row.quantity:<32}  {_num(row.value):<13}  {_num(row.stderr):<13}  "
+                     f"{row.unit}")
     part = summary.participation
     if part is not None and not all(r.protocol == "transient" for r in summary.runs):
         lines.append(f"participation Q1/Q2 = {_num(part.value)} ({part.source})")

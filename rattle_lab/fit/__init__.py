@@ -12,7 +12,6 @@ from rattle_lab._lazy import lazy_names
 if TYPE_CHECKING:
     from ._bands import (SIGNIFICANCE_K, band_quantile, grazing_band_ms2, hysteresis_uncertainty_ms2,
                          linear_law_band, negative_hysteresis, student_t_ci, threshold_hysteresis)
-    from ._common import ParamEstimate
     from ._damping import RampDampingFit, fit_zeta_ramp
     from ._grazing import GrazingFit, fit_grazing
     from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
@@ -28,7 +27,7 @@ if TYPE_CHECKING:
                              GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
                              RatioRestitution, SplLawSummary)
     from ._summary import (SUMMARY_SCHEMA_VERSION, FitSummary, ParticipationInfo, RunRow,
-                           SkippedRun, ThresholdTable, TransientRun)
+                           SkippedRun, TableRow, ThresholdTable, TransientRun)
 
 #: public name -> submodule that defines it; loaded on first use, so that a command that needs
 #: the parameter names only (``rattle-lab run`` checking its pipeline file) does not import
@@ -42,7 +41,6 @@ _LAZY: dict[str, str] = {
     "negative_hysteresis": "_bands",
     "student_t_ci": "_bands",
     "threshold_hysteresis": "_bands",
-    "ParamEstimate": "_common",
     "RampDampingFit": "_damping",
     "fit_zeta_ramp": "_damping",
     "GrazingFit": "_grazing",
@@ -90,6 +88,7 @@ _LAZY: dict[str, str] = {
     "ParticipationInfo": "_summary",
     "RunRow": "_summary",
     "SkippedRun": "_summary",
+    "TableRow": "_summary",
     "ThresholdTable": "_summary",
     "TransientRun": "_summary",
 }
@@ -97,7 +96,7 @@ _LAZY: dict[str, str] = {
 __all__ = [
     "DbLaw", "GrazingFit", "analyse_run", "check_fit_params", "fit_runs", "json_ready",
     "load_pipeline",
-    "summarise_fits", "LinearLaw", "ParamEstimate", "RestitutionFit", "RestitutionStats",
+    "summarise_fits", "LinearLaw", "RestitutionFit", "RestitutionStats",
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
     "pooled_ringing_share", "ratios_of_runs", "restitution_from_ratios", "ringing_corrected_ratios",
     "saddle_node_threshold_ms2",
@@ -106,8 +105,8 @@ __all__ = [
     "RunResult", "StoreFit",
     "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
     "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
-    "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun", "ThresholdTable",
-    "TransientRun", "ParticipationInfo",
+    "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun", "TableRow",
+    "ThresholdTable", "TransientRun", "ParticipationInfo",
     "band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci",
     "threshold_hysteresis", "negative_hysteresis", "hysteresis_uncertainty_ms2", "SIGNIFICANCE_K",
     "FIT_KEYS", "SOUND_KEYS",

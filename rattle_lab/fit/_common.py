@@ -1,8 +1,7 @@
-"""Helpers shared by the fits: argument checks, parameter summaries of lmfit results."""
+"""Helpers shared by the fits: argument checks, the correlation matrix of an lmfit result."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import math
@@ -26,37 +25,6 @@ def check_positive(**values: float) -> None:
     for name, value in values.items():
         if not (math.isfinite(value) and value > 0):
             raise ParameterError(f"`{name}` must be finite and > 0, was {value}")
-
-
-@dataclass(frozen=True)
-class ParamEstimate:
-    """One fitted parameter.
-
-    Attributes
-    ----------
-    name : str
-        Parameter name (carries its unit, e.g. ``gap_m``).
-    value : float
-        Best-fit value.
-    stderr : float
-        Standard error from the covariance matrix (NaN when not identifiable).
-    ci_low, ci_high : float
-        2-sigma (95.4 %) profile confidence interval (``lmfit.conf_interval``); NaN when not computed.
-    vary : bool
-        False for a parameter held fixed.
-    """
-
-    name: str
-    value: float
-    stderr: float
-    ci_low: float
-    ci_high: float
-    vary: bool
-
-    def as_dict(self) -> dict[str, Any]:
-        """Plain dict (JSON-ready)."""
-        return {"name": self.name, "value": self.value, "stderr": self.stderr,
-                "ci_low": self.ci_low, "ci_high": self.ci_high, "vary": self.vary}
 
 
 def correlation_matrix(result: Any, names: list[str]) -> np.ndarray:

@@ -22,7 +22,8 @@ from scipy import optimize
 
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.detect.thresholds import Threshold
-from ._common import ParamEstimate, check_positive
+from ._common import check_positive
+from ._estimates import Estimate
 from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
 
 
@@ -32,7 +33,7 @@ class RampDampingFit:
 
     Attributes
     ----------
-    zeta : ParamEstimate
+    zeta : Estimate
         Damping ratio, nondimensional.  ``stderr``: linearised, ``sqrt(s2 / sum((g /
         sigma)^2))`` with ``g = dA/dzeta`` by central differences at ``+-2 %``;
         ``ci_low``, ``ci_high``: ``value -+ 2 stderr``.
@@ -50,7 +51,7 @@ class RampDampingFit:
         Warnings (an estimate at a bound of the search).
     """
 
-    zeta: ParamEstimate
+    zeta: Estimate
     run_ids: tuple[str, ...]
     freq_hz: np.ndarray
     accel_ms2: np.ndarray
@@ -62,7 +63,7 @@ class RampDampingFit:
     notes: tuple[str, ...]
 
     @property
-    def params(self) -> dict[str, ParamEstimate]:
+    def params(self) -> dict[str, Estimate]:
         """``{"zeta": ...}`` (same shape as the other fits)."""
         return {"zeta": self.zeta}
 
@@ -161,7 +162,7 @@ def fit_zeta_ramp(thresholds: Sequence[Threshold], *, gap_m: float, f_s_hz: floa
     g = (model(z + dz) - model(z - dz)) / (2 * dz)
     info = float(np.sum((g / sigma) ** 2))
     stderr = float(np.sqrt(s2 / info)) if info > 0 else float("nan")
-    est = ParamEstimate("zeta", z, stderr, z - 2 * stderr, z + 2 * stderr, True)
+    est = Estimate(z, stderr, "1", z - 2 * stderr, z + 2 * stderr)
     return RampDampingFit(est, tuple(t.run_id for t in points),
                           np.array([t.freq_hz for t in points]), acc, sigma, best, best - acc,
                           c2, s2, tuple(notes))

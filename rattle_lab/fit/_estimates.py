@@ -172,6 +172,14 @@ class Estimate(_Normalised):
         fits); None when not computed.
     notes : tuple of str
         Data-quality notes on this value (e.g. a stderr that leaves out a known bias).
+    vary : bool
+        False for a parameter held fixed, not fitted (stored only when False, except by
+        :class:`GrazingParameter`, which always stores it).
+
+    The one estimate type of :mod:`rattle_lab.fit`: the fitting functions
+    (:func:`~rattle_lab.fit.fit_grazing`, :func:`~rattle_lab.fit.fit_zeta_ramp`,
+    :func:`~rattle_lab.fit.fit_restitution_down`, ...) return their parameters as
+    Estimates, and the store-level fits are made of them; what is not available is None.
     """
 
     value: float | None
@@ -180,6 +188,7 @@ class Estimate(_Normalised):
     ci_low: float | None = None
     ci_high: float | None = None
     notes: tuple[str, ...] = ()
+    vary: bool = True
 
     def _base(self, *, ci: bool = True) -> dict[str, Any]:
         d: dict[str, Any] = {"value": self.value, "stderr": self.stderr, "unit": self.unit}
@@ -187,18 +196,30 @@ class Estimate(_Normalised):
             d["ci"] = [self.ci_low, self.ci_high]
         return d
 
+    @property
+    def float_value(self) -> float:
+        """``value`` as a float for arithmetic: NaN where it is not available (None)."""
+        return float("nan") if self.value is None else self.value
+
+    def _fixed(self, d: dict[str, Any]) -> dict[str, Any]:
+        """``d`` with ``"vary": false`` added for a parameter held fixed."""
+        if not self.vary:
+            d["vary"] = False
+        return d
+
     def to_dict(self) -> dict[str, Any]:
-        """``{"value", "stderr", "unit", "ci": [low, high]}``, and ``"notes"`` when any."""
+        """``{"value", "stderr", "unit", "ci": [low, high]}``, ``"notes"`` when any and
+        ``"vary": false`` for a parameter held fixed."""
         d = self._base()
         if self.notes:
             d["notes"] = list(self.notes)
-        return d
+        return self._fixed(d)
 
     @staticmethod
     def _read(r: _In, *, ci: bool = True) -> dict[str, Any]:
         lo, hi = r.pair("ci") if ci or "ci" in r else (None, None)
         return dict(value=r["value"], stderr=r["stderr"], unit=r["unit"], ci_low=lo, ci_high=hi,
-                    notes=r.get("notes", ()))
+                    notes=r.get("notes", ()), vary=r.get("vary", True))
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], path: str = "estimate") -> Estimate:
@@ -215,7 +236,7 @@ class GrazingParameter(Estimate):
     Attributes
     ----------
     vary : bool
-        False for a parameter held fixed (``participation`` by default).
+        False for a parameter held fixed (``participation`` by default); always stored.
     bias_rel : float or None
         ``zeta`` only, with a ramp-replay damping: ``zeta / zeta_ramp - 1`` (eq. 3.4 reads
         the ramp lag as damping; its interval leaves that out).
@@ -223,12 +244,14 @@ class GrazingParameter(Estimate):
         The same in words ("" when not computed).
     """
 
-    vary: bool = True
     bias_rel: float | None = None
     bias_note: str = ""
 
     def to_dict(self) -> dict[str, Any]:
-        d = {**super().to_dict(), "vary": self.vary}
+        d = self._base()
+        if self.notes:
+            d["notes"] = list(self.notes)
+        d["vary"] = self.vary
         if self.bias_rel is not None or self.bias_note:
             d.update(bias_rel=self.bias_rel, bias_note=self.bias_note)
         return d
@@ -236,7 +259,7 @@ class GrazingParameter(Estimate):
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], path: str = "parameter") -> GrazingParameter:
         r = _In(d, path)
-        return r.build(cls, **cls._read(r), vary=r["vary"],  # type: ignore[no-any-return]
+        return r.build(cls, **{**cls._read(r), "vary": r["vary"]},  # type: ignore[no-any-return]
                        bias_rel=r.get("bias_rel"), bias_note=r.get("bias_note", ""))
 
 
@@ -337,7 +360,7 @@ class RatioRestitution(Estimate):
                      ringing_runs=self.ringing_runs)
         if self.notes:
             d["notes"] = list(self.notes)
-        return d
+        return self._fixed(d)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], path: str = "fits.restitution_ratio"
@@ -373,8 +396,8 @@ class RampDamping(Estimate):
         return {"method": self.method, "n": self.n}
 
     def to_dict(self) -> dict[str, Any]:
-        return {**self._base(), **self._extra(), "residuals_ms2": list(self.residuals_ms2),
-                "notes": list(self.notes)}
+        return self._fixed({**self._base(), **self._extra(),
+                            "residuals_ms2": list(self.residuals_ms2), "notes": list(self.notes)})
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], path: str = "fits.damping_ramp") -> RampDamping:
@@ -417,8 +440,9 @@ class DownRestitution(RampDamping):
 
 @dataclass(frozen=True)
 class LinearLawSummary(_Normalised):
-    """``|p| = slope |v| + intercept`` (:class:`~rattle_lab.fit.LinearLaw`): slope Pa/(m/s),
-    intercept Pa, each with its 95 % interval; ``r2`` and the ``n`` points used."""
+    """``|p| = slope |v| + intercept``: slope Pa/(m/s), intercept Pa, each with its 95 %
+    interval; ``r2`` and the ``n`` points used.  What :func:`~rattle_lab.fit.fit_linear_law`
+    returns (:class:`~rattle_lab.fit.LinearLaw` is this class) and the store keeps."""
 
     slope: float | None
     slope_ci_low: float | None
@@ -430,6 +454,16 @@ class LinearLawSummary(_Normalised):
     n: int
     slope_unit: str = "Pa/(m/s)"
     intercept_unit: str = "Pa"
+
+    @property
+    def slope_ci(self) -> tuple[float | None, float | None]:
+        """``(slope_ci_low, slope_ci_high)``."""
+        return self.slope_ci_low, self.slope_ci_high
+
+    @property
+    def intercept_ci(self) -> tuple[float | None, float | None]:
+        """``(intercept_ci_low, intercept_ci_high)``."""
+        return self.intercept_ci_low, self.intercept_ci_high
 
     def to_dict(self) -> dict[str, Any]:
         return {"slope": self.slope, "slope_ci": [self.slope_ci_low, self.slope_ci_high],
@@ -450,8 +484,10 @@ class LinearLawSummary(_Normalised):
 
 @dataclass(frozen=True)
 class DbLawSummary(_Normalised):
-    """``L = 20 log10 v + c_db`` (:class:`~rattle_lab.fit.DbLaw`): ``c_db`` in dB re 20 uPa at
-    1 m/s with its 95 % interval, the free slope ``k_db_per_decade`` and ``n`` points."""
+    """``L = 20 log10 v + c_db``: ``c_db`` in dB re 20 uPa at 1 m/s with its 95 % interval,
+    the free slope ``k_db_per_decade`` and ``n`` points.  What
+    :func:`~rattle_lab.fit.fit_db_law` returns (:class:`~rattle_lab.fit.DbLaw` is this
+    class) and the store keeps."""
 
     c_db: float | None
     c_ci_low: float | None
@@ -459,6 +495,11 @@ class DbLawSummary(_Normalised):
     k_db_per_decade: float | None
     n: int
     unit: str = "dB re 20 uPa at 1 m/s"
+
+    @property
+    def c_ci(self) -> tuple[float | None, float | None]:
+        """``(c_ci_low, c_ci_high)``."""
+        return self.c_ci_low, self.c_ci_high
 
     def to_dict(self) -> dict[str, Any]:
         return {"c_db": self.c_db, "c_ci": [self.c_ci_low, self.c_ci_high],

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Any
 
 import lmfit
 import numpy as np
@@ -28,7 +27,11 @@ import numpy as np
 from rattle_lab.detect import robust_sigma
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.model.linear import threshold_accel_unchecked
-from ._common import ParamEstimate, correlation_matrix
+from ._common import correlation_matrix
+from ._estimates import Estimate
+
+#: unit of each parameter of the fit
+_UNITS = {"gap_m": "m", "f_s_hz": "Hz", "zeta": "1", "participation": "1"}
 
 _CORR_LIMIT = 0.995
 
@@ -48,7 +51,7 @@ class GrazingFit:
 
     Attributes
     ----------
-    params : dict of str to ParamEstimate
+    params : dict of str to Estimate
         ``gap_m`` (m), ``f_s_hz`` (Hz), ``zeta`` (nondimensional), ``participation``.
     freq_hz, accel_ms2 : ndarray
         The data (all points).
@@ -66,7 +69,7 @@ class GrazingFit:
         Reduced chi-square of the relative residuals of the final fit.
     """
 
-    params: dict[str, ParamEstimate]
+    params: dict[str, Estimate]
     freq_hz: np.ndarray
     accel_ms2: np.ndarray
     residuals_ms2: np.ndarray
@@ -79,9 +82,9 @@ class GrazingFit:
     def predict(self, freq_hz: object) -> np.ndarray:
         """Threshold acceleration of the fitted model at ``freq_hz``, m/s^2."""
         p = self.params
-        return threshold_accel_unchecked(np.asarray(freq_hz, dtype=float), p["gap_m"].value,
-                                         p["f_s_hz"].value, p["zeta"].value,
-                                         p["participation"].value)
+        return threshold_accel_unchecked(np.asarray(freq_hz, dtype=float),
+                                         p["gap_m"].float_value, p["f_s_hz"].float_value,
+                                         p["zeta"].float_value, p["participation"].float_value)
 
 
 def _initial(freq: np.ndarray, acc: np.ndarray, q: float) -> tuple[float, float, float]:
@@ -189,16 +192,11 @@ def fit_grazing(freq_hz: object, accel_ms2: object, *, participation: float = 1.
         p = final.params[src]
         lo, hi = ci.get(src, (np.nan, np.nan))
         std = p.stderr if (p.stderr is not None and p.vary) else np.nan
-        params[dst] = ParamEstimate(dst, scale_to * float(p.value), scale_to * float(std),
-                                    scale_to * lo, scale_to * hi, bool(p.vary))
+        params[dst] = Estimate(scale_to * float(p.value), scale_to * float(std), _UNITS[dst],
+                               scale_to * lo, scale_to * hi, vary=bool(p.vary))
     resid = np.full(f.shape, np.nan)
     resid[ok] = final.eval(params=final.params, freq_hz=fo) - ao
     outl = np.zeros(f.shape, dtype=bool)
     outl[np.flatnonzero(ok)[~inlier]] = True
     return GrazingFit(params, f, a, resid, outl, corr, tuple(shown),
                       tuple(notes), float(final.redchi))
-
-
-def summary_dict(fit: Any) -> dict[str, Any]:
-    """JSON-ready summary of a fit result with ``params`` (a dict of ParamEstimate)."""
-    return {name: p.as_dict() for name, p in fit.params.items()}

@@ -135,7 +135,7 @@ def fit_grazing_ramp(thresholds: Sequence[Threshold], *, participation: float = 
     fit, lag = start, np.zeros(acc.size)
     done = 0
     for done in range(1, max_iterations + 1):  # noqa: B007 (the count is reported)
-        p = {k: fit.params[k].value for k in ("gap_m", "f_s_hz", "zeta")}
+        p = {k: fit.params[k].float_value for k in ("gap_m", "f_s_hz", "zeta")}
         model = np.array([model_threshold(r, e=e, participation=participation, n_phases=n_phases,
                                           n_confirm=n_confirm, max_gap_cycles=max_gap_cycles,
                                           edge_cycles=edge_cycles,
@@ -154,7 +154,7 @@ def fit_grazing_ramp(thresholds: Sequence[Threshold], *, participation: float = 
         # are computed once, for the last round's levels
         new = fit_grazing(fc, ac, participation=participation, gap_m=p["gap_m"],
                           conf_interval=False)
-        moved = max(abs(new.params[k].value / p[k] - 1.0) for k in p)
+        moved = max(abs(new.params[k].float_value / p[k] - 1.0) for k in p)
         fit = new
         if moved < rtol:
             break

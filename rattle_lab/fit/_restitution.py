@@ -41,7 +41,8 @@ from scipy import stats
 from rattle_lab.detect import RINGING_RESIDUAL_RATIO
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.detect.thresholds import Threshold
-from ._common import ParamEstimate, check_positive
+from ._common import check_positive
+from ._estimates import Estimate
 from ._params import METHODS
 from ._profile import _search_coarse, profile_interval, profile_parabola
 from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
@@ -324,7 +325,7 @@ class RestitutionFit:
 
     Attributes
     ----------
-    e : ParamEstimate
+    e : Estimate
         Fitted coefficient of restitution (``method="ramp"``: the vertex of a parabola
         ``chi2 ~ a (e - value)^2 + c`` fitted to the profile within ``4 s2`` of its
         minimum, ``s2 = chi2_scale``).  ``stderr``: ``sqrt(s2 / a)`` (or, without a
@@ -362,7 +363,7 @@ class RestitutionFit:
         What the data could not determine, and warnings (e.g. ramp lag for quasi-static).
     """
 
-    e: ParamEstimate
+    e: Estimate
     method: str
     run_ids: tuple[str, ...]
     freq_hz: np.ndarray
@@ -378,7 +379,7 @@ class RestitutionFit:
     notes: tuple[str, ...]
 
     @property
-    def params(self) -> dict[str, ParamEstimate]:
+    def params(self) -> dict[str, Estimate]:
         """``{"e": ...}`` (same shape as the other fits)."""
         return {"e": self.e}
 
@@ -415,8 +416,8 @@ def _quasi_static(points: list[Threshold], *, gap_m: float, f_s_hz: float, zeta:
         raise ConvergenceError(f"the restitution fit did not converge: {res.message}")
     p = res.params["e"]
     std = float(p.stderr) if p.stderr is not None else np.nan
-    est = ParamEstimate("e", float(p.value), std, float(p.value) - 2 * std,
-                        float(p.value) + 2 * std, True)
+    est = Estimate(float(p.value), std, "1", float(p.value) - 2 * std,
+                   float(p.value) + 2 * std)
     notes = []
     tau_s = 1.0 / (zeta * 2 * np.pi * f_s_hz)
     for t in points:
@@ -512,7 +513,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
     if method not in METHODS:
         raise ParameterError(f"`method` must be one of {METHODS}, was {method!r}")
     check_positive(gap_m=gap_m, f_s_hz=f_s_hz, zeta=zeta, participation=participation)
-    if not (np.isfinite(zeta_stderr) and zeta_stderr >= 0):
+    if zeta_stderr is None or not (np.isfinite(zeta_stderr) and zeta_stderr >= 0):
         raise ParameterError(f"`zeta_stderr` must be finite and >= 0, was {zeta_stderr}")
     points = _down_points(thresholds, f_s_hz, zeta)
     if method == "quasi-static":
@@ -609,7 +610,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
     ci_low = value - float(np.hypot(value - lo2, 2 * from_zeta))
     ci_high = value + float(np.hypot(hi2 - value, 2 * from_zeta))
     best = model(value)
-    est = ParamEstimate("e", value, stderr, ci_low, ci_high, True)
+    est = Estimate(value, stderr, "1", ci_low, ci_high)
     return RestitutionFit(est, "ramp", tuple(t.run_id for t in points),
                           np.array([t.freq_hz for t in points]), acc, sigma, best, best - acc,
                           grid, chi2, s2, float(zeta), from_zeta, tuple(notes))

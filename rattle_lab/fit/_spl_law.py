@@ -8,56 +8,19 @@ Linear law ``p = slope * v + intercept`` by ordinary least squares
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from scipy import stats
 
 from rattle_lab.detect import spl_db
 from rattle_lab.exceptions import ParameterError
+from ._estimates import DbLawSummary, LinearLawSummary
 
 
-@dataclass(frozen=True)
-class LinearLaw:
-    """``p_pa = slope * v_m_s + intercept``.
+#: The linear SPL law: one class with the stored one (``slope_ci`` is ``(low, high)``).
+LinearLaw = LinearLawSummary
 
-    Attributes
-    ----------
-    slope, slope_ci : float, (float, float)
-        Pa/(m/s), with its 95 % confidence interval.
-    intercept, intercept_ci : float, (float, float)
-        Pa.
-    r2 : float
-        Coefficient of determination.
-    n : int
-        Points used.
-    """
-
-    slope: float
-    slope_ci: tuple[float, float]
-    intercept: float
-    intercept_ci: tuple[float, float]
-    r2: float
-    n: int
-
-
-@dataclass(frozen=True)
-class DbLaw:
-    """``L_db = 20 log10(v_m_s) + c_db`` (and free slope ``k_db_per_decade``).
-
-    Attributes
-    ----------
-    c_db, c_ci : float, (float, float)
-        Offset, dB re 20 uPa at 1 m/s, with its 95 % interval.
-    k_db_per_decade : float
-        Slope of the free fit ``L = k log10 v + C'`` (20 for a linear law), dB/decade.
-    n : int
-    """
-
-    c_db: float
-    c_ci: tuple[float, float]
-    k_db_per_decade: float
-    n: int
+#: The dB SPL law: one class with the stored one (``c_ci`` is ``(low, high)``).
+DbLaw = DbLawSummary
 
 
 def _clean(v: object, p: object) -> tuple[np.ndarray, np.ndarray]:
@@ -71,7 +34,7 @@ def _clean(v: object, p: object) -> tuple[np.ndarray, np.ndarray]:
     return va[ok], pa[ok]
 
 
-def fit_linear_law(v_m_s: object, p_pa: object) -> LinearLaw:
+def fit_linear_law(v_m_s: object, p_pa: object) -> LinearLawSummary:
     """Fit ``|p| = slope |v| + intercept``.
 
     Examples
@@ -84,13 +47,14 @@ def fit_linear_law(v_m_s: object, p_pa: object) -> LinearLaw:
     v, p = _clean(v_m_s, p_pa)
     r = stats.linregress(v, p)
     t = stats.t.ppf(0.975, v.size - 2)
-    return LinearLaw(float(r.slope), (float(r.slope - t * r.stderr), float(r.slope + t * r.stderr)),
-                     float(r.intercept), (float(r.intercept - t * r.intercept_stderr),
-                                          float(r.intercept + t * r.intercept_stderr)),
-                     float(r.rvalue**2), int(v.size))
+    return LinearLawSummary(float(r.slope), float(r.slope - t * r.stderr),
+                            float(r.slope + t * r.stderr), float(r.intercept),
+                            float(r.intercept - t * r.intercept_stderr),
+                            float(r.intercept + t * r.intercept_stderr), float(r.rvalue**2),
+                            int(v.size))
 
 
-def fit_db_law(v_m_s: object, p_pa: object) -> DbLaw:
+def fit_db_law(v_m_s: object, p_pa: object) -> DbLawSummary:
     """Fit ``L = 20 log10 v + C`` (C in dB re 20 uPa at 1 m/s)."""
     v, p = _clean(v_m_s, p_pa)
     level = spl_db(p)
@@ -98,5 +62,5 @@ def fit_db_law(v_m_s: object, p_pa: object) -> DbLaw:
     sem = float(stats.sem(c)) if c.size > 1 else np.nan
     t = stats.t.ppf(0.975, c.size - 1)
     k = float(stats.linregress(np.log10(v), level).slope)
-    return DbLaw(float(np.mean(c)), (float(np.mean(c) - t * sem), float(np.mean(c) + t * sem)), k,
-                 int(v.size))
+    return DbLawSummary(float(np.mean(c)), float(np.mean(c) - t * sem),
+                        float(np.mean(c) + t * sem), k, int(v.size))

@@ -336,7 +336,7 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
                                  participation=p["participation"].value)
     down, ramp = None, None
     missing: dict[str, str] = {}
-    zeta, zeta_se, zeta_note = p["zeta"].value, p["zeta"].stderr, ""
+    zeta, zeta_se, zeta_note = p["zeta"].float_value, p["zeta"].stderr, ""
     if method == "ramp":
         try:
             zf = fit_zeta_ramp(thresholds, zeta0=zeta, e=e_guess, n_confirm=n_confirm,
@@ -346,13 +346,13 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
                                method="ramp replay of the upward thresholds",
                                n=len(zf.run_ids),
                                residuals_ms2=tuple(zf.residuals_ms2.tolist()))
-            zeta, zeta_se = z.value, z.stderr
+            zeta, zeta_se = z.float_value, z.stderr
         except RattleLabError as exc:
             missing["damping_ramp"] = str(exc)
             zeta_note = f"zeta from the grazing fit (ramp-model damping not fitted: {exc})"
     try:
         rf = fit_restitution_down(thresholds, zeta=zeta, method=method, n_confirm=n_confirm,
-                                  zeta_stderr=zeta_se if np.isfinite(zeta_se) else 0.0,
+                                  zeta_stderr=0.0 if zeta_se is None else zeta_se,
                                   level_hold_periods=hold, **modal)
         e = rf.e
         down = DownRestitution(e.value, e.stderr, "1", e.ci_low, e.ci_high,

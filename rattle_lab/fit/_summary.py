@@ -53,15 +53,16 @@ kept as JSON values under the same rules.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from rattle_lab.exceptions import SummaryFormatError, SummaryVersionError
-from ._bands import negative_hysteresis
-from ._estimates import Fits, _In, _json, _Normalised
+from ._bands import negative_hysteresis, student_t_ci
+from ._estimates import Fits, RatioRestitution, _In, _json, _Normalised
 
 #: Layout version of :meth:`FitSummary.to_dict`; :meth:`FitSummary.from_dict` reads only this.
 SUMMARY_SCHEMA_VERSION = 1
@@ -220,6 +221,280 @@ class TransientRun(_Normalised):
                        channels=r["channels"])
 
 
+# --- the table of fitted quantities -----------------------------------------------------------
+
+@dataclass(frozen=True)
+class TableRow:
+    """One row of :meth:`FitSummary.table`: a fitted quantity as the CLI, the demo and the
+    report print it.
+
+    Attributes
+    ----------
+    quantity : str
+        Its label (``""``: a row that is only a note).
+    value, stderr : float or None
+        Value and standard error, in ``unit`` (None: not available; ``stderr`` of the
+        ``"all"`` and ``"truth"`` views' SPL slope: half its 95 % interval).
+    unit : str
+        Unit of ``value`` (``"mm"`` for the gap in the ``"recommended"`` view, else SI).
+    ci_low, ci_high : float or None
+        95 % interval (``"recommended"`` view only).
+    truth : float or None
+        The synthetic rig's value (``"truth"`` view only; NaN where the truth has none).
+    fixed : bool
+        A parameter held fixed, not fitted.
+    note : str
+        What the reader needs to know about the value (``"recommended"`` view only).
+    section : str
+        ``""``, or ``"eq34"`` for the eq. (3.4) rows that the recommended values supersede.
+    """
+
+    quantity: str
+    value: float | None = None
+    stderr: float | None = None
+    unit: str = ""
+    ci_low: float | None = None
+    ci_high: float | None = None
+    truth: float | None = None
+    fixed: bool = False
+    note: str = ""
+    section: str = ""
+
+    @property
+    def ci(self) -> tuple[float | None, float | None]:
+        """``(ci_low, ci_high)``."""
+        return self.ci_low, self.ci_high
+
+
+def _fmt(x: Any, digits: str = ".4g") -> str:
+    """``x`` formatted with ``digits``; ``"-"`` for None or a non-finite number."""
+    if x is None:
+        return "-"
+    xf = float(x)
+    return format(xf, digits) if math.isfinite(xf) else "-"
+
+
+def _half(lo: float | None, hi: float | None) -> float | None:
+    return None if lo is None or hi is None else (hi - lo) / 2
+
+
+def _t_stderr(ci: tuple[Any, Any], dof: int) -> float | None:
+    """The standard error behind a Student t 95 % interval with ``dof`` degrees of freedom."""
+    from scipy import stats
+
+    lo, hi = ci
+    if lo is None or hi is None or dof < 1:
+        return None
+    return (hi - lo) / (2.0 * float(stats.t.ppf(0.975, dof)))
+
+
+def _all_rows(fits: Fits) -> list[TableRow]:
+    rows: list[TableRow] = []
+    if fits.grazing is not None:
+        for name, p in fits.grazing.parameters().items():
+            rows.append(TableRow(f"grazing.{name}" + ("" if p.vary else " (fixed)"), p.value,
+                                 p.stderr, p.unit, p.ci_low, p.ci_high, fixed=not p.vary))
+    if fits.grazing_ramp is not None:
+        for name in fits.grazing_ramp.PARAMETERS:
+            est = getattr(fits.grazing_ramp, name)
+            rows.append(TableRow(f"grazing_ramp.{name}", est.value, est.stderr, est.unit,
+                                 est.ci_low, est.ci_high))
+    for label, est in (("damping_ramp.zeta (ramp replay)", fits.damping_ramp),
+                       ("restitution_ratio.e", fits.restitution_ratio),
+                       (f"restitution_down.e ({fits.restitution_down.method or '?'})"
+                        if fits.restitution_down is not None else "", fits.restitution_down)):
+        if est is not None:
+            rows.append(TableRow(label, est.value, est.stderr, "1", est.ci_low, est.ci_high))
+    for name in ("first", "max", "rms"):
+        law = fits.spl_law(name)
+        if law is not None:
+            lin = law.linear
+            rows.append(TableRow(f"spl_law_{name}.slope (95% half)", lin.slope,
+                                 _half(lin.slope_ci_low, lin.slope_ci_high), "Pa/(m/s)",
+                                 lin.slope_ci_low, lin.slope_ci_high))
+            rows.append(TableRow(f"spl_law_{name}.r2", lin.r2, None, "1"))
+            rows.append(TableRow(f"spl_law_{name}.db_offset", law.db.c_db, None,
+                                 "dB re 20 uPa @1 m/s", law.db.c_ci_low, law.db.c_ci_high))
+    return rows
+
+
+def _truth_rows(fits: Fits, truth: Mapping[str, Any]) -> list[TableRow]:
+    def t(key: str) -> Any:
+        return truth.get(key, float("nan"))
+
+    rows: list[TableRow] = []
+    graz = fits.grazing
+    for key, name, unit in (("gap_m", "gap", "m"), ("f_s_hz", "f_s", "Hz"), ("zeta", "zeta", "1")):
+        p = graz.parameters()[key] if graz is not None else None
+        rows.append(TableRow(name, None if p is None else p.value,
+                             None if p is None else p.stderr, unit, truth=t(key)))
+    if fits.grazing_ramp is not None:  # eq. (3.4) less each ramp's replayed lag
+        for key, name, unit in (("gap_m", "gap (ramp-corrected)", "m"),
+                                ("zeta", "zeta (ramp-corrected)", "1")):
+            est = getattr(fits.grazing_ramp, key)
+            rows.append(TableRow(name, est.value, est.stderr, unit, truth=t(key)))
+    if fits.damping_ramp is not None:  # zeta from replaying the ramps, if fitted
+        z = fits.damping_ramp
+        rows.append(TableRow("zeta (ramp model)", z.value, z.stderr, "1", truth=t("zeta")))
+    for e, name in ((fits.restitution_ratio, "e (velocity ratios)"),
+                    (fits.restitution_down, "e (down thresholds)")):
+        rows.append(TableRow(name, None if e is None else e.value,
+                             None if e is None else e.stderr, "1", truth=t("e")))
+    law = fits.spl_law_first.linear if fits.spl_law_first is not None else None
+    lo, hi = (law.slope_ci_low, law.slope_ci_high) if law is not None else (None, None)
+    rows.append(TableRow("SPL slope, 1st peak (95%)", None if law is None else law.slope,
+                         _half(lo, hi),
+                         "Pa/(m/s)", lo, hi, truth=t("spl_slope_first")))
+    return rows
+
+
+#: grazing parameter -> (label, scale, unit) in the recommended view
+_GRAZING_NAMES = {"gap_m": ("gap h", 1e3, "mm"), "f_s_hz": ("f_s (modal frequency)", 1.0, "Hz"),
+                  "zeta": ("zeta (damping ratio)", 1.0, "1"),
+                  "participation": ("participation Q1/Q2", 1.0, "1")}
+
+
+def _scaled(quantity: str, value: Any, stderr: Any, ci: tuple[Any, Any] | None, unit: str,
+            note: str = "", scale: float = 1.0, *, fixed: bool = False,
+            section: str = "") -> TableRow:
+    def sc(x: Any) -> Any:
+        return None if x is None else float(x) * scale
+
+    lo, hi = (None, None) if fixed or ci is None or None in ci else (sc(ci[0]), sc(ci[1]))
+    return TableRow(quantity, sc(value), None if fixed else sc(stderr), unit, lo, hi,
+                    fixed=fixed, note=note, section=section)
+
+
+class _Recommended:
+    """The rows of the ``"recommended"`` view (:meth:`FitSummary.table`)."""
+
+    def __init__(self, summary: FitSummary):
+        self.summary, self.fits = summary, summary.fits
+
+    def not_fitted(self, key: str) -> str:
+        return " ".join(self.summary.not_fitted.get(key, "not fitted").split())
+
+    def grazing(self) -> list[TableRow]:
+        """Gap, zeta, f_s as recommended: ramp-corrected where that fit exists, else eq. (3.4)."""
+        g, rg, damp = self.fits.grazing, self.fits.grazing_ramp, self.fits.damping_ramp
+        assert g is not None
+        rows: list[TableRow] = []
+        for key in ("gap_m", "zeta", "f_s_hz", "participation"):
+            label, scale, unit = _GRAZING_NAMES[key]
+            p = g.parameters()[key]
+            if key == "participation":
+                rows.append(_scaled(label, p.value, p.stderr, (p.ci_low, p.ci_high), unit,
+                                    scale=scale, fixed=not p.vary))
+                continue
+            if rg is not None and getattr(rg, key).value is not None:
+                est = getattr(rg, key)
+                ci = (est.ci_low, est.ci_high)
+                if None in ci:
+                    ci = student_t_ci(est.value, est.stderr, max(len(rg.lag_rel) - 3, 0))
+                rows.append(_scaled(f"{label.split(' (')[0]} (ramp-corrected)"
+                                    if key != "f_s_hz" else "f_s, ramp-corrected",
+                                    est.value, est.stderr, ci, unit, "; ".join(est.notes),
+                                    scale=scale))
+            elif key == "zeta" and damp is not None and damp.value is not None:
+                ci = (damp.ci_low, damp.ci_high)
+                if None in ci:
+                    ci = student_t_ci(damp.value, damp.stderr, damp.n - 1)
+                rows.append(_scaled("zeta (ramp replay)", damp.value, damp.stderr, ci, unit,
+                                    "; ".join(damp.notes), scale=scale))
+            else:
+                rows.append(_scaled(f"{label}, eq. (3.4)", p.value, p.stderr,
+                                    (p.ci_low, p.ci_high), unit,
+                                    p.bias_note if p.vary else "", scale=scale,
+                                    fixed=not p.vary))
+        return rows
+
+    def others(self) -> list[TableRow]:
+        """Restitution (and the ramp-replay zeta where not above), then the SPL laws."""
+        fits, rows = self.fits, []
+        for key, label, what in (("damping_ramp", "zeta (ramp replay)", "upward ramps"),
+                                 ("restitution_ratio", "e (velocity ratios)", "impacts"),
+                                 ("restitution_down", "e (disappearance thresholds)",
+                                  "thresholds")):
+            est = getattr(fits, key)
+            if key == "damping_ramp" and (fits.grazing_ramp is None and est is not None):
+                continue  # already the recommended zeta above
+            if est is None:
+                if key != "damping_ramp" or key in self.summary.not_fitted:  # only if tried
+                    rows.append(TableRow(label, note="not fitted: " + self.not_fitted(key)))
+                continue
+            n = int(getattr(est, "n", 0))
+            method = getattr(est, "method", "")
+            note = f"from {n} {what}" + (f" ({method})" if method else "")
+            if isinstance(est, RatioRestitution) and est.median is not None:
+                note += f"; median {_fmt(est.median)}, scatter (std) {_fmt(est.std)}"
+            err = est.stderr
+            if err is not None and est.value is not None and err > abs(est.value):
+                note += "; NOT IDENTIFIED: the standard error exceeds the value"
+            for extra in est.notes:
+                note += f"; {extra}"
+            ci: tuple[float | None, float | None] = (est.ci_low, est.ci_high)
+            if None in ci:
+                ci = student_t_ci(est.value, err, n - 1)
+            rows.append(_scaled(label, est.value, err, ci, "1", note))
+        for name, label in (("first", "first peak"), ("max", "maximum peak"),
+                            ("rms", "RMS per impact")):
+            law = fits.spl_law(name)
+            if law is None:
+                rows.append(TableRow(f"SPL law, {label}",
+                                     note="not fitted: " + self.not_fitted(f"spl_law_{name}")))
+                continue
+            lin, db = law.linear, law.db
+            slope_ci = (lin.slope_ci_low, lin.slope_ci_high)
+            icpt_ci = (lin.intercept_ci_low, lin.intercept_ci_high)
+            c_ci = (db.c_ci_low, db.c_ci_high)
+            rows.append(_scaled(
+                f"SPL {label}: slope", lin.slope, _t_stderr(slope_ci, lin.n - 2), slope_ci,
+                "Pa/(m/s)", f"p = slope * |v_in| + intercept, r2 = {_fmt(lin.r2, '.3f')}, "
+                f"{lin.n} impacts (OLS; std. error from the t interval)"))
+            rows.append(_scaled(f"SPL {label}: intercept", lin.intercept,
+                                _t_stderr(icpt_ci, lin.n - 2), icpt_ci, "Pa"))
+            rows.append(_scaled(
+                f"SPL {label}: C", db.c_db, _t_stderr(c_ci, db.n - 1), c_ci,
+                "dB re 20 uPa at 1 m/s",
+                f"L = 20 log10(|v_in| / (1 m/s)) + C; free-slope check k = "
+                f"{_fmt(db.k_db_per_decade, '.3g')} dB/decade (20 for a linear law)"))
+        return rows
+
+    def eq34(self, keys: tuple[str, ...]) -> list[TableRow]:
+        """The eq. (3.4) fit's ``keys`` with their biases, then its notes (section "eq34")."""
+        g = self.fits.grazing
+        assert g is not None
+        rows: list[TableRow] = []
+        for key in keys:
+            label, scale, unit = _GRAZING_NAMES[key]
+            p = g.parameters()[key]
+            rows.append(_scaled(f"{label.split(' (')[0]}, eq. (3.4)", p.value, p.stderr,
+                                (p.ci_low, p.ci_high), unit,
+                                ("BIASED: " + p.bias_note) if p.bias_note and p.vary else "",
+                                scale=scale, fixed=not p.vary, section="eq34"))
+        notes = list(g.unidentifiable)
+        if g.outliers_hz:
+            notes.append("thresholds left out as outliers at " + ", ".join(
+                f"{_fmt(f)} Hz" for f in g.outliers_hz))
+        rows += [TableRow("", note="note: " + note, section="eq34") for note in notes]
+        return rows
+
+    def rows(self) -> list[TableRow]:
+        fits, g = self.fits, self.fits.grazing
+        rows = self.grazing() if g is not None else [
+            TableRow("gap h, f_s, zeta", note="not fitted: " + self.not_fitted("grazing"))]
+        rows += self.others()
+        # the eq. (3.4) values that a ramp-corrected one supersedes above, with their biases;
+        # without any ramp-corrected fit the eq. (3.4) values are the recommended ones
+        superseded: tuple[str, ...] = (
+            ("gap_m", "zeta", "f_s_hz") if fits.grazing_ramp is not None
+            else ("zeta",) if fits.damping_ramp is not None and fits.damping_ramp.value is not None
+            else ())
+        if g is not None and (superseded or g.unidentifiable or g.outliers_hz):
+            rows += self.eq34(superseded)
+        return rows
+
+
 # --- the summary ----------------------------------------------------------------------------
 
 def _items(r: _In, key: str, cls: Any, default: Any = None) -> tuple[Any, ...]:
@@ -276,6 +551,50 @@ class FitSummary(_Normalised):
     def shocks_only(self) -> bool:
         """True when every analysed run is a transient (single shock): no rattle fits apply."""
         return bool(self.runs) and all(r.protocol == "transient" for r in self.runs)
+
+    def table(self, view: Literal["all", "truth", "recommended"] = "all", *,
+              truth: Mapping[str, Any] | None = None) -> list[TableRow]:
+        """The fitted quantities as rows of quantity, value, standard error and unit: the one
+        source of ``rattle-lab fit``'s table, the demo's table against the truth and the
+        report's parameter table, which only lay the rows out.
+
+        Parameters
+        ----------
+        view : {"all", "truth", "recommended"}
+            ``"all"``: every fitted quantity under its stored name (``grazing.gap_m``, ...),
+            in SI units, the SPL laws' slope with half its 95 % interval as ``stderr``, r2 and
+            dB offset (``rattle-lab fit``).  ``"truth"``: the quantities a synthetic rig
+            knows -- gap, f_s, zeta (eq. 3.4, then ramp-corrected and ramp-replayed where
+            fitted), e both ways, the first-peak SPL slope -- each with ``truth``; a
+            quantity not fitted has a row of None.  ``"recommended"``: the recommended value
+            of each quantity first (gap and zeta ramp-corrected where fitted; gap in mm)
+            with its 95 % interval (as the fit gives it, else Student t from the standard
+            error) and notes, a ``"not fitted: why"`` row for each fit not made, then
+            (section ``"eq34"``) the eq. (3.4) values superseded above, with their biases,
+            and the grazing fit's notes.
+        truth : mapping of str to float
+            ``"truth"`` view only: the rig's ``"gap_m"`` (m), ``"f_s_hz"`` (Hz), ``"zeta"``,
+            ``"e"`` and ``"spl_slope_first"`` (Pa/(m/s)); a key not given is NaN.
+
+        Examples
+        --------
+        >>> from rattle_lab.fit import RatioRestitution
+        >>> s = FitSummary(2, 2, fits=Fits(restitution_ratio=RatioRestitution(0.6, 0.01, "1")))
+        >>> [(r.quantity, r.value, r.stderr, r.unit) for r in s.table()]
+        [('restitution_ratio.e', 0.6, 0.01, '1')]
+        >>> [(r.quantity, r.value, r.truth) for r in s.table("truth", truth={"e": 0.61})][3]
+        ('e (velocity ratios)', 0.6, 0.61)
+        """
+        if view == "all":
+            return _all_rows(self.fits)
+        if view == "truth":
+            if truth is None:
+                raise TypeError("FitSummary.table('truth') needs the truth")
+            return _truth_rows(self.fits, truth)
+        if view == "recommended":
+            return _Recommended(self).rows()
+        raise ValueError(f"FitSummary.table: unknown view {view!r} "
+                         "(one of 'all', 'truth', 'recommended')")
 
     def to_dict(self) -> dict[str, Any]:
         """The stored form (module docstring): JSON values, with ``schema_version``."""
@@ -352,4 +671,4 @@ class FitSummary(_Normalised):
 
 
 __all__ = ["FitSummary", "ParticipationInfo", "RunRow", "SUMMARY_SCHEMA_VERSION", "SkippedRun",
-           "ThresholdTable", "TransientRun"]
+           "TableRow", "ThresholdTable", "TransientRun"]

@@ -22,7 +22,7 @@ __all__ = ["run_demo", "truth_table"]
 RAW_NAME, STORE_NAME, REPORT_NAME = "raw.h5", "store.h5", "report.pdf"
 
 
-def _row(name: str, unit: str, fitted: Any, stderr: Any, truth: float) -> str:
+def _row(name: str, unit: str, fitted: Any, stderr: Any, truth: Any) -> str:
     def fmt(x: Any) -> str:
         return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.5g}"
 
@@ -33,7 +33,8 @@ def _row(name: str, unit: str, fitted: Any, stderr: Any, truth: float) -> str:
 
 
 def truth_table(fits: Fits, truth: Any) -> list[str]:
-    """Lines of the table of fitted values (:attr:`FitSummary.fits`) against the rig's truth.
+    """Lines of the table of fitted values (:attr:`FitSummary.fits`) against the rig's truth:
+    the rows of :meth:`FitSummary.table` ``("truth")``, laid out.
 
     Parameters
     ----------
@@ -51,28 +52,10 @@ def truth_table(fits: Fits, truth: Any) -> list[str]:
     lines = [
         f"{'quantity':<26} {'fitted':>12} {'std. error':>12} {'rig truth':>12} {'error':>10}  unit",
     ]
-    graz = fits.grazing
-    for key, name, unit, true in (("gap_m", "gap", "m", truth.gap_m),
-                                  ("f_s_hz", "f_s", "Hz", truth.f_s_hz),
-                                  ("zeta", "zeta", "1", truth.zeta)):
-        p = graz.parameters()[key] if graz is not None else None
-        lines.append(_row(name, unit, p and p.value, p and p.stderr, true))
-    if fits.grazing_ramp is not None:  # eq. (3.4) less each ramp's replayed lag
-        for key, name, unit, true in (("gap_m", "gap (ramp-corrected)", "m", truth.gap_m),
-                                      ("zeta", "zeta (ramp-corrected)", "1", truth.zeta)):
-            est = getattr(fits.grazing_ramp, key)
-            lines.append(_row(name, unit, est.value, est.stderr, true))
-    if fits.damping_ramp is not None:  # zeta from replaying the ramps, if fitted
-        z = fits.damping_ramp
-        lines.append(_row("zeta (ramp model)", "1", z.value, z.stderr, truth.zeta))
-    for est, name in ((fits.restitution_ratio, "e (velocity ratios)"),
-                      (fits.restitution_down, "e (down thresholds)")):
-        lines.append(_row(name, "1", est and est.value, est and est.stderr, truth.e))
-    law = fits.spl_law_first.linear if fits.spl_law_first is not None else None
-    lo, hi = (law.slope_ci_low, law.slope_ci_high) if law is not None else (None, None)
-    half = 0.5 * (hi - lo) if lo is not None and hi is not None else None
-    lines.append(_row("SPL slope, 1st peak (95%)", "Pa/(m/s)", law and law.slope, half,
-                      float(truth.extra.get("acoustic_pa_per_m_s", float("nan")))))
+    known = {"gap_m": truth.gap_m, "f_s_hz": truth.f_s_hz, "zeta": truth.zeta, "e": truth.e,
+             "spl_slope_first": float(truth.extra.get("acoustic_pa_per_m_s", float("nan")))}
+    for row in FitSummary(n_runs=0, n_ok=0, fits=fits).table("truth", truth=known):
+        lines.append(_row(row.quantity, row.unit, row.value, row.stderr, row.truth))
     return lines
 
 

@@ -1,9 +1,9 @@
 """The summary page's text: the fitted-parameter table, data-quality flags, provenance.
 
 Content, not drawing: the lines are built here from the gathered data (every fitted
-number from ``/results``; a missing interval is the Student t interval of
-:func:`rattle_lab.fit.student_t_ci`), wrapped to the report's text width, and drawn by
-the report as given.
+number from ``/results``, in the rows of :meth:`rattle_lab.fit.FitSummary.table`; a missing
+interval is the Student t interval of :func:`rattle_lab.fit.student_t_ci`), wrapped to the
+report's text width, and drawn by the report as given.
 """
 
 from __future__ import annotations
@@ -15,20 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from rattle_lab.fit import (SIGNIFICANCE_K, Estimate, Fits, GrazingSummary, RatioRestitution,
-                            negative_hysteresis, student_t_ci)
+from rattle_lab.fit import SIGNIFICANCE_K, FitSummary, negative_hysteresis
 from rattle_lab.report import TEXT_WIDTH, fmt, wrapped
 from ._gather import ReportData
 
 _COLS = (("quantity", 34), ("value", 11), ("std. error", 11), ("95 % CI", 27), ("unit", 0))
-
-
-def _fits(data: ReportData) -> Fits:
-    return data.summary.fits if data.summary is not None else Fits()
-
-
-def _grazing(data: ReportData) -> GrazingSummary | None:
-    return _fits(data).grazing
 
 
 def _finite(x: Any) -> float | None:
@@ -81,160 +72,41 @@ def _row(quantity: str, value: Any = None, stderr: Any = None,
     return out
 
 
-def _not_fitted(data: ReportData, key: str) -> str:
-    if data.summary is None:
-        return data.missing.get("results", "no results")
-    return " ".join(data.summary.not_fitted.get(key, "not fitted").split())
-
-
-def _t_stderr(ci: tuple[Any, Any], dof: int) -> float | None:
-    """The standard error behind a Student t 95 % interval with ``dof`` degrees of freedom."""
-    from scipy import stats
-
-    lo, hi = _finite(ci[0]), _finite(ci[1])
-    if lo is None or hi is None or dof < 1:
-        return None
-    return (hi - lo) / (2.0 * float(stats.t.ppf(0.975, dof)))
-
-
-_GRAZING_NAMES = {"gap_m": ("gap h", 1e3, "mm"), "f_s_hz": ("f_s (modal frequency)", 1.0, "Hz"),
-                  "zeta": ("zeta (damping ratio)", 1.0, "1"),
-                  "participation": ("participation Q1/Q2", 1.0, "1")}
-
-
-def _recommended_grazing(fits: Fits) -> list[str]:
-    """Gap, zeta, f_s as recommended: ramp-corrected where that fit exists, else eq. (3.4)."""
-    g, rg, damp = fits.grazing, fits.grazing_ramp, fits.damping_ramp
-    lines: list[str] = []
-    if g is None:
-        return lines
-    for key in ("gap_m", "zeta", "f_s_hz", "participation"):
-        label, scale, unit = _GRAZING_NAMES[key]
-        p = g.parameters()[key]
-        if key == "participation":
-            if not p.vary:
-                lines += _row(label, p.value, "fixed", None, unit, scale=scale)
-            else:
-                lines += _row(label, p.value, p.stderr, (p.ci_low, p.ci_high), unit, scale=scale)
-            continue
-        if rg is not None and getattr(rg, key).value is not None:
-            est = getattr(rg, key)
-            ci = (est.ci_low, est.ci_high)
-            if None in ci:
-                ci = student_t_ci(est.value, est.stderr, max(len(rg.lag_rel) - 3, 0))
-            note = "; ".join(est.notes)
-            lines += _row(f"{label.split(' (')[0]} (ramp-corrected)" if key != "f_s_hz"
-                          else "f_s, ramp-corrected", est.value, est.stderr, ci, unit,
-                          note, scale=scale)
-        elif key == "zeta" and damp is not None and damp.value is not None:
-            ci = (damp.ci_low, damp.ci_high)
-            if None in ci:
-                ci = student_t_ci(damp.value, damp.stderr, damp.n - 1)
-            lines += _row("zeta (ramp replay)", damp.value, damp.stderr, ci, unit,
-                          "; ".join(damp.notes), scale=scale)
-        elif p.vary:
-            lines += _row(f"{label}, eq. (3.4)", p.value, p.stderr, (p.ci_low, p.ci_high), unit,
-                          p.bias_note, scale=scale)
-        else:
-            lines += _row(f"{label}, eq. (3.4)", p.value, "fixed", None, unit, scale=scale)
-    return lines
-
-
-def _eq34_lines(g: GrazingSummary, keys: tuple[str, ...]) -> list[str]:
-    """The eq. (3.4) fit's ``keys`` (of gap, zeta, f_s) with their bias notes, labelled."""
-    lines: list[str] = []
-    for key in keys:
-        label, scale, unit = _GRAZING_NAMES[key]
-        p = g.parameters()[key]
-        name = f"{label.split(' (')[0]}, eq. (3.4)"
-        if not p.vary:
-            lines += _row(name, p.value, "fixed", None, unit, scale=scale)
-            continue
-        lines += _row(name, p.value, p.stderr, (p.ci_low, p.ci_high), unit,
-                      ("BIASED: " + p.bias_note) if p.bias_note else "", scale=scale)
-    notes = list(g.unidentifiable)
-    if g.outliers_hz:
-        notes.append("thresholds left out as outliers at " + ", ".join(
-            f"{fmt(f)} Hz" for f in g.outliers_hz))
-    for note in notes:
-        lines += textwrap.wrap("note: " + note, TEXT_WIDTH, initial_indent="      ",
-                               subsequent_indent="      ")
-    return lines
+#: the fits the parameter table names as "not fitted" when the store has no /results
+_TABLE_FITS = ("grazing", "restitution_ratio", "restitution_down", "spl_law_first",
+               "spl_law_max", "spl_law_rms")
 
 
 def parameter_lines(data: ReportData) -> list[str]:
     """The table of fitted parameters: value, standard error, 95 % interval, unit.
 
-    The recommended value of each quantity comes first (gap and zeta ramp-corrected where
-    that fit exists, with its notes); the eq. (3.4) fit of the measured onsets follows,
-    labelled as such, with the biases the fit names.
+    The rows of :meth:`FitSummary.table` ``("recommended")``, laid out: the recommended
+    value of each quantity first (gap and zeta ramp-corrected where that fit exists, with
+    its notes); the eq. (3.4) fit of the measured onsets follows, labelled as such, with the
+    biases the fit names.
     """
     header = "  " + " ".join(n.ljust(w) if w else n for n, w in _COLS)
     lines = [header, "  " + "-" * (len(header) - 2)]
-    fits = _fits(data)
-    g = _grazing(data)
-    if g is not None:
-        lines += _recommended_grazing(fits)
-    else:
-        lines += _row("gap h, f_s, zeta", note="not fitted: " + _not_fitted(data, "grazing"))
-    not_fitted = data.summary.not_fitted if data.summary is not None else {}
-    for key, label, what in (("damping_ramp", "zeta (ramp replay)", "upward ramps"),
-                             ("restitution_ratio", "e (velocity ratios)", "impacts"),
-                             ("restitution_down", "e (disappearance thresholds)", "thresholds")):
-        est: Estimate | None = getattr(fits, key)
-        if key == "damping_ramp" and (fits.grazing_ramp is None and est is not None):
-            continue  # already the recommended zeta above
-        if est is None:
-            if key != "damping_ramp" or key in not_fitted:  # an optional fit: only if tried
-                lines += _row(label, note="not fitted: " + _not_fitted(data, key))
-            continue
-        n = int(getattr(est, "n", 0))
-        method = getattr(est, "method", "")
-        note = f"from {n} {what}" + (f" ({method})" if method else "")
-        if isinstance(est, RatioRestitution) and est.median is not None:
-            note += f"; median {fmt(est.median)}, scatter (std) {fmt(est.std)}"
-        err = est.stderr
-        if err is not None and est.value is not None and err > abs(est.value):
-            note += "; NOT IDENTIFIED: the standard error exceeds the value"
-        for extra in est.notes:
-            note += f"; {extra}"
-        ci: tuple[float | None, float | None] = (est.ci_low, est.ci_high)
-        if None in ci:
-            ci = student_t_ci(est.value, err, n - 1)
-        lines += _row(label, est.value, err, ci, "1", note)
-    for name, label in (("first", "first peak"), ("max", "maximum peak"),
-                        ("rms", "RMS per impact")):
-        law = fits.spl_law(name)
-        if law is None:
-            lines += _row(f"SPL law, {label}",
-                          note="not fitted: " + _not_fitted(data, f"spl_law_{name}"))
-            continue
-        lin, db = law.linear, law.db
-        slope_ci = (lin.slope_ci_low, lin.slope_ci_high)
-        icpt_ci = (lin.intercept_ci_low, lin.intercept_ci_high)
-        c_ci = (db.c_ci_low, db.c_ci_high)
-        lines += _row(f"SPL {label}: slope", lin.slope, _t_stderr(slope_ci, lin.n - 2),
-                      slope_ci, "Pa/(m/s)",
-                      f"p = slope * |v_in| + intercept, r2 = {fmt(lin.r2, '.3f')}, "
-                      f"{lin.n} impacts (OLS; std. error from the t interval)")
-        lines += _row(f"SPL {label}: intercept", lin.intercept, _t_stderr(icpt_ci, lin.n - 2),
-                      icpt_ci, "Pa")
-        lines += _row(f"SPL {label}: C", db.c_db, _t_stderr(c_ci, db.n - 1), c_ci,
-                      "dB re 20 uPa at 1 m/s",
-                      f"L = 20 log10(|v_in| / (1 m/s)) + C; free-slope check k = "
-                      f"{fmt(db.k_db_per_decade, '.3g')} dB/decade (20 for a linear law)")
-    # the eq. (3.4) values that a ramp-corrected one supersedes above, labelled, with their
-    # biases; without any ramp-corrected fit the eq. (3.4) values are the recommended ones
-    superseded: tuple[str, ...] = (
-        ("gap_m", "zeta", "f_s_hz") if fits.grazing_ramp is not None
-        else ("zeta",) if fits.damping_ramp is not None and fits.damping_ramp.value is not None
-        else ())
-    if g is not None and superseded:
+    summary = data.summary
+    if summary is None:  # every fit "not fitted", for the reason the results are missing
+        why = data.missing.get("results", "no results")
+        summary = FitSummary(n_runs=0, n_ok=0, not_fitted=dict.fromkeys(_TABLE_FITS, why))
+    rows = summary.table("recommended")
+    main = [r for r in rows if r.section != "eq34"]
+    eq34 = [r for r in rows if r.section == "eq34"]
+    for r in main:
+        lines += _row(r.quantity, r.value, "fixed" if r.fixed else r.stderr,
+                      None if r.fixed else r.ci, r.unit, r.note)
+    if any(r.quantity for r in eq34):
         lines += ["", "Eq. (3.4) fit of the measured onsets (for reference: the ramp lag reads as "
                   "gap and damping; recommended values above)"]
-        lines += _eq34_lines(g, superseded)
-    elif g is not None and (g.unidentifiable or g.outliers_hz):
-        lines += _eq34_lines(g, ())
+    for r in eq34:
+        if r.quantity:
+            lines += _row(r.quantity, r.value, "fixed" if r.fixed else r.stderr,
+                          None if r.fixed else r.ci, r.unit, r.note)
+        else:
+            lines += textwrap.wrap(r.note, TEXT_WIDTH, initial_indent="      ",
+                                   subsequent_indent="      ")
     return lines
 
 
