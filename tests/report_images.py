@@ -1,6 +1,6 @@
 """The report's pages as images of their drawn structure, and the comparison with references.
 
-Used by the report tests (``tests/test_report.py``) and by the explicit regeneration
+Used by the report tests (``tests/report/test_report.py``) and by the explicit regeneration
 command ``python tests/regen_reference_images.py`` (``make reference-images``); no test
 ever writes a reference.
 

@@ -2,7 +2,7 @@
 ``sottek-hearing-model``.
 
 Why this implementation.  On the standard's own reference signals (checked in
-``tests/test_psychoacoustics_ecma.py``; the standard sets its calibration factors so
+``tests/acoustics/test_psychoacoustics_ecma.py``; the standard sets its calibration factors so
 that each gives exactly 1):
 
 ============================================  ============  ============================

@@ -20,7 +20,7 @@ section 6 for all 28 third-octave bands at once, with nothing stored at the samp
 
 Memory is the 500 Hz loudness curve and a few hundred state numbers, whatever the
 length of the record.  The order of operations follows MoSQITo (the reference of the
-tests, ``tests/test_acoustics.py``) where the standard leaves it open: the level is
+tests, ``tests/acoustics/test_acoustics.py``) where the standard leaves it open: the level is
 taken at samples 0, 24, 48, ...; the interpolation of the last frame runs towards zero.
 Two places follow the standard instead of MoSQITo: the decay network starts from rest
 (MoSQITo's first step reads the record's last frame, a wrap-around of a NumPy index) and

@@ -7,7 +7,7 @@ simulated on a virtual grid 24 times finer than the 2 kHz core-loudness rate.  M
 (the library that computes the rest of the chain here) runs this recursion as a Python
 loop over every one of those sub-steps, which costs about 90 % of its time (5 s per
 second of sound).  :func:`nonlinear_decay` is the same recursion, step for step and in
-the same floating-point order, compiled with numba; ``tests/test_acoustics.py`` checks
+the same floating-point order, compiled with numba; ``tests/acoustics/test_acoustics.py`` checks
 it against MoSQITo's own function to the last bit.
 """
 

@@ -37,7 +37,7 @@ from rattle_lab.report._pages_acoustics import acoustics_page
 from rattle_lab.report._pages_model import model_pages
 from rattle_lab.workflow import ReportData
 
-REPORT = Path(__file__).resolve().parents[1] / "rattle_lab" / "report"
+REPORT = Path(__file__).resolve().parents[2] / "rattle_lab" / "report"
 #: Every module of the report package (drawing, the content types, the PDF writer).
 REPORT_MODULES = sorted(p.name for p in REPORT.glob("*.py"))
 #: What they may import besides the standard library: (module, names or None for any).

@@ -16,7 +16,7 @@ from conftest import realdata
 from rattle_lab.store import ingest, open_stored_record, read_catalogue
 from rattle_lab.records import UncalibratedWarning, read
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 MAPPINGS = REPO / "data_schema" / "mappings"
 
 

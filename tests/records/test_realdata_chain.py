@@ -30,7 +30,7 @@ from rattle_lab.records import read
 from rattle_lab.records._readers.lvm import LvmHeaderWarning, parse_lvm
 from record_factory import run_cli
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MAPPINGS = ROOT / "data_schema" / "mappings"
 
 

@@ -238,7 +238,7 @@ def test_real_clap_is_one_prominent_impulse():
 
     from conftest import realdata
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     path = realdata("clap/rir_clap.wav")   # the existing helper (RATTLE_LAB_REALDATA)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

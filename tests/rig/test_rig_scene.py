@@ -12,7 +12,7 @@ import pytest
 from rattle_lab.exceptions import ParameterError, RattleLabError
 from rattle_lab.rig import SceneError, load_scene, parse_scene
 
-SCENES = Path(__file__).resolve().parents[1] / "synthetic"
+SCENES = Path(__file__).resolve().parents[2] / "synthetic"
 
 
 def default_dict() -> dict:

@@ -23,7 +23,7 @@ from rattle_lab.records._h5 import LinkError
 from rattle_lab.store import (STORE_VERSION, check_linked_inputs, ingest, open_stored_record,
                               read_catalogue, verify_store)
 
-FIXTURE_V2 = Path(__file__).parent / "data" / "store_v2.h5"
+FIXTURE_V2 = Path(__file__).resolve().parents[1] / "data" / "store_v2.h5"
 MIC = "runs/dwell_094/channels/mic"
 
 

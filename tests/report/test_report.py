@@ -304,9 +304,9 @@ def test_the_snapshot_has_the_live_reports_sections_and_pages(
 def test_no_test_writes_a_reference_image() -> None:
     # issue 23: regenerating is an explicit command, never a side effect of a test; the
     # names are built here so that this file does not hold them
-    here = Path(__file__).resolve().parent
+    tests = Path(__file__).resolve().parents[1]
     writer, switch = "save_" + "references", "RATTLE_LAB_" + "REGEN_REFS"
-    for path in here.glob("test_*.py"):
+    for path in tests.rglob("test_*.py"):
         text = path.read_text(encoding="utf-8")
         assert writer not in text and switch not in text, path
 

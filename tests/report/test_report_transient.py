@@ -24,7 +24,7 @@ from record_factory import run_cli
 
 from rattle_lab.records import read
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REALDATA = Path(os.environ.get("RATTLE_LAB_REALDATA", ROOT / ".." / "shared" / "realdata"))
 MAPPING = ROOT / "data_schema" / "mappings" / "forced_shock_lvm.toml"
 LVM = REALDATA / "forced_shock" / "vibration_0.2.lvm"

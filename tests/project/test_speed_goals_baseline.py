@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-BENCH = Path(__file__).resolve().parent.parent / "benchmarks" / "speed_goals.py"
+BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "speed_goals.py"
 
 
 @pytest.fixture(scope="module")

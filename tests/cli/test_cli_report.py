@@ -10,7 +10,7 @@ import pytest
 from rattle_lab.store import ingest
 from record_factory import run_cli
 
-PIPELINES = Path(__file__).resolve().parents[1] / "pipelines"
+PIPELINES = Path(__file__).resolve().parents[2] / "pipelines"
 
 
 @pytest.fixture(scope="module")

@@ -123,7 +123,7 @@ def test_bad_chain_is_refused(tmp_path, line, why):
 def test_realistic_scene_turns_everything_on():
     from pathlib import Path
 
-    scene = load_scene(Path(__file__).resolve().parents[1] / "synthetic" / "realistic_lab.toml")
+    scene = load_scene(Path(__file__).resolve().parents[2] / "synthetic" / "realistic_lab.toml")
     c = scene.chain
     assert c.decoder_delay_s > 0 and c.vibrometer == "absolute" and c.ring_velocity_per_m_s > 0
     assert c.hum_m_s > 0 and c.hum_m_s2 > 0 and c.hum_pa > 0 and c.adc_bits == 16

@@ -27,8 +27,8 @@ from rattle_lab.workflow.pipeline import (Pipeline, code_fingerprint, load_pipel
                                  parse_pipeline, read_detections, run_pipeline)
 from rattle_lab.fit._results import read_results
 
-PIPELINES = Path(__file__).resolve().parents[1] / "pipelines"
-MAPPINGS = Path(__file__).resolve().parents[1] / "data_schema" / "mappings"
+PIPELINES = Path(__file__).resolve().parents[2] / "pipelines"
+MAPPINGS = Path(__file__).resolve().parents[2] / "data_schema" / "mappings"
 
 
 def _pipe(outputs: list[str], **tables: dict[str, Any]) -> Pipeline:

@@ -25,7 +25,7 @@ from rattle_lab.detect import (ImpactParams, cross_correlation_delay, detect_imp
                                sound_peaks)
 from rattle_lab.records import read
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MAPPINGS = ROOT / "data_schema" / "mappings"
 SHOCK = ImpactParams(on=100.0, off=10.0, min_separation_s=0.5)
 

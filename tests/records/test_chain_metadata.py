@@ -29,7 +29,7 @@ from rattle_lab.records._model import Rig
 from rattle_lab.store import read_results
 from record_factory import make_record, run_cli
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 THESIS_PLATE = ["--a", "0.254", "--b", "0.2286", "--h", "0.001", "--E", "7e10", "--nu", "0.34",
                 "--rho", "2710"]
 

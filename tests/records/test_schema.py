@@ -22,7 +22,7 @@ from rattle_lab.records._convert import record_to_tree
 from rattle_lab.records._units import (ALLOWED_SENSITIVITY_UNITS, ALLOWED_UNITS, G0_MS2,
                                        SENSITIVITY_UNITS, SI_UNITS, UNIT_TO_SI)
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 PACKAGED = REPO / "rattle_lab" / "data" / "schema" / "rattle_record.v1.schema.json"
 TOP_LEVEL = REPO / "data_schema" / "rattle_record.v1.schema.json"
 

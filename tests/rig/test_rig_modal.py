@@ -24,7 +24,7 @@ from rattle_lab.model.plate import Plate
 from rattle_lab.rig import load_scene
 from rattle_lab.rig._scene import SceneError, parse_scene
 
-SCENE = Path(__file__).resolve().parents[1] / "synthetic" / "modal_lab.toml"
+SCENE = Path(__file__).resolve().parents[2] / "synthetic" / "modal_lab.toml"
 
 
 @pytest.fixture(scope="module")

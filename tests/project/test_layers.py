@@ -31,7 +31,7 @@ from pathlib import Path
 
 import pytest
 
-PACKAGE = Path(__file__).resolve().parents[1] / "rattle_lab"
+PACKAGE = Path(__file__).resolve().parents[2] / "rattle_lab"
 
 #: top-level part -> layer (lower = upstream).  Infrastructure modules are layer 0.
 LAYER: dict[str, int] = {

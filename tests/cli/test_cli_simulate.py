@@ -10,7 +10,7 @@ from rattle_lab.records import read
 from rattle_lab.rig import load_scene
 from record_factory import run_cli
 
-SCENES = Path(__file__).resolve().parents[1] / "synthetic"
+SCENES = Path(__file__).resolve().parents[2] / "synthetic"
 
 
 def test_simulate_default_writes_record_and_summary(tmp_path):
