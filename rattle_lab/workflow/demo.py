@@ -92,6 +92,7 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False, scene: str | Path = "d
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise OutputError(f"{out}: exists and is not a directory")
+    rig_scene = load_scene(scene)   # a bad scene is refused before anything is written
     out.mkdir(parents=True, exist_ok=True)
     raw, store = out / RAW_NAME, out / STORE_NAME
 
@@ -99,7 +100,6 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False, scene: str | Path = "d
         print(line, file=sys.stderr, flush=True)
 
     what = "embedded default scene" if str(scene) == "default" else f"scene {scene}"
-    rig_scene = load_scene(scene)
     say(f"[1/4] simulate: {what} {rig_scene.campaign_id!r} -> {raw}")
     synthesis = write_synthetic(rig_scene, raw, quiet=quiet)
     truth = synthesis.record.truth

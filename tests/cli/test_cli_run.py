@@ -113,6 +113,15 @@ def test_demo_piped_prints_the_table_and_the_pdf_path_last(tmp_path):
     assert "%|" not in out.stderr  # no progress bars when not on a terminal
 
 
+def test_demo_with_a_missing_scene_is_one_line_exit_2_and_writes_nothing(tmp_path):
+    out = tmp_path / "demo"
+    proc = run("demo", "--scene", str(tmp_path / "absent.toml"), "--out", str(out), check_rc=2)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "absent.toml" in lines[0] and "cannot read the scene" in lines[0]
+    assert not out.exists()
+
+
 @pytest.mark.slow  # > 8 s (measured under load)
 def test_demo_on_a_terminal_shows_progress_bars(tmp_path):
     # the bars, not the fit's accuracy (the piped test above checks that on the default
