@@ -73,7 +73,8 @@ def test_needed_stages_are_lazy() -> None:
 
 
 @pytest.mark.slow  # > 8 s (measured under load)
-def test_cache_and_exact_reruns(small_campaign_record: Path, tmp_path: Path) -> None:
+def test_cache_and_exact_reruns_and_outside_fits_are_noticed(small_campaign_record: Path,
+                                                             tmp_path: Path) -> None:
     rec = [small_campaign_record]
     store = tmp_path / "s.h5"
     base = {"detect": {"on": 12.0}, "fit": {"outlier_k": 5.0}}
@@ -103,29 +104,21 @@ def test_cache_and_exact_reruns(small_campaign_record: Path, tmp_path: Path) -> 
     rep = run_pipeline(_pipe(["report"], detect={"on": 11.0}, fit={"outlier_k": 4.0},
                              report={"model": False}), rec, store=store, out_dir=tmp_path)
     assert rep.executed == ["report"] and rep.outputs["report"] == tmp_path / "t.pdf"
-    assert (tmp_path / "t.pdf").is_file()
+    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 8  # two summary pages, acoustics
     # a lost output is remade even with an unchanged key
     (tmp_path / "t.pdf").unlink()
     rep2 = run_pipeline(_pipe(["report"], detect={"on": 11.0}, fit={"outlier_k": 4.0},
                               report={"model": False}), rec, store=store, out_dir=tmp_path)
     assert rep2.executed == ["report"]
-
-
-@pytest.mark.slow  # > 8 s (measured under load)
-def test_report_parameter_reruns_only_the_report_and_outside_fits_are_noticed(
-        small_campaign_record: Path, tmp_path: Path) -> None:
-    rec, store = [small_campaign_record], tmp_path / "s.h5"
-    no_model = _pipe(["report"], report={"model": False})
-    first = run_pipeline(no_model, rec, store=store, out_dir=tmp_path)
-    assert first.executed == ["ingest", "detect", "thresholds", "fit", "report"]
-    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 8  # two summary pages, acoustics
     # [report] model = true: the report only (one more page pair: the model predictions)
-    with_model = run_pipeline(_pipe(["report"]), rec, store=store, out_dir=tmp_path)
+    with_model = run_pipeline(_pipe(["report"], detect={"on": 11.0}, fit={"outlier_k": 4.0}),
+                              rec, store=store, out_dir=tmp_path)
     assert with_model.executed == ["report"]
     assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 10
     # `rattle-lab fit` run on the store by hand replaces /results: the fit stage is stale
-    fit_store(store, fit={"outlier_k": 3.0})
-    after = run_pipeline(_pipe(["results"]), rec, store=store, out_dir=tmp_path)
+    fit_store(store, detect={"on": 11.0}, fit={"outlier_k": 3.0})
+    after = run_pipeline(_pipe(["results"], detect={"on": 11.0}, fit={"outlier_k": 4.0}),
+                         rec, store=store, out_dir=tmp_path)
     assert after.executed == ["fit"] and after.cached == ["ingest", "detect", "thresholds"]
     assert read_results(store).provenance["via"] == "rattle_lab.workflow.pipeline"
 
