@@ -28,6 +28,11 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
+    from rattle_lab.store import read_catalogue
+
+    # a missing or foreign store is refused (StoreError) before the report's own imports
+    # (matplotlib, the fits, the model), which take seconds
+    read_catalogue(args.store)
     from rattle_lab.workflow import write_report
 
     result = write_report(args.store, args.output, model=not args.no_model, quiet=args.quiet)

@@ -25,9 +25,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
+    from rattle_lab.rig import load_scene
+
+    scene = load_scene(args.scene)  # refused (SceneError) before the simulator is imported
     from rattle_lab.rig import write_synthetic
 
-    result = write_synthetic(args.scene, args.output, seed=args.seed, quiet=args.quiet)
+    result = write_synthetic(scene, args.output, seed=args.seed, quiet=args.quiet)
     for run in result.runs:
         print(run.line())
     print(args.output)

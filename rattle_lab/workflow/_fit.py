@@ -47,12 +47,17 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     ParameterError
         For an unknown parameter.
     """
-    from rattle_lab.fit import check_fit_params, fit_runs
-    from rattle_lab.store import write_results
+    from rattle_lab.fit import check_fit_params
 
     detect = dict(detect or {})
     fit_params = check_fit_params(fit)
+    # the store is read (and a missing or foreign one refused) before the fits and the
+    # acoustics are imported, so that a mistyped path costs a user no more than the store's
+    # own imports
     runs = detect_runs(store, detect, fit_params, scheduler=scheduler, quiet=quiet)
+    from rattle_lab.fit import fit_runs
+    from rattle_lab.store import write_results
+
     result = fit_runs(store, runs, detect=detect, fit=fit_params,
                       participation_source=participation_source)
     if write:

@@ -87,12 +87,13 @@ def run_demo(out_dir: str | Path, *, quiet: bool = False, scene: str | Path = "d
     """
     from rattle_lab.workflow.pipeline import parse_pipeline, run_pipeline
     from rattle_lab.store import read_results
-    from rattle_lab.rig import load_scene, write_synthetic
+    from rattle_lab.rig import load_scene
 
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise OutputError(f"{out}: exists and is not a directory")
     rig_scene = load_scene(scene)   # a bad scene is refused before anything is written
+    from rattle_lab.rig import write_synthetic
     out.mkdir(parents=True, exist_ok=True)
     raw, store = out / RAW_NAME, out / STORE_NAME
 
