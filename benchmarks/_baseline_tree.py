@@ -79,8 +79,9 @@ def _ramp_fit(job: dict[str, Any]) -> dict[str, Any]:
         best = min(best, time.perf_counter() - t0)
         cpu = min(cpu, time.process_time() - c0)
     assert fit is not None
-    return {"seconds": best, "cpu_seconds": cpu, "e": fit.e.float_value,
-            "stderr": float("nan") if fit.e.stderr is None else float(fit.e.stderr)}
+    e = getattr(fit, "e", fit)   # a tree before one class per fit: the estimate in ``.e``
+    return {"seconds": best, "cpu_seconds": cpu, "e": e.float_value,
+            "stderr": float("nan") if e.stderr is None else float(e.stderr)}
 
 
 def _sweep(job: dict[str, Any]) -> dict[str, Any]:
