@@ -247,7 +247,8 @@ def ratios_of_runs(logs: Sequence[Any]) -> RatioRestitution:
         median over impacts); ``ringing_share``, ``ringing_share_stderr``,
         ``ringing_runs``: the pooled share (``ringing_runs == 0``: none, nothing taken
         off); working field ``ringing_runs_unmeasured``.  No notes: the store's summary
-        (:func:`summarise_fits`) adds them, and the vibrometer's systematics to ``stderr``.
+        (:func:`~rattle_lab.fit.summarise_fits`) adds them, and the vibrometer's
+        systematics to ``stderr``.
 
     Examples
     --------

@@ -458,7 +458,8 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     notes = list[str]()
     if rs.ringing_runs:
         notes.append(f"the plate's higher modes ring after each impact: "
-                     f"{100 * (rs.ringing_share or math.nan):.1f} % of each measured velocity "
+                     f"{100 * (math.nan if rs.ringing_share is None else rs.ringing_share):.1f} % "
+                     "of each measured velocity "
                      f"jump (median of {rs.ringing_runs} runs' flight models) is theirs and is "
                      "taken off the ratios"
                      + ("" if rs.ringing_share_stderr is not None else "; one run: its error "
