@@ -79,8 +79,12 @@ def _ramp_fit(job: dict[str, Any]) -> dict[str, Any]:
         best = min(best, time.perf_counter() - t0)
         cpu = min(cpu, time.process_time() - c0)
     assert fit is not None
-    return {"seconds": best, "cpu_seconds": cpu, "e": fit.e.float_value,
-            "stderr": float("nan") if fit.e.stderr is None else float(fit.e.stderr)}
+    # a tree before one class per fit has the estimate in ``.e`` (a ParamEstimate, NaN where
+    # not available, before the one Estimate type); today's fit is the estimate
+    e = getattr(fit, "e", fit)
+    return {"seconds": best, "cpu_seconds": cpu,
+            "e": float("nan") if e.value is None else float(e.value),
+            "stderr": float("nan") if e.stderr is None else float(e.stderr)}
 
 
 def _sweep(job: dict[str, Any]) -> dict[str, Any]:

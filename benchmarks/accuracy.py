@@ -103,7 +103,9 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
     times["detect_s"] = time.perf_counter() - t0
     contact_s = float(truth.extra["contact_s"])
     # as rattle-lab fit: the runs' ringing shares pooled and taken off every ratio
-    ring = ratios_of_runs([r.impacts for r in runs if r.impacts is not None]).ringing
+    rs = ratios_of_runs([r.impacts for r in runs if r.impacts is not None])
+    ring_runs = rs.ringing_runs
+    ring_share = rs.ringing_share if ring_runs and rs.ringing_share is not None else float("nan")
     tp = fp = fn = 0
     dt, dv, dv_big, e_det, v_det, p_first = [], [], [], [], [], []
     for r in runs:
@@ -119,7 +121,7 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
             dv.extend(rel)
             dv_big.extend(rel[true.v_in_m_s[ti] >= 0.03])
             e_det.extend(ringing_corrected_ratios(r.impacts.v_in_m_s[di], r.impacts.v_out_m_s[di],
-                                                  ring.value) if ring.n_runs else r.impacts.e[di])
+                                                  ring_share) if ring_runs else r.impacts.e[di])
         if r.peaks is not None:
             v_det.extend(np.abs(r.impacts.v_in_m_s))
             p_first.extend(r.peaks.p_first_pa)
@@ -152,7 +154,7 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
                e_ratio_err=abs(float(np.nanmedian(e_det)) - truth.e),
                e_ratio_err_rel=abs(float(restitution_from_ratios(np.asarray(e_det)).mean)
                                    / truth.e - 1) if e_det else float("nan"),
-               ringing_share=ring.value, ringing_runs=ring.n_runs,
+               ringing_share=ring_share, ringing_runs=ring_runs,
                thr_err_max_rel=float(np.max(thr_rel)) if thr_rel else float("nan"),
                thr_err_max_steps=float(np.max(thr_steps)) if thr_steps else float("nan"))
     t0 = time.perf_counter()
@@ -183,7 +185,7 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
         try:
             zf = fit_zeta_ramp(ths, gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value,
                                zeta0=p["zeta"].value, participation=q, level_hold_periods=hold)
-            zeta, zeta_se = zf.zeta.value, zf.zeta.stderr
+            zeta, zeta_se = zf.float_value, zf.stderr
         except Exception as exc:   # report, do not crash the table
             out["zeta_ramp_error"] = str(exc)
     out["zeta_ramp_err_rel"] = abs(zeta / truth.zeta - 1)
@@ -194,7 +196,7 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
         modal = dict(gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value, participation=q)
         try:
             e = fit_restitution_down(ths, zeta=zeta, zeta_stderr=zeta_se,
-                                     level_hold_periods=hold, **modal).e
+                                     level_hold_periods=hold, **modal)
             e_down, e_down_se = e.value, e.stderr
         except Exception as exc:
             out["e_down_error"] = str(exc)
@@ -203,7 +205,7 @@ def run_rig(name: str, noise_x: float) -> dict[str, float | str]:
         try:
             e_qs = fit_restitution_down(ths, zeta=p["zeta"].value, method="quasi-static",
                                         gap_m=p["gap_m"].value, f_s_hz=p["f_s_hz"].value,
-                                        participation=q).e.value
+                                        participation=q).value
         except Exception:
             pass
     out.update(e_down_err=abs(e_down - truth.e), e_down_err_rel=abs(e_down / truth.e - 1),
@@ -279,7 +281,7 @@ def run_scene(noise_rel: float, quick: bool, seed: int = 0) -> dict[str, float]:
         "gap_err_rel": abs(p["gap_m"].value / truth.gap_m - 1),
         "f_s_err_rel": abs(p["f_s_hz"].value / truth.f_s_hz - 1),
         "zeta_err_rel": abs(p["zeta"].value / truth.zeta - 1),
-        "e_ratio_err": abs(e_ratio.mean - truth.e), "e_down_err": abs(e_down.e.value - truth.e),
+        "e_ratio_err": abs(e_ratio.mean - truth.e), "e_down_err": abs(e_down.float_value - truth.e),
         "spl_slope_err_rel": abs(law.slope / slope_true - 1), **times,
     }
 

@@ -223,8 +223,9 @@ def coverage_detect(n: int, seed0: int) -> None:
                     vr.append(abs(log.v_in_m_s[k]) / abs(vi))
         v_errs.append(float(np.nanmedian(vr)) - 1 if vr else float("nan"))
         rs = ratios_of_runs(logs)
-        se = float(np.hypot(rs.stderr, delay_systematic(logs)[0]))
-        e = rs.stats.mean
+        se = float(np.hypot(np.nan if rs.stderr is None else rs.stderr,
+                            delay_systematic(logs)[0]))
+        e = rs.float_value
         cover = abs(e - plant.e) <= 1.96 * se
         hits += int(cover)
         errs.append(e / plant.e - 1)

@@ -67,7 +67,8 @@ def one_rig(seed: int, scene_name: str) -> dict[str, tuple[float, float, float]]
     hold = scene.simulation.piece_periods
     # eq. (3.4) fitted to the thresholds with each ramp's lag replayed and removed
     rg = fit_grazing_ramp(ths, participation=q, level_hold_periods=hold)
-    g, qs = rg.grazing.params, rg.quasi_static.params
+    assert rg.quasi_static is not None
+    g, qs = rg.params, rg.quasi_static.params
     out = {name: (truth_v, g[name].ci_low, g[name].ci_high)
            for name, truth_v in (("gap_m", truth.gap_m), ("f_s_hz", truth.f_s_hz),
                                  ("zeta", truth.zeta))}
@@ -75,21 +76,22 @@ def one_rig(seed: int, scene_name: str) -> dict[str, tuple[float, float, float]]
     out["gap_qs"] = (truth.gap_m, qs["gap_m"].ci_low, qs["gap_m"].ci_high)
     out["zeta_qs"] = (truth.zeta, qs["zeta"].ci_low, qs["zeta"].ci_high)
     zf = fit_zeta_ramp(ths, gap_m=qs["gap_m"].value, f_s_hz=qs["f_s_hz"].value,
-                       zeta0=qs["zeta"].value, participation=q, level_hold_periods=hold).zeta
+                       zeta0=qs["zeta"].value, participation=q, level_hold_periods=hold)
     out["zeta_ramp_qsgap"] = (truth.zeta, zf.ci_low, zf.ci_high)
     ok = [r for r in runs if r.impacts]
     # as rattle-lab fit: the runs' ringing shares pooled and taken off every ratio
     rs = ratios_of_runs([r.impacts for r in ok])
-    st = rs.stats
-    out["e_ratio"] = (truth.e, st.mean - 1.96 * rs.stderr, st.mean + 1.96 * rs.stderr)
+    e_mean, e_se = rs.float_value, rs.stderr if rs.stderr is not None else float("nan")
+    out["e_ratio"] = (truth.e, e_mean - 1.96 * e_se, e_mean + 1.96 * e_se)
     ratios = (np.concatenate([ringing_corrected_ratios(r.impacts.v_in_m_s, r.impacts.v_out_m_s,
-                                                       rs.ringing.value) for r in ok])
-              if rs.ringing.n_runs else np.concatenate([r.impacts.e for r in ok]))
+                                                       rs.ringing_share) for r in ok])
+              if rs.ringing_runs and rs.ringing_share is not None
+              else np.concatenate([r.impacts.e for r in ok]))
     st = restitution_from_ratios(ratios)
     out["e_ratio_iid"] = (truth.e, st.mean - 1.96 * st.stderr, st.mean + 1.96 * st.stderr)
     ed = fit_restitution_down(ths, gap_m=g["gap_m"].value, f_s_hz=g["f_s_hz"].value,
                               zeta=g["zeta"].value, zeta_stderr=g["zeta"].stderr,
-                              participation=q, level_hold_periods=hold).e
+                              participation=q, level_hold_periods=hold)
     out["e_down"] = (truth.e, ed.value - 1.96 * ed.stderr, ed.value + 1.96 * ed.stderr)
     return out
 
@@ -108,8 +110,8 @@ def one(seed: int, noise_rel: float) -> dict[str, tuple[float, float, float]]:
                                  ("zeta", truth.zeta))}
     ok = [r for r in runs if r.impacts]
     rs = ratios_of_runs([r.impacts for r in ok])     # (this generator rings in no run)
-    st = rs.stats
-    out["e_ratio"] = (truth.e, st.mean - 1.96 * rs.stderr, st.mean + 1.96 * rs.stderr)
+    e_mean, e_se = rs.float_value, rs.stderr if rs.stderr is not None else float("nan")
+    out["e_ratio"] = (truth.e, e_mean - 1.96 * e_se, e_mean + 1.96 * e_se)
     st = restitution_from_ratios(np.concatenate([r.impacts.e for r in ok]))
     out["e_ratio_iid"] = (truth.e, st.mean - 1.96 * st.stderr, st.mean + 1.96 * st.stderr)
     return out

@@ -329,7 +329,7 @@ def ramp_rows(quick: bool, repeat: int, tree: Path | None, why: str) -> list[Row
     ths, plate, zeta = _ramp_thresholds()
     name = "ramp-model fit of e (2 ramps)"
     t_new, c_new, fit = _time_fit(ths, plate, zeta, e_step, repeat)
-    e_new, se_new = fit.e.value, fit.e.stderr
+    e_new, se_new = fit.value, fit.stderr
     rows: list[Row] = []
     if tree is None:
         rows.append(("SKIP", f"{name} vs the baseline", f"no baseline: {why}",
@@ -360,14 +360,14 @@ def ramp_rows(quick: bool, repeat: int, tree: Path | None, why: str) -> list[Row
         t_grid, c_grid, fit_grid = _time_fit(ths, plate, zeta, e_step, repeat)
     finally:
         _restitution._FULL_GRID = False
-    same = (fit_grid.e.value, fit_grid.e.stderr) == (e_new, se_new)
+    same = (fit_grid.value, fit_grid.stderr) == (e_new, se_new)
     rows.append(("INFO", f"{name} vs today's fit on the whole e grid",
                  f"{t_new:.3f} s vs {t_grid:.3f} s = {t_grid / t_new:.1f}x wall, "
                  f"{c_grid / c_new:.1f}x CPU ({fit.e_grid.size} vs {fit_grid.e_grid.size} "
                  f"values of e; e and stderr equal: {same})", "informational"))
     rows.append(("INFO", f"{name} vs today's per-piece calls",
                  f"{t_new:.3f} s vs {t_old:.3f} s = {t_old / t_new:.1f}x wall, "
-                 f"{c_old / c_new:.1f}x CPU (e equal: {fit_old.e.value == e_new})",
+                 f"{c_old / c_new:.1f}x CPU (e equal: {fit_old.value == e_new})",
                  "informational"))
     return rows
 

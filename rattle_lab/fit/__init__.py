@@ -12,11 +12,11 @@ from rattle_lab._lazy import lazy_names
 if TYPE_CHECKING:
     from ._bands import (SIGNIFICANCE_K, band_quantile, grazing_band_ms2, hysteresis_uncertainty_ms2,
                          linear_law_band, negative_hysteresis, student_t_ci, threshold_hysteresis)
-    from ._damping import RampDampingFit, fit_zeta_ramp
-    from ._grazing import GrazingFit, fit_grazing
-    from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
+    from ._damping import fit_zeta_ramp
+    from ._grazing import fit_grazing
+    from ._grazing_ramp import fit_grazing_ramp
     from ._ramp_model import ModelThreshold, RampSpec, model_threshold
-    from ._restitution import (RestitutionFit, RestitutionStats, fit_restitution_down,
+    from ._restitution import (RestitutionStats, fit_restitution_down,
                                pooled_ringing_share, ratios_of_runs, restitution_from_ratios,
                                ringing_corrected_ratios, saddle_node_threshold_ms2)
     from ._results import RunResult, StoreFit
@@ -41,16 +41,12 @@ _LAZY: dict[str, str] = {
     "negative_hysteresis": "_bands",
     "student_t_ci": "_bands",
     "threshold_hysteresis": "_bands",
-    "RampDampingFit": "_damping",
     "fit_zeta_ramp": "_damping",
-    "GrazingFit": "_grazing",
     "fit_grazing": "_grazing",
-    "RampGrazingFit": "_grazing_ramp",
     "fit_grazing_ramp": "_grazing_ramp",
     "ModelThreshold": "_ramp_model",
     "RampSpec": "_ramp_model",
     "model_threshold": "_ramp_model",
-    "RestitutionFit": "_restitution",
     "RestitutionStats": "_restitution",
     "fit_restitution_down": "_restitution",
     "pooled_ringing_share": "_restitution",
@@ -94,14 +90,13 @@ _LAZY: dict[str, str] = {
 }
 
 __all__ = [
-    "DbLaw", "GrazingFit", "analyse_run", "check_fit_params", "fit_runs", "json_ready",
+    "DbLaw", "analyse_run", "check_fit_params", "fit_runs", "json_ready",
     "load_pipeline",
-    "summarise_fits", "LinearLaw", "RestitutionFit", "RestitutionStats",
+    "summarise_fits", "LinearLaw", "RestitutionStats",
     "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
     "pooled_ringing_share", "ratios_of_runs", "restitution_from_ratios", "ringing_corrected_ratios",
     "saddle_node_threshold_ms2",
-    "ModelThreshold", "RampDampingFit", "RampSpec", "fit_zeta_ramp", "model_threshold",
-    "RampGrazingFit", "fit_grazing_ramp",
+    "ModelThreshold", "RampSpec", "fit_zeta_ramp", "model_threshold", "fit_grazing_ramp",
     "RunResult", "StoreFit",
     "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
     "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",

@@ -24,7 +24,7 @@ __all__ = ["band_quantile", "grazing_band_ms2", "linear_law_band", "student_t_ci
 
 
 def _pval(g: GrazingSummary, name: str, default: float = float("nan")) -> float:
-    value = g.parameters()[name].value
+    value = g.params[name].value
     return default if value is None else value
 
 
@@ -80,7 +80,7 @@ def grazing_band_ms2(freq_hz: np.ndarray, g: GrazingSummary) -> tuple[np.ndarray
     varied = list(g.correlation_names)
     matrix = np.array([[np.nan if c is None else c for c in row] for row in g.correlation],
                       dtype=float).reshape(len(g.correlation), -1)
-    err = np.array([g.parameters()[n].stderr or np.nan for n in varied]) if varied \
+    err = np.array([g.params[n].stderr or np.nan for n in varied]) if varied \
         else np.zeros(0)
     if not varied or matrix.shape != (len(varied), len(varied)) or not np.isfinite(err).all():
         return y, np.full_like(y, np.nan)

@@ -14,7 +14,6 @@ of a linear motion, so ``e`` hardly matters (only through the confirming impacts
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -23,56 +22,15 @@ from scipy import optimize
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.detect.thresholds import Threshold
 from ._common import check_positive
-from ._estimates import Estimate
+from ._estimates import RampDamping
 from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
-
-
-@dataclass(frozen=True)
-class RampDampingFit:
-    """``zeta`` fitted to upward thresholds with the ramp model.
-
-    Attributes
-    ----------
-    zeta : Estimate
-        Damping ratio, nondimensional.  ``stderr``: linearised, ``sqrt(s2 / sum((g /
-        sigma)^2))`` with ``g = dA/dzeta`` by central differences at ``+-2 %``;
-        ``ci_low``, ``ci_high``: ``value -+ 2 stderr``.
-    run_ids : tuple of str
-        Runs used, in the order of the arrays.
-    freq_hz, accel_ms2, sigma_ms2 : ndarray
-        Frequencies (Hz), measured onsets and their standard deviations (m/s^2).
-    model_ms2, residuals_ms2 : ndarray
-        Model at the fitted ``zeta``, and model minus data, m/s^2.
-    chi2 : float
-        ``sum((residuals / sigma)^2)`` at the fit.
-    chi2_scale : float
-        ``s2 = max(1, chi2 / (n - 1))`` (1 with one point).
-    notes : tuple of str
-        Warnings (an estimate at a bound of the search).
-    """
-
-    zeta: Estimate
-    run_ids: tuple[str, ...]
-    freq_hz: np.ndarray
-    accel_ms2: np.ndarray
-    sigma_ms2: np.ndarray
-    model_ms2: np.ndarray
-    residuals_ms2: np.ndarray
-    chi2: float
-    chi2_scale: float
-    notes: tuple[str, ...]
-
-    @property
-    def params(self) -> dict[str, Estimate]:
-        """``{"zeta": ...}`` (same shape as the other fits)."""
-        return {"zeta": self.zeta}
 
 
 def fit_zeta_ramp(thresholds: Sequence[Threshold], *, gap_m: float, f_s_hz: float, zeta0: float,
                   participation: float = 1.0, e: float = 0.6,
                   zeta_bounds_rel: tuple[float, float] = (0.5, 1.5), n_phases: int = 4,
                   n_confirm: int = 3, max_gap_cycles: float = 100.0,
-                  edge_cycles: float = 2.0, level_hold_periods: int = 1) -> RampDampingFit:
+                  edge_cycles: float = 2.0, level_hold_periods: int = 1) -> RampDamping:
     """Fit ``zeta`` to the onset thresholds of upward ramps, each replayed through the simulator.
 
     Parameters
@@ -92,7 +50,14 @@ def fit_zeta_ramp(thresholds: Sequence[Threshold], *, gap_m: float, f_s_hz: floa
 
     Returns
     -------
-    RampDampingFit
+    RampDamping
+        ``zeta`` (nondimensional) with ``stderr`` linearised, ``sqrt(s2 / sum((g /
+        sigma)^2))`` with ``g = dA/dzeta`` by central differences at ``+-2 %``, and
+        ``ci_low``, ``ci_high`` = ``value -+ 2 stderr``; ``n`` thresholds and their
+        ``residuals_ms2`` (model minus data, m/s^2); ``notes``: warnings (an estimate at a
+        bound of the search).  Working fields (not stored): ``run_ids``, ``freq_hz``,
+        ``accel_ms2``, ``sigma_ms2``, ``model_ms2`` per threshold used, ``chi2`` at the fit
+        and ``chi2_scale`` ``s2 = max(1, chi2 / (n - 1))`` (1 with one point).
 
     Notes
     -----
@@ -115,7 +80,7 @@ def fit_zeta_ramp(thresholds: Sequence[Threshold], *, gap_m: float, f_s_hz: floa
     >>> up = Threshold("up_096", 96.0, "up", 6.92, 1.68, ramp_start_ms2=3.0, ramp_end_ms2=10.0,
     ...                ramp_duration_s=3.0, ramp_rms_ms2=0.001)
     >>> fit = fit_zeta_ramp([up], gap_m=1.3e-3, f_s_hz=96.0, zeta0=0.0091, participation=1.2442)
-    >>> bool(abs(fit.zeta.value / 0.0085 - 1) < 0.01)
+    >>> bool(abs(fit.value / 0.0085 - 1) < 0.01)
     True
     """
     check_positive(gap_m=gap_m, f_s_hz=f_s_hz, zeta0=zeta0, participation=participation)
@@ -162,7 +127,12 @@ def fit_zeta_ramp(thresholds: Sequence[Threshold], *, gap_m: float, f_s_hz: floa
     g = (model(z + dz) - model(z - dz)) / (2 * dz)
     info = float(np.sum((g / sigma) ** 2))
     stderr = float(np.sqrt(s2 / info)) if info > 0 else float("nan")
-    est = Estimate(z, stderr, "1", z - 2 * stderr, z + 2 * stderr)
-    return RampDampingFit(est, tuple(t.run_id for t in points),
-                          np.array([t.freq_hz for t in points]), acc, sigma, best, best - acc,
-                          c2, s2, tuple(notes))
+    return RampDamping(z, stderr, "1", z - 2 * stderr, z + 2 * stderr, notes=tuple(notes),
+                       method=METHOD, n=len(points), residuals_ms2=tuple((best - acc).tolist()),
+                       run_ids=tuple(t.run_id for t in points),
+                       freq_hz=np.array([t.freq_hz for t in points]), accel_ms2=acc,
+                       sigma_ms2=sigma, model_ms2=best, chi2=c2, chi2_scale=s2)
+
+
+#: :attr:`RampDamping.method` of :func:`fit_zeta_ramp`
+METHOD = "ramp replay of the upward thresholds"

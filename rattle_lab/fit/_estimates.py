@@ -1,6 +1,17 @@
 """Typed fit results: one estimate (value, stderr, interval, unit, notes) and one class per
-store-level fit, each with ``to_dict``/``from_dict`` (the layout is documented in
+fit, each with ``to_dict``/``from_dict`` (the layout is documented in
 :mod:`rattle_lab.fit._summary`).
+
+One class per fit: what the fitting function returns (:func:`~rattle_lab.fit.fit_grazing`
+a :class:`GrazingSummary`, :func:`~rattle_lab.fit.fit_grazing_ramp` a :class:`RampGrazing`,
+:func:`~rattle_lab.fit.fit_zeta_ramp` a :class:`RampDamping`,
+:func:`~rattle_lab.fit.fit_restitution_down` a :class:`DownRestitution`,
+:func:`~rattle_lab.fit.ratios_of_runs` a :class:`RatioRestitution`,
+:func:`~rattle_lab.fit.fit_linear_law` and :func:`~rattle_lab.fit.fit_db_law` a
+:class:`LinearLawSummary` and a :class:`DbLawSummary`) is what the store keeps.  A fitting
+function's working data that the store does not keep (the points fitted, the model at them,
+the chi-square profile, ...) are *working fields* (``metadata={"stored": False}``): left out
+of ``to_dict``, of ``==`` and of ``repr``, and empty (or None, NaN) in an object read back.
 
 Every class normalises its fields when built (:class:`_Normalised`): a number that is not
 finite becomes None, NumPy scalars become Python numbers, arrays and lists become tuples and
@@ -11,12 +22,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
 
 from rattle_lab.exceptions import SummaryFormatError
+from rattle_lab.model.linear import threshold_accel_unchecked
 
 _F = "float | None"
 
@@ -153,6 +165,25 @@ class _In:
             raise SummaryFormatError(f"summary: {self.path}: {exc}") from exc
 
 
+def _work(default: Any = None, *, factory: Any = None) -> Any:
+    """A working field: the fitting function's data that the store does not keep (not in
+    ``to_dict``, ``==`` or ``repr``; ``from_dict`` leaves it at its default)."""
+    kw: dict[str, Any] = dict(compare=False, repr=False, metadata={"stored": False})
+    if factory is not None:
+        return field(default_factory=factory, **kw)
+    return field(default=default, **kw)
+
+
+def _empty() -> np.ndarray:
+    return np.zeros(0)
+
+
+def stored_fields(obj: Any) -> tuple[str, ...]:
+    """The names of the fields of result ``obj`` that ``to_dict`` keeps (all but the working
+    fields)."""
+    return tuple(f.name for f in fields(obj) if f.metadata.get("stored", True))
+
+
 # --- estimates ------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -282,7 +313,12 @@ class GrazingSummary(_Normalised):
     correlation : tuple of tuple of float or None
         Their correlation matrix (None entries without a covariance).
     redchi : float or None
-        Reduced chi-square.
+        Reduced chi-square of the relative residuals of the final fit.
+
+    What :func:`~rattle_lab.fit.fit_grazing` returns (without ``bias_rel``, ``bias_note``:
+    :func:`~rattle_lab.fit.summarise_fits` adds them against the ramp-corrected fits) and
+    the store keeps.  Arithmetic on the tuples: ``np.asarray(fit.residuals_ms2, dtype=float)``
+    (None becomes NaN).
     """
 
     gap_m: GrazingParameter
@@ -298,12 +334,21 @@ class GrazingSummary(_Normalised):
 
     PARAMETERS = ("gap_m", "f_s_hz", "zeta", "participation")
 
-    def parameters(self) -> dict[str, GrazingParameter]:
+    @property
+    def params(self) -> dict[str, GrazingParameter]:
         """``{"gap_m": ..., "f_s_hz": ..., "zeta": ..., "participation": ...}``."""
         return {n: getattr(self, n) for n in self.PARAMETERS}
 
+    def predict(self, freq_hz: object) -> np.ndarray:
+        """Threshold acceleration of the fitted eq. (3.4) at ``freq_hz``, m/s^2 (NaN where a
+        parameter is not available)."""
+        p = self.params
+        return threshold_accel_unchecked(np.asarray(freq_hz, dtype=float),
+                                         p["gap_m"].float_value, p["f_s_hz"].float_value,
+                                         p["zeta"].float_value, p["participation"].float_value)
+
     def to_dict(self) -> dict[str, Any]:
-        return {**{n: p.to_dict() for n, p in self.parameters().items()},
+        return {**{n: p.to_dict() for n, p in self.params.items()},
                 "unidentifiable": list(self.unidentifiable),
                 "outliers_hz": list(self.outliers_hz),
                 "residuals_ms2": list(self.residuals_ms2),
@@ -324,7 +369,8 @@ class GrazingSummary(_Normalised):
 
 @dataclass(frozen=True)
 class RatioRestitution(Estimate):
-    """``e`` as the mean of the per-impact velocity ratios ``-v_out/v_in`` (nondimensional).
+    """``e`` as the mean of the per-impact velocity ratios ``-v_out/v_in`` (nondimensional;
+    :func:`~rattle_lab.fit.ratios_of_runs`).
 
     Attributes
     ----------
@@ -341,6 +387,14 @@ class RatioRestitution(Estimate):
         error.  None where no run gave one (no correction).
     ringing_runs : int
         Runs the share was pooled from.
+    ringing_runs_unmeasured : int
+        Working field (not stored): runs whose local fits showed ringing after the impacts
+        when no run gave a share (their ratios are biased; the store says so in ``notes``
+        and the data-quality flags).
+
+    :func:`~rattle_lab.fit.ratios_of_runs` returns it with ``stderr`` from the ratios and
+    the share; :func:`~rattle_lab.fit.summarise_fits` adds the vibrometer's delay and
+    measurand systematics to ``stderr`` and the notes, and the store keeps that.
     """
 
     std: float | None = None
@@ -350,6 +404,7 @@ class RatioRestitution(Estimate):
     ringing_share: float | None = None
     ringing_share_stderr: float | None = None
     ringing_runs: int = 0
+    ringing_runs_unmeasured: int = _work(0)
 
     def to_dict(self) -> dict[str, Any]:
         d = {**self._base(ci=self.ci_low is not None or self.ci_high is not None),
@@ -374,9 +429,9 @@ class RatioRestitution(Estimate):
 
 
 @dataclass(frozen=True)
-class RampDamping(Estimate):
-    """``zeta`` refitted to the upward thresholds by replaying each ramp (nondimensional;
-    :func:`~rattle_lab.fit.fit_zeta_ramp`).
+class _RampReplay(Estimate):
+    """A parameter fitted to measured ramp thresholds by replaying each ramp through the
+    exact simulator (the part common to :class:`RampDamping` and :class:`DownRestitution`).
 
     Attributes
     ----------
@@ -385,12 +440,31 @@ class RampDamping(Estimate):
     n : int
         Thresholds used.
     residuals_ms2 : tuple of float or None
-        Model minus measured threshold, m/s^2.
+        Model minus measured threshold, m/s^2, per threshold used.
+    freq_hz, accel_ms2, sigma_ms2, model_ms2 : ndarray
+        Working fields (not stored): per threshold used, its frequency (Hz), the measured
+        threshold, its standard deviation and the model at the fitted value (m/s^2).
+    chi2_scale : float
+        Working field (not stored): ``s2 = max(1, chi2_min / (n - 1))`` (1 with one point),
+        the residual scatter beyond ``sigma_ms2`` that widens the interval (NaN where not
+        computed).
     """
 
     method: str = ""
     n: int = 0
     residuals_ms2: tuple[float | None, ...] = ()
+    freq_hz: np.ndarray = _work(factory=_empty)
+    accel_ms2: np.ndarray = _work(factory=_empty)
+    sigma_ms2: np.ndarray = _work(factory=_empty)
+    model_ms2: np.ndarray = _work(factory=_empty)
+    chi2_scale: float = _work(math.nan)
+
+    @property
+    def params(self) -> dict[str, Estimate]:
+        """``{name: self}`` (``"zeta"`` or ``"e"``; the same shape as the other fits)."""
+        return {self._PARAM: self}
+
+    _PARAM = ""
 
     def _extra(self) -> dict[str, Any]:
         return {"method": self.method, "n": self.n}
@@ -398,6 +472,31 @@ class RampDamping(Estimate):
     def to_dict(self) -> dict[str, Any]:
         return self._fixed({**self._base(), **self._extra(),
                             "residuals_ms2": list(self.residuals_ms2), "notes": list(self.notes)})
+
+
+@dataclass(frozen=True)
+class RampDamping(_RampReplay):
+    """``zeta`` refitted to the upward thresholds by replaying each ramp (nondimensional;
+    :func:`~rattle_lab.fit.fit_zeta_ramp`, which returns it and the store keeps).
+
+    ``stderr``: linearised, ``sqrt(s2 / sum((g / sigma)^2))`` with ``g = dA/dzeta`` by
+    central differences at ``+-2 %``; ``ci_low``, ``ci_high``: ``value -+ 2 stderr``;
+    ``notes``: warnings (an estimate at a bound of the search).  Besides the fields of the
+    ramp replay (``method``, ``n``, ``residuals_ms2``; working: ``freq_hz``, ``accel_ms2``,
+    ``sigma_ms2``, ``model_ms2``, ``chi2_scale``):
+
+    Attributes
+    ----------
+    run_ids : tuple of str
+        Working field (not stored): the runs used, in the order of the arrays.
+    chi2 : float
+        Working field (not stored): ``sum((residuals / sigma)^2)`` at the fit.
+    """
+
+    run_ids: tuple[str, ...] = _work(())
+    chi2: float = _work(math.nan)
+
+    _PARAM = "zeta"
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], path: str = "fits.damping_ramp") -> RampDamping:
@@ -407,23 +506,42 @@ class RampDamping(Estimate):
 
 
 @dataclass(frozen=True)
-class DownRestitution(RampDamping):
-    """``e`` from the disappearance (downward) thresholds (nondimensional;
-    :func:`~rattle_lab.fit.fit_restitution_down`).
+class DownRestitution(_RampReplay):
+    """``e`` from the disappearance (downward) thresholds above resonance (nondimensional;
+    :func:`~rattle_lab.fit.fit_restitution_down`, which returns it and the store keeps).
+
+    ``method`` is ``"ramp"`` (the ramp replayed) or ``"quasi-static"`` (the fold of eq.
+    3.11).  Ramp method: ``value`` is the vertex of a parabola ``chi2 ~ a (e - value)^2 + c``
+    fitted to the profile within ``4 s2`` of its minimum (``s2 = chi2_scale``); ``stderr``
+    is ``sqrt(s2 / a)`` (or, without a parabola, half the width of the set where ``chi2 <=
+    min + s2``) combined in quadrature with ``stderr_from_zeta``; ``ci_low``, ``ci_high``
+    are the outer edges of the set where ``chi2 <= min + 4 s2`` (2 sigma), widened likewise,
+    None where the profile does not rise that far inside ``e_bounds`` (see ``notes``).
+    Quasi-static: lmfit's standard error and ``value +- 2 stderr``.  Besides the fields of
+    the ramp replay (``method``, ``n``, ``residuals_ms2``; working: ``freq_hz``,
+    ``accel_ms2``, ``sigma_ms2`` (NaN for quasi-static, which weights by ``1 /
+    accel_ms2``), ``model_ms2``, ``chi2_scale``):
 
     Attributes
     ----------
     run_ids : tuple of str
-        The runs whose thresholds were used.
+        The runs whose thresholds were used, in the order of the arrays.
     zeta_used : float or None
         The damping ratio the fit held.
     stderr_from_zeta : float or None
-        The part of ``stderr`` propagated from ``zeta``'s.
+        The part of ``stderr`` propagated from ``zeta``'s (``|de/dzeta| stderr_zeta``).
+    e_grid, chi2 : ndarray
+        Working fields (not stored): the profile ``chi2(e) = sum(((model(e) - accel) /
+        sigma)^2)`` at the values of ``e`` evaluated (ramp method; empty otherwise).
     """
 
     run_ids: tuple[str, ...] = ()
     zeta_used: float | None = None
     stderr_from_zeta: float | None = None
+    e_grid: np.ndarray = _work(factory=_empty)
+    chi2: np.ndarray = _work(factory=_empty)
+
+    _PARAM = "e"
 
     def _extra(self) -> dict[str, Any]:
         return {"method": self.method, "n": self.n, "run_ids": list(self.run_ids),
@@ -533,18 +651,30 @@ class SplLawSummary:
 @dataclass(frozen=True)
 class RampGrazing(_Normalised):
     """Eq. (3.4) refitted to the upward thresholds less each ramp's replayed lag
-    (:func:`~rattle_lab.fit.fit_grazing_ramp`).
+    (:func:`~rattle_lab.fit.fit_grazing_ramp`, which returns it and the store keeps).
 
     Attributes
     ----------
     gap_m, f_s_hz, zeta : Estimate
-        Gap (m), natural frequency (Hz) and damping ratio, fitted together.
+        Gap (m), natural frequency (Hz) and damping ratio, fitted together, with profile
+        95 % intervals.
     method : str
         How it was fitted.
     lag_rel : tuple of float or None
         Each threshold's replayed ramp lag relative to its level.
     iterations : int
         Rounds of lag replay and refit.
+    grazing : GrazingSummary or None
+        Working field (not stored): eq. (3.4) fitted to the lag-corrected levels (per
+        frequency: the mean over runs), the fit ``gap_m``, ``f_s_hz``, ``zeta`` come from
+        (with the fixed participation, the residuals, the correlation).
+    quasi_static : GrazingSummary or None
+        Working field (not stored): eq. (3.4) on the uncorrected crossing levels.
+    run_ids : tuple of str
+        Working field (not stored): the upward thresholds used.
+    freq_hz, accel_ms2, lag_ms2 : ndarray
+        Working fields (not stored): per threshold, frequency (Hz), measured onset level and
+        the replayed lag at the final parameters (m/s^2).
     """
 
     gap_m: Estimate
@@ -553,11 +683,22 @@ class RampGrazing(_Normalised):
     method: str = ""
     lag_rel: tuple[float | None, ...] = ()
     iterations: int = 0
+    grazing: GrazingSummary | None = _work(None)
+    quasi_static: GrazingSummary | None = _work(None)
+    run_ids: tuple[str, ...] = _work(())
+    freq_hz: np.ndarray = _work(factory=_empty)
+    accel_ms2: np.ndarray = _work(factory=_empty)
+    lag_ms2: np.ndarray = _work(factory=_empty)
 
     PARAMETERS = ("gap_m", "f_s_hz", "zeta")
 
+    @property
+    def params(self) -> dict[str, Estimate]:
+        """``{"gap_m": ..., "f_s_hz": ..., "zeta": ...}``."""
+        return {n: getattr(self, n) for n in self.PARAMETERS}
+
     def to_dict(self) -> dict[str, Any]:
-        return {**{n: getattr(self, n).to_dict() for n in self.PARAMETERS},
+        return {**{n: p.to_dict() for n, p in self.params.items()},
                 "method": self.method, "lag_rel": list(self.lag_rel),
                 "iterations": self.iterations}
 

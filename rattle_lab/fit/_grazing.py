@@ -19,7 +19,6 @@ correlation matrix and profile confidence intervals (``lmfit.conf_interval``).
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
 
 import lmfit
 import numpy as np
@@ -28,7 +27,7 @@ from rattle_lab.detect import robust_sigma
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.model.linear import threshold_accel_unchecked
 from ._common import correlation_matrix
-from ._estimates import Estimate
+from ._estimates import GrazingParameter, GrazingSummary
 
 #: unit of each parameter of the fit
 _UNITS = {"gap_m": "m", "f_s_hz": "Hz", "zeta": "1", "participation": "1"}
@@ -45,48 +44,6 @@ def _model_ms2(freq_hz: np.ndarray, gap_mm: float, f_s_hz: float, zeta: float,
     return threshold_accel_unchecked(freq_hz, 1e-3 * gap_mm, f_s_hz, zeta, participation)
 
 
-@dataclass(frozen=True)
-class GrazingFit:
-    """Result of :func:`fit_grazing`.
-
-    Attributes
-    ----------
-    params : dict of str to Estimate
-        ``gap_m`` (m), ``f_s_hz`` (Hz), ``zeta`` (nondimensional), ``participation``.
-    freq_hz, accel_ms2 : ndarray
-        The data (all points).
-    residuals_ms2 : ndarray
-        ``A_model - A`` at every point (inliers and outliers), m/s^2.
-    outlier : ndarray of bool
-        Points rejected by the robust step.
-    correlation : ndarray
-        Correlation matrix of the varied parameters, in the order ``varied``.
-    varied : tuple of str
-        Names of the varied parameters.
-    unidentifiable : tuple of str
-        Human-readable notes on what the data cannot identify (empty if all identified).
-    redchi : float
-        Reduced chi-square of the relative residuals of the final fit.
-    """
-
-    params: dict[str, Estimate]
-    freq_hz: np.ndarray
-    accel_ms2: np.ndarray
-    residuals_ms2: np.ndarray
-    outlier: np.ndarray
-    correlation: np.ndarray
-    varied: tuple[str, ...]
-    unidentifiable: tuple[str, ...]
-    redchi: float
-
-    def predict(self, freq_hz: object) -> np.ndarray:
-        """Threshold acceleration of the fitted model at ``freq_hz``, m/s^2."""
-        p = self.params
-        return threshold_accel_unchecked(np.asarray(freq_hz, dtype=float),
-                                         p["gap_m"].float_value, p["f_s_hz"].float_value,
-                                         p["zeta"].float_value, p["participation"].float_value)
-
-
 def _initial(freq: np.ndarray, acc: np.ndarray, q: float) -> tuple[float, float, float]:
     k = int(np.argmin(acc))
     fs0 = float(freq[k])
@@ -100,7 +57,7 @@ def _initial(freq: np.ndarray, acc: np.ndarray, q: float) -> tuple[float, float,
 def fit_grazing(freq_hz: object, accel_ms2: object, *, participation: float = 1.0,
                 vary_participation: bool = False, gap_m: float | None = None,
                 vary_gap: bool = True, outlier_k: float = 5.0,
-                conf_interval: bool = True) -> GrazingFit:
+                conf_interval: bool = True) -> GrazingSummary:
     """Fit eq. (3.4) to appearance thresholds ``accel_ms2`` against ``freq_hz``.
 
     Parameters
@@ -115,6 +72,16 @@ def fit_grazing(freq_hz: object, accel_ms2: object, *, participation: float = 1.
         Rejection level in robust standard deviations of the relative residuals.
     conf_interval : bool
         Compute 95 % profile confidence intervals.
+
+    Returns
+    -------
+    GrazingSummary
+        ``gap_m`` (m), ``f_s_hz`` (Hz), ``zeta``, ``participation`` (``vary`` False when
+        held) with standard errors and 2-sigma profile intervals; ``residuals_ms2``: model
+        minus data at every point given (None where a point was not finite);
+        ``outliers_hz``: the points rejected by the robust step; the correlation of the
+        varied parameters, ``unidentifiable`` notes and the reduced chi-square.  The class
+        the store keeps.
 
     Raises
     ------
@@ -192,11 +159,14 @@ def fit_grazing(freq_hz: object, accel_ms2: object, *, participation: float = 1.
         p = final.params[src]
         lo, hi = ci.get(src, (np.nan, np.nan))
         std = p.stderr if (p.stderr is not None and p.vary) else np.nan
-        params[dst] = Estimate(scale_to * float(p.value), scale_to * float(std), _UNITS[dst],
-                               scale_to * lo, scale_to * hi, vary=bool(p.vary))
+        params[dst] = GrazingParameter(scale_to * float(p.value), scale_to * float(std),
+                                       _UNITS[dst], scale_to * lo, scale_to * hi,
+                                       vary=bool(p.vary))
     resid = np.full(f.shape, np.nan)
     resid[ok] = final.eval(params=final.params, freq_hz=fo) - ao
-    outl = np.zeros(f.shape, dtype=bool)
-    outl[np.flatnonzero(ok)[~inlier]] = True
-    return GrazingFit(params, f, a, resid, outl, corr, tuple(shown),
-                      tuple(notes), float(final.redchi))
+    outliers = f[np.flatnonzero(ok)[~inlier]]
+    return GrazingSummary(**params, unidentifiable=tuple(notes),
+                          outliers_hz=tuple(outliers.tolist()),
+                          residuals_ms2=tuple(resid.tolist()), correlation_names=tuple(shown),
+                          correlation=tuple(map(tuple, corr.tolist())),
+                          redchi=float(final.redchi))

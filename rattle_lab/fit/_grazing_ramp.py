@@ -37,45 +37,15 @@ levels about eq. (3.4) (lmfit scales the covariance by the reduced chi-square).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 from rattle_lab.detect.thresholds import Threshold, crossing_level_ms2
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.model.linear import threshold_accel_unchecked
-from ._grazing import GrazingFit, fit_grazing
+from ._estimates import Estimate, RampGrazing
+from ._grazing import fit_grazing
 from ._ramp_model import RampSpec, model_threshold
-
-
-@dataclass(frozen=True)
-class RampGrazingFit:
-    """Result of :func:`fit_grazing_ramp`.
-
-    Attributes
-    ----------
-    grazing : GrazingFit
-        Eq. (3.4) fitted to the lag-corrected levels (per frequency: the mean over runs);
-        its ``params`` (gap_m, f_s_hz, zeta) are the ramp-corrected estimates with
-        profile 95 % intervals.
-    quasi_static : GrazingFit
-        Eq. (3.4) fitted to the uncorrected crossing levels (step 1), for comparison.
-    run_ids : tuple of str
-        The upward thresholds used.
-    freq_hz, accel_ms2, lag_ms2 : ndarray
-        Per threshold: frequency (Hz), measured onset level and the replayed lag ``L_i``
-        at the final parameters (m/s^2).
-    iterations : int
-        Correction rounds done.
-    """
-
-    grazing: GrazingFit
-    quasi_static: GrazingFit
-    run_ids: tuple[str, ...]
-    freq_hz: np.ndarray
-    accel_ms2: np.ndarray
-    lag_ms2: np.ndarray
-    iterations: int
 
 
 def _per_frequency(freq_hz: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -87,7 +57,7 @@ def fit_grazing_ramp(thresholds: Sequence[Threshold], *, participation: float = 
                      e: float = 0.6, n_phases: int = 4, n_confirm: int = 3,
                      max_gap_cycles: float = 100.0, edge_cycles: float = 2.0,
                      level_hold_periods: int = 1, max_iterations: int = 6,
-                     rtol: float = 5e-4) -> RampGrazingFit:
+                     rtol: float = 5e-4) -> RampGrazing:
     """Fit eq. (3.4) to upward ramp thresholds with each one's ramp lag replayed and removed.
 
     Parameters
@@ -108,7 +78,12 @@ def fit_grazing_ramp(thresholds: Sequence[Threshold], *, participation: float = 
 
     Returns
     -------
-    RampGrazingFit
+    RampGrazing
+        ``gap_m``, ``f_s_hz``, ``zeta``: eq. (3.4) fitted to the lag-corrected levels (per
+        frequency: the mean over runs), with profile 95 % intervals; ``lag_rel`` and
+        ``iterations`` (stored), and the working fields ``grazing`` (that final fit),
+        ``quasi_static`` (eq. 3.4 on the uncorrected crossing levels, for comparison),
+        ``run_ids``, ``freq_hz``, ``accel_ms2`` and ``lag_ms2`` (per threshold used).
 
     Raises
     ------
@@ -159,7 +134,14 @@ def fit_grazing_ramp(thresholds: Sequence[Threshold], *, participation: float = 
         if moved < rtol:
             break
     fit = fit_grazing(fc, ac, participation=participation, gap_m=p["gap_m"])
-    return RampGrazingFit(fit, start, tuple(t.run_id for t in points), freq, acc, lag, done)
+    est = {n: Estimate(q.value, q.stderr, q.unit, q.ci_low, q.ci_high)
+           for n in RampGrazing.PARAMETERS for q in (fit.params[n],)}
+    return RampGrazing(**est, method=METHOD, lag_rel=tuple((lag / acc).tolist()), iterations=done, grazing=fit,
+                       quasi_static=start, run_ids=tuple(t.run_id for t in points),
+                       freq_hz=freq, accel_ms2=acc, lag_ms2=lag)
 
 
-__all__ = ["RampGrazingFit", "fit_grazing_ramp"]
+#: :attr:`RampGrazing.method` of :func:`fit_grazing_ramp`
+METHOD = "eq. (3.4) on the thresholds less each ramp's replayed lag"
+
+__all__ = ["fit_grazing_ramp"]

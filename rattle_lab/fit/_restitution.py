@@ -42,7 +42,7 @@ from rattle_lab.detect import RINGING_RESIDUAL_RATIO
 from rattle_lab.exceptions import ConvergenceError, ParameterError
 from rattle_lab.detect.thresholds import Threshold
 from ._common import check_positive
-from ._estimates import Estimate
+from ._estimates import DownRestitution, RatioRestitution
 from ._params import METHODS
 from ._profile import _search_coarse, profile_interval, profile_parabola
 from ._ramp_model import RampSpec, model_threshold, threshold_sigma_ms2
@@ -224,32 +224,7 @@ FLAG_RINGING_UNCORRECTED = "e_ratio_ringing_uncorrected"
 FLAG_RING_MODES_ONE_RUN = "e_ratio_ring_modes_one_run"
 
 
-@dataclass(frozen=True)
-class RatioStats:
-    """Result of :func:`ratios_of_runs`.
-
-    Attributes
-    ----------
-    stats : RestitutionStats
-        Of the per-impact ratios (the share taken off); ``stats.stderr`` is the
-        run-clustered one (:func:`restitution_from_ratios`).
-    stderr : float
-        ``stats.stderr`` combined in quadrature with the pooled share's error moving every
-        ratio alike (``|d e / d share| = |v_out - v_in| / |v_in|``, median over impacts).
-    ringing : RingingShare
-        The pooled share (``n_runs == 0``: none, nothing taken off).
-    ringing_runs_unmeasured : int
-        Runs whose local fits showed ringing after the impacts (``ringing_ratio`` at or
-        above the detector's threshold) when no run gave a share: their ratios are biased.
-    """
-
-    stats: RestitutionStats
-    stderr: float
-    ringing: RingingShare
-    ringing_runs_unmeasured: int = 0
-
-
-def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
+def ratios_of_runs(logs: Sequence[Any]) -> RatioRestitution:
     """e from the velocity ratios of several runs' impact logs, as ``rattle-lab fit`` reports it.
 
     ``logs``: :class:`~rattle_lab.detect.ImpactLog` (or anything with ``v_in_m_s``,
@@ -262,6 +237,19 @@ def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
     modes too, and the fit says so; unless its velocities came from the flight model with
     the campaign's ringing modes (``ring_modes``, tails carried on).
 
+    Returns
+    -------
+    RatioRestitution
+        ``value``, ``std``, ``median``, ``n`` of the per-impact ratios (the share taken
+        off), ``n_runs`` with a ratio; ``stderr``: the run-clustered one
+        (:func:`restitution_from_ratios`) combined in quadrature with the pooled share's
+        error moving every ratio alike (``|d e / d share| = |v_out - v_in| / |v_in|``,
+        median over impacts); ``ringing_share``, ``ringing_share_stderr``,
+        ``ringing_runs``: the pooled share (``ringing_runs == 0``: none, nothing taken
+        off); working field ``ringing_runs_unmeasured``.  No notes: the store's summary
+        (:func:`~rattle_lab.fit.summarise_fits`) adds them, and the vibrometer's
+        systematics to ``stderr``.
+
     Examples
     --------
     >>> from types import SimpleNamespace as Log
@@ -269,7 +257,7 @@ def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
     >>> runs = [Log(v_in_m_s=vi, v_out_m_s=-0.76 * vi, e=np.array([0.76, 0.76]),
     ...             ringing_share=s) for s in (1 / 11, float("nan"), 1 / 11)]
     >>> r = ratios_of_runs(runs)
-    >>> round(r.stats.mean, 6), r.ringing.n_runs
+    >>> round(r.value, 6), r.ringing_runs
     (0.6, 2)
     """
     ring = pooled_ringing_share(log.ringing_share for log in logs)
@@ -293,7 +281,12 @@ def ratios_of_runs(logs: Sequence[Any]) -> RatioStats:
     unmeasured = 0 if ring.n_runs else sum(
         1 for log in logs if getattr(log, "ringing_ratio", np.nan) >= RINGING_RESIDUAL_RATIO
         and not getattr(log, "ring_modes", ()))
-    return RatioStats(st, se, ring, unmeasured)
+    nan = float("nan")
+    return RatioRestitution(st.mean, se, "1", std=st.std, median=st.median, n=st.n,
+                            n_runs=st.n_groups,
+                            ringing_share=ring.value if ring.n_runs else nan,
+                            ringing_share_stderr=ring.stderr if ring.n_runs else nan,
+                            ringing_runs=ring.n_runs, ringing_runs_unmeasured=unmeasured)
 
 
 def saddle_node_threshold_ms2(freq_hz: np.ndarray, e: float, gap_m: float, f_s_hz: float,
@@ -319,71 +312,6 @@ def saddle_node_threshold_ms2(freq_hz: np.ndarray, e: float, gap_m: float, f_s_h
 Method = Literal["ramp", "quasi-static"]
 
 
-@dataclass(frozen=True)
-class RestitutionFit:
-    """``e`` fitted to downward thresholds above resonance.
-
-    Attributes
-    ----------
-    e : Estimate
-        Fitted coefficient of restitution (``method="ramp"``: the vertex of a parabola
-        ``chi2 ~ a (e - value)^2 + c`` fitted to the profile within ``4 s2`` of its
-        minimum, ``s2 = chi2_scale``).  ``stderr``: ``sqrt(s2 / a)`` (or, without a
-        parabola, half the width of the set where ``chi2 <= min + s2``), combined in
-        quadrature with ``stderr_from_zeta``; ``ci_low``, ``ci_high``: the outer edges of
-        the set where ``chi2 <= min + 4 s2`` (2 sigma, 95.4 %), widened likewise; NaN
-        where the profile does not rise that far inside ``e_bounds`` (see ``notes``).
-        For ``method="quasi-static"``: lmfit's standard error and ``value +- 2 stderr``.
-    method : {"ramp", "quasi-static"}
-        The threshold model (module docstring).
-    run_ids : tuple of str
-        Runs used, in the order of the arrays below.
-    freq_hz, accel_ms2 : ndarray
-        Their frequencies (Hz) and measured thresholds (m/s^2).
-    sigma_ms2 : ndarray
-        Standard deviation of each measured threshold, m/s^2
-        (:func:`~rattle_lab.fit._ramp_model.threshold_sigma_ms2`; NaN for quasi-static,
-        which weights by ``1 / accel_ms2``).
-    model_ms2, residuals_ms2 : ndarray
-        Model at the fitted ``e`` and model minus data, m/s^2.
-    e_grid, chi2 : ndarray
-        The profile: ``chi2(e) = sum(((model(e) - accel) / sigma)^2)`` at the values of
-        ``e`` evaluated (``method="ramp"``; empty otherwise): the part of the coarse grid the
-        fit needs (the points left out lie above the 2-sigma cut, see
-        :func:`fit_restitution_down`) and the refinement.
-    chi2_scale : float
-        ``s2 = max(1, min(chi2) / (n - 1))`` (1 with one point): the residual scatter
-        beyond the stated ``sigma_ms2`` widens the intervals (Birge ratio).
-    zeta : float
-        Damping ratio used.
-    stderr_from_zeta : float
-        Part of ``e.stderr`` that comes from the standard error of ``zeta`` (linear
-        propagation: ``|de/dzeta| stderr_zeta``), nondimensional.
-    notes : tuple of str
-        What the data could not determine, and warnings (e.g. ramp lag for quasi-static).
-    """
-
-    e: Estimate
-    method: str
-    run_ids: tuple[str, ...]
-    freq_hz: np.ndarray
-    accel_ms2: np.ndarray
-    sigma_ms2: np.ndarray
-    model_ms2: np.ndarray
-    residuals_ms2: np.ndarray
-    e_grid: np.ndarray
-    chi2: np.ndarray
-    chi2_scale: float
-    zeta: float
-    stderr_from_zeta: float
-    notes: tuple[str, ...]
-
-    @property
-    def params(self) -> dict[str, Estimate]:
-        """``{"e": ...}`` (same shape as the other fits)."""
-        return {"e": self.e}
-
-
 def _down_points(thresholds: Sequence[Threshold], f_s_hz: float, zeta: float
                  ) -> list[Threshold]:
     """Finite downward thresholds above the upper half-power frequency ``f_s (1 + zeta)``."""
@@ -403,7 +331,7 @@ _FULL_GRID = False
 
 
 def _quasi_static(points: list[Threshold], *, gap_m: float, f_s_hz: float, zeta: float,
-                  participation: float, e0: float) -> RestitutionFit:
+                  participation: float, e0: float) -> DownRestitution:
     fu = np.array([t.freq_hz for t in points])
     au = np.array([t.accel_ms2 for t in points])
     model = lmfit.Model(saddle_node_threshold_ms2, independent_vars=["freq_hz"])
@@ -416,8 +344,6 @@ def _quasi_static(points: list[Threshold], *, gap_m: float, f_s_hz: float, zeta:
         raise ConvergenceError(f"the restitution fit did not converge: {res.message}")
     p = res.params["e"]
     std = float(p.stderr) if p.stderr is not None else np.nan
-    est = Estimate(float(p.value), std, "1", float(p.value) - 2 * std,
-                   float(p.value) + 2 * std)
     notes = []
     tau_s = 1.0 / (zeta * 2 * np.pi * f_s_hz)
     for t in points:
@@ -428,10 +354,12 @@ def _quasi_static(points: list[Threshold], *, gap_m: float, f_s_hz: float, zeta:
                              f"({100 * lag / t.accel_ms2:.2g} % of the threshold): the quasi-static "
                              f"fold lags; use method='ramp'")
     model_ms2 = res.eval(freq_hz=fu)
-    empty = np.zeros(0)
-    return RestitutionFit(est, "quasi-static", tuple(t.run_id for t in points), fu, au,
-                          np.full(fu.size, np.nan), model_ms2, model_ms2 - au, empty, empty,
-                          float("nan"), float(zeta), 0.0, tuple(notes))
+    return DownRestitution(float(p.value), std, "1", float(p.value) - 2 * std,
+                           float(p.value) + 2 * std, notes=tuple(notes), method="quasi-static",
+                           n=len(points), residuals_ms2=tuple((model_ms2 - au).tolist()),
+                           run_ids=tuple(t.run_id for t in points), zeta_used=float(zeta),
+                           stderr_from_zeta=0.0, freq_hz=fu, accel_ms2=au,
+                           sigma_ms2=np.full(fu.size, np.nan), model_ms2=model_ms2)
 
 
 def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_hz: float,
@@ -439,7 +367,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
                          zeta_stderr: float = 0.0, e_bounds: tuple[float, float] = (0.05, 0.95),
                          e_step: float = 0.025, n_phases: int = 4, n_confirm: int = 3,
                          max_gap_cycles: float = 100.0, edge_cycles: float = 2.0,
-                         level_hold_periods: int = 1, e0: float = 0.7) -> RestitutionFit:
+                         level_hold_periods: int = 1, e0: float = 0.7) -> DownRestitution:
     """Fit ``e`` to the disappearance thresholds of downward ramps above resonance.
 
     Parameters
@@ -465,7 +393,16 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
 
     Returns
     -------
-    RestitutionFit
+    DownRestitution
+        ``e`` with its standard error and 2-sigma interval (see the class), ``method``,
+        ``run_ids`` of the thresholds used (in the order of the working arrays), ``n``,
+        ``zeta_used``, ``stderr_from_zeta``, ``residuals_ms2`` (model minus data) and
+        ``notes`` (what the data could not determine, and warnings such as the ramp lag
+        for quasi-static); working fields (not stored): ``freq_hz``, ``accel_ms2``,
+        ``sigma_ms2``, ``model_ms2`` per threshold, the profile ``e_grid``, ``chi2`` (ramp
+        method: the part of the coarse grid the fit needs -- the points left out lie
+        above the 2-sigma cut -- and the refinement; empty otherwise) and ``chi2_scale``
+        ``s2 = max(1, min(chi2) / (n - 1))`` (the Birge ratio that widens the interval).
 
     Notes
     -----
@@ -507,7 +444,7 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
     ...                  ramp_end_ms2=3.0, ramp_duration_s=6.0, ramp_rms_ms2=0.005)
     >>> fit = fit_restitution_down([down], gap_m=1.3e-3, f_s_hz=96.0, zeta=0.0085,
     ...                            participation=1.2442, e_bounds=(0.4, 0.8), e_step=0.05)
-    >>> bool(abs(fit.e.value - 0.6) < 0.05), fit.method
+    >>> bool(abs(fit.value - 0.6) < 0.05), fit.method
     (True, 'ramp')
     """
     if method not in METHODS:
@@ -610,7 +547,10 @@ def fit_restitution_down(thresholds: Sequence[Threshold], *, gap_m: float, f_s_h
     ci_low = value - float(np.hypot(value - lo2, 2 * from_zeta))
     ci_high = value + float(np.hypot(hi2 - value, 2 * from_zeta))
     best = model(value)
-    est = Estimate(value, stderr, "1", ci_low, ci_high)
-    return RestitutionFit(est, "ramp", tuple(t.run_id for t in points),
-                          np.array([t.freq_hz for t in points]), acc, sigma, best, best - acc,
-                          grid, chi2, s2, float(zeta), from_zeta, tuple(notes))
+    return DownRestitution(value, stderr, "1", ci_low, ci_high, notes=tuple(notes),
+                           method="ramp", n=len(points), residuals_ms2=tuple((best - acc).tolist()),
+                           run_ids=tuple(t.run_id for t in points), zeta_used=float(zeta),
+                           stderr_from_zeta=from_zeta,
+                           freq_hz=np.array([t.freq_hz for t in points]), accel_ms2=acc,
+                           sigma_ms2=sigma, model_ms2=best, e_grid=grid, chi2=chi2,
+                           chi2_scale=s2)

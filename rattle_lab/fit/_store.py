@@ -34,16 +34,15 @@ from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of, delay_sy
                      infer_measurand, measurand_systematic,
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
                      transient_shocks, velocity_delay_flags)
-from ._grazing import GrazingFit, fit_grazing
+from ._grazing import fit_grazing
 from ._plate_check import check_plate_model
-from ._grazing_ramp import RampGrazingFit, fit_grazing_ramp
+from ._grazing_ramp import fit_grazing_ramp
 from ._damping import fit_zeta_ramp
 from ._restitution import (FLAG_RING_MODES_ONE_RUN, FLAG_RINGING_UNCORRECTED,
                            fit_restitution_down, ratios_of_runs)
-from ._spl_law import DbLaw, LinearLaw, fit_db_law, fit_linear_law
-from ._estimates import (DbLawSummary, DownRestitution, Estimate, Fits, GrazingParameter,
-                         GrazingSummary, LinearLawSummary, RampDamping, RampGrazing,
-                         RatioRestitution, SplLawSummary)
+from ._spl_law import fit_db_law, fit_linear_law
+from ._estimates import (DownRestitution, Fits, GrazingSummary, RampDamping, RampGrazing,
+                         SplLawSummary)
 from ._summary import (FitSummary, ParticipationInfo, RunRow, SkippedRun, ThresholdTable,
                        TransientRun)
 from ._params import FIT_KEYS, SOUND_KEYS, check_fit_params, load_pipeline
@@ -295,7 +294,7 @@ def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
     return StoreFit(tuple(runs), curve, summary, json_ready(prov))
 
 
-def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
+def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingSummary,
                              fit: Mapping[str, Any], *, e_guess: float = 0.6
                              ) -> tuple[DownRestitution | None, RampDamping | None, dict[str, str]]:
     """``e`` from the downward thresholds (and the ramp-model damping) for the summary.
@@ -311,7 +310,7 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
     ----------
     thresholds : list of Threshold
         Every measured ramp threshold (up and down).
-    grazing : GrazingFit
+    grazing : GrazingSummary
         Supplies ``gap_m``, ``f_s_hz``, ``participation`` (and ``zeta`` as a start).
     fit : mapping
         Fit parameters (``FIT_KEYS``).
@@ -339,44 +338,31 @@ def restitution_down_summary(thresholds: list[Threshold], grazing: GrazingFit,
     zeta, zeta_se, zeta_note = p["zeta"].float_value, p["zeta"].stderr, ""
     if method == "ramp":
         try:
-            zf = fit_zeta_ramp(thresholds, zeta0=zeta, e=e_guess, n_confirm=n_confirm,
-                               level_hold_periods=hold, **modal)
-            z = zf.zeta
-            ramp = RampDamping(z.value, z.stderr, "1", z.ci_low, z.ci_high, notes=zf.notes,
-                               method="ramp replay of the upward thresholds",
-                               n=len(zf.run_ids),
-                               residuals_ms2=tuple(zf.residuals_ms2.tolist()))
-            zeta, zeta_se = z.float_value, z.stderr
+            ramp = fit_zeta_ramp(thresholds, zeta0=zeta, e=e_guess, n_confirm=n_confirm,
+                                 level_hold_periods=hold, **modal)
+            zeta, zeta_se = ramp.float_value, ramp.stderr
         except RattleLabError as exc:
             missing["damping_ramp"] = str(exc)
             zeta_note = f"zeta from the grazing fit (ramp-model damping not fitted: {exc})"
     try:
-        rf = fit_restitution_down(thresholds, zeta=zeta, method=method, n_confirm=n_confirm,
-                                  zeta_stderr=0.0 if zeta_se is None else zeta_se,
-                                  level_hold_periods=hold, **modal)
-        e = rf.e
-        down = DownRestitution(e.value, e.stderr, "1", e.ci_low, e.ci_high,
-                               notes=tuple(rf.notes) + ((zeta_note,) if zeta_note else ()),
-                               method=rf.method, n=len(rf.run_ids), run_ids=rf.run_ids,
-                               zeta_used=rf.zeta, stderr_from_zeta=rf.stderr_from_zeta,
-                               residuals_ms2=tuple(rf.residuals_ms2.tolist()))
+        down = fit_restitution_down(thresholds, zeta=zeta, method=method, n_confirm=n_confirm,
+                                    zeta_stderr=0.0 if zeta_se is None else zeta_se,
+                                    level_hold_periods=hold, **modal)
+        if zeta_note:
+            down = dataclasses.replace(down, notes=down.notes + (zeta_note,))
     except RattleLabError as exc:
         missing["restitution_down"] = str(exc)
     return down, ramp, missing
 
 
-_UNITS = {"gap_m": "m", "f_s_hz": "Hz", "zeta": "1", "participation": "1"}
-
-
-def _grazing_summary(grazing: GrazingFit, ramp: RampDamping | None,
-                     rg: RampGrazingFit | None = None) -> GrazingSummary:
-    """The grazing fit's entry; against the ramp-corrected fits, the biases of its ``gap_m``
-    and ``zeta`` named (their intervals leave the ramp lag out)."""
-    params = {n: GrazingParameter(p.value, p.stderr, _UNITS[n], p.ci_low, p.ci_high,
-                                  vary=p.vary) for n, p in grazing.params.items()}
+def _with_biases(grazing: GrazingSummary, ramp: RampDamping | None,
+                 rg: RampGrazing | None = None) -> GrazingSummary:
+    """The grazing fit with the biases of its ``gap_m`` and ``zeta`` named against the
+    ramp-corrected fits (their intervals leave the ramp lag out)."""
+    params = grazing.params
     if rg is not None:
         for n in ("gap_m", "zeta"):
-            ref, q = rg.grazing.params[n].value, params[n]
+            ref, q = rg.params[n].value, params[n]
             if q.value is not None and ref:
                 params[n] = dataclasses.replace(q, bias_rel=q.value / ref - 1.0)
         gap = params["gap_m"]
@@ -394,19 +380,7 @@ def _grazing_summary(grazing: GrazingFit, ramp: RampDamping | None,
             f"eq. (3.4) reads the ramp lag as damping: zeta is {100 * bias:+.1f} % against "
             "the ramp replay (damping_ramp), which corrects it; this interval does not "
             "include the lag"))
-    return GrazingSummary(**params, unidentifiable=grazing.unidentifiable,
-                          outliers_hz=tuple(grazing.freq_hz[grazing.outlier].tolist()),
-                          residuals_ms2=tuple(grazing.residuals_ms2.tolist()),
-                          correlation_names=grazing.varied,
-                          correlation=tuple(map(tuple, grazing.correlation.tolist())),
-                          redchi=grazing.redchi)
-
-
-def _spl_law_summary(lin: LinearLaw, db: DbLaw) -> SplLawSummary:
-    return SplLawSummary(
-        LinearLawSummary(lin.slope, lin.slope_ci[0], lin.slope_ci[1], lin.intercept,
-                         lin.intercept_ci[0], lin.intercept_ci[1], lin.r2, lin.n),
-        DbLawSummary(db.c_db, db.c_ci[0], db.c_ci[1], db.k_db_per_decade, db.n))
+    return dataclasses.replace(grazing, gap_m=params["gap_m"], zeta=params["zeta"])
 
 
 def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
@@ -480,17 +454,16 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     # issue 15: the higher modes' share of each velocity jump, pooled over the runs whose
     # flight model gave one, is taken off every run's ratios
     rs = ratios_of_runs([r.impacts for r in ok if r.impacts is not None])
-    st, ring = rs.stats, rs.ringing
     ratio, ringing_flags = None, list[str]()
-    notes, extra = list[str](), dict[str, Any]()
-    if ring.n_runs:
-        extra = dict(ringing_share=ring.value, ringing_share_stderr=_f(ring.stderr),
-                     ringing_runs=ring.n_runs)
-        notes.append(f"the plate's higher modes ring after each impact: {100 * ring.value:.1f} "
-                     f"% of each measured velocity jump (median of {ring.n_runs} runs' "
-                     "flight models) is theirs and is taken off the ratios"
-                     + ("" if np.isfinite(ring.stderr) else "; one run: its error is "
-                        "not in the standard error"))
+    notes = list[str]()
+    if rs.ringing_runs:
+        notes.append(f"the plate's higher modes ring after each impact: "
+                     f"{100 * (math.nan if rs.ringing_share is None else rs.ringing_share):.1f} % "
+                     "of each measured velocity "
+                     f"jump (median of {rs.ringing_runs} runs' flight models) is theirs and is "
+                     "taken off the ratios"
+                     + ("" if rs.ringing_share_stderr is not None else "; one run: its error "
+                        "is not in the standard error"))
     carried = [r.impacts for r in ok if r.impacts is not None and r.impacts.ring_modes]
     if carried:
         modes = carried[0].ring_modes
@@ -523,44 +496,37 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
     measurand_se, measurand_note = measurand_systematic([r.impacts for r in ok])
     if measurand_note:
         notes.append(measurand_note)
-    if st.n:
-        ratio = RatioRestitution(st.mean, float(np.hypot(np.hypot(rs.stderr, delay_se),
-                                                         measurand_se)), "1", std=st.std,
-                                 median=st.median, n=st.n,
-                                 n_runs=st.n_groups, notes=tuple(notes), **extra)
+    e_guess = rs.value if rs.n and rs.value is not None else 0.6
+    if rs.n:
+        se = math.nan if rs.stderr is None else rs.stderr
+        ratio = dataclasses.replace(rs, stderr=float(np.hypot(np.hypot(se, delay_se),
+                                                              measurand_se)),
+                                    notes=tuple(notes))
     else:
         missing["restitution_ratio"] = " ".join(
             ["no impact with a velocity on both sides"] + [f"({n})" for n in notes])
     # issue 15: the ramp lag biases eq. (3.4)'s gap as well as its zeta; the ramp-corrected
     # fit removes each threshold's replayed lag and gives gap, f_s and zeta together
-    rg: RampGrazingFit | None = None
-    ramp_grazing = None
+    rg: RampGrazing | None = None
     if (grazing_fit is not None and not fit["vary_participation"]
             and fit.get("restitution_method", FIT_KEYS["restitution_method"]) == "ramp"):
         try:
             rg = fit_grazing_ramp(runs_thresholds(ok), participation=fit["participation"],
-                                  e=st.mean if st.n else 0.6,
-                                  n_confirm=int(fit.get("n_confirm", 3)),
+                                  e=e_guess, n_confirm=int(fit.get("n_confirm", 3)),
                                   level_hold_periods=int(fit.get("level_hold_periods", 1)))
-            ramp_grazing = RampGrazing(
-                **{n: Estimate(p.value, p.stderr, u, p.ci_low, p.ci_high)
-                   for n, u in (("gap_m", "m"), ("f_s_hz", "Hz"), ("zeta", "1"))
-                   for p in (rg.grazing.params[n],)},
-                method="eq. (3.4) on the thresholds less each ramp's replayed lag",
-                lag_rel=tuple((rg.lag_ms2 / rg.accel_ms2).tolist()), iterations=rg.iterations)
         except RattleLabError as exc:
             missing["grazing_ramp"] = str(exc)
     down, ramp = None, None
     if grazing_fit is not None and np.isfinite(curve.down_ms2).any():
         down, ramp, missing_down = restitution_down_summary(
             [r.threshold for r in ok if r.threshold is not None],
-            rg.grazing if rg is not None else grazing_fit, fit,
-            e_guess=st.mean if st.n else 0.6)
+            rg.grazing if rg is not None and rg.grazing is not None else grazing_fit, fit,
+            e_guess=e_guess)
         missing.update(missing_down)
     else:
         missing["restitution_down"] = "needs a grazing fit and downward thresholds"
     if grazing_fit is not None:
-        grazing = _grazing_summary(grazing_fit, ramp, rg)
+        grazing = _with_biases(grazing_fit, ramp, rg)
     v = np.concatenate([np.abs(r.impacts.v_in_m_s) for r in ok if r.peaks is not None
                         and r.impacts is not None] or [np.zeros(0)])
     laws: dict[str, SplLawSummary] = {}
@@ -569,7 +535,7 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         pr = np.concatenate([getattr(r.peaks, attr) for r in ok if r.peaks is not None
                              and r.impacts is not None] or [np.zeros(0)])
         try:
-            laws[f"spl_law_{name}"] = _spl_law_summary(fit_linear_law(v, pr), fit_db_law(v, pr))
+            laws[f"spl_law_{name}"] = SplLawSummary(fit_linear_law(v, pr), fit_db_law(v, pr))
         except RattleLabError as exc:
             missing[f"spl_law_{name}"] = str(exc)
     # [issue 26] each run's rattle loudness against the background stretches of all runs
@@ -587,7 +553,7 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
                       for r in runs if r.status == "skipped"),
         thresholds=ThresholdTable(curve.freq_hz, curve.up_ms2, curve.down_ms2,
                                   curve.hysteresis_ms2, curve.up_se_ms2, curve.down_se_ms2),
-        fits=Fits(grazing=grazing, grazing_ramp=ramp_grazing, restitution_ratio=ratio,
+        fits=Fits(grazing=grazing, grazing_ramp=rg, restitution_ratio=ratio,
                   damping_ramp=ramp,
                   restitution_down=down, **laws),
         not_fitted=missing,

@@ -291,7 +291,7 @@ def _t_stderr(ci: tuple[Any, Any], dof: int) -> float | None:
 def _all_rows(fits: Fits) -> list[TableRow]:
     rows: list[TableRow] = []
     if fits.grazing is not None:
-        for name, p in fits.grazing.parameters().items():
+        for name, p in fits.grazing.params.items():
             rows.append(TableRow(f"grazing.{name}" + ("" if p.vary else " (fixed)"), p.value,
                                  p.stderr, p.unit, p.ci_low, p.ci_high, fixed=not p.vary))
     if fits.grazing_ramp is not None:
@@ -325,7 +325,7 @@ def _truth_rows(fits: Fits, truth: Mapping[str, Any]) -> list[TableRow]:
     rows: list[TableRow] = []
     graz = fits.grazing
     for key, name, unit in (("gap_m", "gap", "m"), ("f_s_hz", "f_s", "Hz"), ("zeta", "zeta", "1")):
-        p = graz.parameters()[key] if graz is not None else None
+        p = graz.params[key] if graz is not None else None
         rows.append(TableRow(name, None if p is None else p.value,
                              None if p is None else p.stderr, unit, truth=t(key)))
     if fits.grazing_ramp is not None:  # eq. (3.4) less each ramp's replayed lag
@@ -381,7 +381,7 @@ class _Recommended:
         rows: list[TableRow] = []
         for key in ("gap_m", "zeta", "f_s_hz", "participation"):
             label, scale, unit = _GRAZING_NAMES[key]
-            p = g.parameters()[key]
+            p = g.params[key]
             if key == "participation":
                 rows.append(_scaled(label, p.value, p.stderr, (p.ci_low, p.ci_high), unit,
                                     scale=scale, fixed=not p.vary))
@@ -467,7 +467,7 @@ class _Recommended:
         rows: list[TableRow] = []
         for key in keys:
             label, scale, unit = _GRAZING_NAMES[key]
-            p = g.parameters()[key]
+            p = g.params[key]
             rows.append(_scaled(f"{label.split(' (')[0]}, eq. (3.4)", p.value, p.stderr,
                                 (p.ci_low, p.ci_high), unit,
                                 ("BIASED: " + p.bias_note) if p.bias_note and p.vary else "",

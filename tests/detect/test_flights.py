@@ -403,4 +403,4 @@ def test_ringing_runs_without_a_share_or_modes_are_named_unmeasured():
 
     assert ratios_of_runs([log(1.5), log(1.0), log(float("nan"))]).ringing_runs_unmeasured == 1
     carried = ratios_of_runs([log(1.5, ((171.0, 21.5),)), log(1.3, ((171.0, 21.5),))])
-    assert carried.ringing_runs_unmeasured == 0 and carried.stats.mean == pytest.approx(0.55)
+    assert carried.ringing_runs_unmeasured == 0 and carried.value == pytest.approx(0.55)

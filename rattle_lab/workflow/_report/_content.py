@@ -39,7 +39,7 @@ def fits_of(data: ReportData) -> Fits:
 
 def pval(g: GrazingSummary, name: str, default: float = float("nan")) -> float:
     """A fitted grazing parameter's value (``default`` where the fit has none)."""
-    value = g.parameters()[name].value
+    value = g.params[name].value
     return default if value is None else value
 
 
