@@ -236,6 +236,31 @@ def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any
                            mic_distance_m=record.rig.mic_distance_m)
 
 
+def _refused_at_once(address: str) -> None:
+    """Raise ConnectionRefusedError when nothing listens at a ``tcp://`` address.
+
+    A Dask client retries a refused connection until its timeout (10 s); a mistyped
+    port on a reachable host is known at the first try.  Other errors (an unknown or
+    unreachable host, a scheme other than tcp) are left to the client."""
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address)
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        return
+    if parts.scheme != "tcp" or not host or port is None:
+        return
+    try:
+        socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S).close()
+    except ConnectionRefusedError:
+        raise ConnectionRefusedError(f"nothing listens at {host}:{port}: "
+                                     "connection refused") from None
+    except OSError:
+        return
+
+
 def _connect(scheduler: Any) -> tuple[Any, bool]:
     """A ``distributed.Client`` for ``scheduler`` and whether this call owns it."""
     from distributed import Client
@@ -246,6 +271,7 @@ def _connect(scheduler: Any) -> tuple[Any, bool]:
         raise ParameterError(f"`scheduler` must be an address like 'tcp://host:8786' or a "
                              f"distributed.Client, was {scheduler!r}")
     try:
+        _refused_at_once(scheduler.strip())
         return Client(scheduler.strip(), timeout=CONNECT_TIMEOUT_S), True
     except (OSError, TimeoutError, ValueError) as exc:
         raise ParameterError(f"`scheduler` {scheduler!r}: cannot connect "
