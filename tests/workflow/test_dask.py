@@ -203,6 +203,8 @@ def test_cli_fit_with_a_scheduler_that_does_not_answer_is_one_line_exit_2(  # ty
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in proc.stderr
     assert "`scheduler` 'tcp://127.0.0.1:9': cannot connect" in lines[0]
+    # refused at the first try (nothing listens on port 9), not after the client's timeout
+    assert "connection refused" in lines[0]
 
 
 def test_cli_fit_and_run_accept_a_scheduler(cluster, tmp_path) -> None:  # type: ignore[no-untyped-def]
