@@ -16,7 +16,7 @@ libraries, :mod:`rattle_lab.plot`'s styles and its own types (a test pins that).
 
 from ._common import TEXT_WIDTH, fmt, wrapped
 from ._content_types import (WAVEFORM_QUANTITIES, AcousticsContent, ChannelInfo, Field, GrazingCurve,
-                             ModelContent, PatternContent, RecordInfo, ReportContent, RigContent,
+                             ListenerMetrics, ModelContent, PatternContent, RecordInfo, ReportContent, RigContent,
                              ShockContent, ShockRun, ShockTrace, SplContent, SplCurve,
                              SweepComparison, ThresholdContent, Trace, WaveformColumn,
                              WaveformContent)
@@ -26,7 +26,7 @@ __all__ = ["write_pdf", "render_pages", "ReportResult", "ReportContent", "PAGES"
            # the content's parts, filled by rattle_lab.workflow
            "RigContent", "RecordInfo", "ChannelInfo", "ThresholdContent", "GrazingCurve",
            "PatternContent", "SplContent", "SplCurve", "WaveformContent", "WaveformColumn",
-           "Trace", "WAVEFORM_QUANTITIES", "AcousticsContent", "ModelContent", "SweepComparison",
+           "Trace", "WAVEFORM_QUANTITIES", "AcousticsContent", "ListenerMetrics", "ModelContent", "SweepComparison",
            "Field", "ShockContent", "ShockRun", "ShockTrace",
            # text layout of the report's pages, and the checked output path
            "TEXT_WIDTH", "fmt", "wrapped", "pdf_output"]

@@ -211,6 +211,32 @@ class AcousticsContent:
     loudness_guide: tuple[np.ndarray, np.ndarray] | None
     calibration_note: str
     sound_fields: tuple[str, ...]
+    listener: ListenerMetrics | None = None
+
+
+@dataclass(frozen=True)
+class ListenerMetrics:
+    """What a listener judges, per run against its RMS impact velocity (the acoustics
+    section's second page; NaN where a run has no value).
+
+    ``impulse_prominence`` (P) and ``impulse_penalty_db`` (K_I, dB) of ISO/PAS 1996-3;
+    ``impacts_per_s`` over the run's rattle episodes; ``above_background_sone`` the rattle's
+    ISO 532-1 N5 less the background's, with ``background_spread_sone`` the spread of the
+    background stretches' N5; ``loudness_ecma_sone``, ``tonality_tu``, ``roughness_asper``
+    of ECMA-418-2 (NaN unless computed); ``ecma_note``: why they are absent, else "";
+    ``flags``: the runs' psychoacoustic flags, each once.
+    """
+
+    impulse_prominence: np.ndarray
+    impulse_penalty_db: np.ndarray
+    impacts_per_s: np.ndarray
+    above_background_sone: np.ndarray
+    background_spread_sone: np.ndarray
+    loudness_ecma_sone: np.ndarray
+    tonality_tu: np.ndarray
+    roughness_asper: np.ndarray
+    ecma_note: str
+    flags: tuple[str, ...]
 
 
 # --- model predictions -----------------------------------------------------------------------

@@ -5,6 +5,7 @@ Draws :class:`._content_types.AcousticsContent`; nothing is computed here.
 
 from __future__ import annotations
 
+import textwrap
 from typing import Any
 
 import numpy as np
@@ -12,7 +13,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from ._common import fmt, landscape_figure, table
-from ._content_types import AcousticsContent
+from ._content_types import AcousticsContent, ListenerMetrics
 
 
 def acoustics_page(c: AcousticsContent) -> list[Figure]:
@@ -92,7 +93,65 @@ def acoustics_page(c: AcousticsContent) -> list[Figure]:
     ax_b.xaxis.set_major_formatter(LogFormatterSciNotation())
     fig.suptitle("Sound levels, third-octave bands and loudness\n" + c.calibration_note,
                  fontsize=11)
-    return [fig]
+    if c.listener is None:
+        return [fig]
+    return [fig, listener_page(c.v_rms_m_s, c.listener)]
+
+
+def listener_page(v: np.ndarray, m: ListenerMetrics) -> Figure:
+    """Impulsiveness, loudness above the background, impact rate and the ECMA-418-2 metrics
+    of each run against its RMS impact velocity."""
+    fig = landscape_figure()
+    (ax_i, ax_b), (ax_r, ax_e) = fig.subplots(2, 2)
+    ok = np.isfinite(v) & (v > 0)
+    # (a) impulsiveness: the level adjustment K_I (dB) and the prominence P
+    ax_i.plot(v[ok], m.impulse_penalty_db[ok], "o", color="tab:red",
+              label="K_I, level adjustment (dB)")
+    ax_i.plot(v[ok], m.impulse_prominence[ok], "s", mfc="none", color="tab:orange",
+              label="P, impulse prominence")
+    ax_i.set_ylabel("K_I (dB); P (nondimensional)")
+    ax_i.set_title("Impulsiveness (ISO/PAS 1996-3:2022, NT ACOU 112)", fontsize=9)
+    # (b) the rattle's loudness above the background, bars: the background's spread
+    ax_b.errorbar(v[ok], m.above_background_sone[ok],
+                  yerr=np.where(np.isfinite(m.background_spread_sone[ok]),
+                                m.background_spread_sone[ok], 0.0),
+                  fmt="o", color="tab:green", capsize=2,
+                  label="N5 rattle - N5 background (bar: background spread)")
+    ax_b.axhline(0.0, color="0.4", lw=0.8)
+    ax_b.set_ylabel("loudness above background (sone)")
+    ax_b.set_title("Rattle loudness above the background (ISO 532-1 N5)", fontsize=9)
+    # (c) impacts per second of the rattle episodes
+    ax_r.plot(v[ok], m.impacts_per_s[ok], "D", color="tab:blue",
+              label="impacts per second of rattle")
+    ax_r.set_ylabel("impact rate (1/s)")
+    ax_r.set_title("Impact rate in the rattle episodes", fontsize=9)
+    for ax in (ax_i, ax_b, ax_r):
+        ax.set_xscale("log")
+        _label_log_axis(ax.xaxis, v[ok])
+        ax.set_xlabel("RMS impact velocity of the run (m/s)")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7)
+    # (d) ECMA-418-2, where computed
+    if m.ecma_note:
+        ax_e.axis("off")
+        ax_e.text(0.0, 0.6, "\n".join(textwrap.wrap(m.ecma_note, 60)), fontsize=9,
+                  transform=ax_e.transAxes, va="top")
+    else:
+        for values, marker, label in ((m.loudness_ecma_sone, "o", "loudness (sone_HMS)"),
+                                      (m.tonality_tu, "^", "tonality (tu_HMS)"),
+                                      (m.roughness_asper, "s", "roughness (asper_HMS)")):
+            ax_e.plot(v[ok], values[ok], marker, label=label)
+        ax_e.set_xscale("log")
+        _label_log_axis(ax_e.xaxis, v[ok])
+        ax_e.set_xlabel("RMS impact velocity of the run (m/s)")
+        ax_e.set_ylabel("ECMA-418-2 value (unit in legend)")
+        ax_e.set_title("ECMA-418-2 (hearing model of Sottek)", fontsize=9)
+        ax_e.grid(alpha=0.3, which="both")
+        ax_e.legend(fontsize=7)
+    flags = ("flags: " + ", ".join(m.flags)) if m.flags else "no psychoacoustic flag"
+    fig.suptitle("Rattle as a listener hears it: impulsiveness, loudness above the background, "
+                 "impact rate\n" + flags, fontsize=11)
+    return fig
 
 
 def _label_log_axis(axis: Any, values: np.ndarray) -> None:

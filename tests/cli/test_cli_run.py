@@ -88,7 +88,7 @@ def _demo_checks(text: str, out_dir: Path) -> None:
 
     lines = [line.strip() for line in text.replace("\r", "\n").splitlines() if line.strip()]
     assert lines[-1] == f"report: {(out_dir / 'report.pdf').resolve()}"
-    assert len(pypdf.PdfReader(out_dir / "report.pdf").pages) == 10  # 2 summary pages, acoustics
+    assert len(pypdf.PdfReader(out_dir / "report.pdf").pages) == 11  # 2 summary pages, acoustics 2
     head = next(i for i, line in enumerate(lines) if line.startswith("quantity"))
     assert lines[head].split()[1:5] == ["fitted", "std.", "error", "rig"]
     end = next(i for i, line in enumerate(lines) if line.startswith("report: "))

@@ -49,8 +49,8 @@ def test_full_report_structure(stores: dict[str, Path], full_report: tuple[Repor
     assert result.missing == {}
     texts = _texts(path)
     n = result.n_pages
-    assert len(texts) == n == 10  # summary 2, rig, thresholds, patterns, waveforms, SPL,
-    # acoustics, 2 model
+    assert len(texts) == n == 11  # summary 2, rig, thresholds, patterns, waveforms, SPL,
+    # acoustics 2 (levels; what a listener hears), 2 model
     for i, text in enumerate(texts, start=1):
         assert f"Page {i} of {n}" in text
     summary = texts[0] + texts[1]
@@ -132,7 +132,11 @@ def test_every_figure_page_has_labelled_axes_and_drawings(full_report: tuple[Rep
                               "ISO 532-1 loudness (sone)", "N5",
                               "RMS impact velocity of the run (m/s)",
                               "no calibrator record: the declared microphone sensitivity is "
-                              "used"],
+                              "used",
+                              # the second page: what a listener judges (issue 26)
+                              "Impulsiveness (ISO/PAS 1996-3:2022", "K_I (dB)",
+                              "loudness above background (sone)", "impact rate (1/s)",
+                              "ECMA-418-2 loudness, tonality and roughness: not computed"],
                 "model predictions": ["omega = f / f_s (nondimensional)",
                                       "F = Q A / (omega_s^2 h) (nondimensional)",
                                       "measured onset", "saddle-node", "model onset"]}
@@ -150,7 +154,7 @@ def test_no_text_overlaps_the_page_footer(stores: dict[str, Path]) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     pages, sections = build_pages(gather(stores["fitted"]), model=False)
-    assert sections[0] == "summary" and len(pages) == 8
+    assert sections[0] == "summary" and len(pages) == 9
     for name, fig in pages:
         canvas = FigureCanvasAgg(fig)
         canvas.draw()
@@ -169,7 +173,7 @@ def test_no_text_overlaps_the_page_footer(stores: dict[str, Path]) -> None:
 def test_every_axis_is_labelled_with_its_unit(stores: dict[str, Path]) -> None:
     pages, _ = build_pages(gather(stores["fitted"]), model=True)
     unit = re.compile(r"\((Hz|s|m/s|m/s\^2|Pa|nondimensional|[^()]*m/s\^2[^()]*|dB re 20 uPa|"
-                      r"sone)\)")
+                      r"sone|dB|1/s)\)")
     n_axes = 0
     for name, fig in pages:
         plots = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
@@ -180,8 +184,8 @@ def test_every_axis_is_labelled_with_its_unit(stores: dict[str, Path]) -> None:
                 assert unit.search(ax.get_xlabel()), (name, ax.get_xlabel())
             else:  # a shared time axis: labelled on the bottom plot of its column
                 assert any(o.get_xlabel() and o.get_xlim() == ax.get_xlim() for o in plots), name
-    assert n_axes == 16  # thresholds 3, patterns 1, waveforms 3 x 2, SPL 1, acoustics 3,
-    # model pages 2
+    assert n_axes == 19  # thresholds 3, patterns 1, waveforms 3 x 2, SPL 1, acoustics 3 + 3
+    # (the ECMA-418-2 panel is a note: not computed by default), model pages 2
 
 
 def test_same_store_gives_identical_bytes(stores: dict[str, Path], full_report, tmp_path: Path
@@ -518,3 +522,31 @@ def test_hysteresis_is_not_shaded_across_a_frequency_without_a_run(report_conten
         steps = np.diff(f[i:j])
         assert steps.size == 0 or steps.max() <= 1.5 * np.min(np.diff(np.unique(th.freq_hz)))
     assert sum(j - i for i, j in th.hysteresis_segments) == f.size
+
+
+def test_the_listener_page_plots_each_runs_stored_psychoacoustics(stores: dict[str, Path]
+                                                                  ) -> None:
+    # issue 26: impulsiveness, loudness above the background, impact rate and the ECMA-418-2
+    # metrics against impact velocity, read from /results as `fit --json` writes them
+    from rattle_lab.workflow import build_report_content
+
+    content = build_report_content(gather(stores["fitted"]), model=False)
+    acoustics = dict(content.sections)["acoustics"]
+    m = acoustics.listener
+    stored = {(r["input_key"], r["run_id"]): r["acoustics"]
+              for r in read_results(stores["fitted"]).summary["runs"] if r.get("acoustics")}
+    rows = acoustics.rows
+    assert len(rows) == len(stored) > 4
+    for i, row in enumerate(rows):
+        ac = stored[(row["input_key"], row["run_id"])]
+        for arr, key in ((m.impulse_prominence, "impulse_prominence"),
+                         (m.impulse_penalty_db, "impulse_penalty_db"),
+                         (m.impacts_per_s, "impacts_per_s"),
+                         (m.above_background_sone, "loudness_above_background_sone"),
+                         (m.background_spread_sone, "background_loudness_spread_sone")):
+            want = ac.get(key)
+            assert (np.isnan(arr[i]) if want is None else arr[i] == want), (key, i)
+    # a rattling run is louder than its background and impacts at a positive rate
+    assert np.nanmax(m.above_background_sone) > 0 and np.nanmax(m.impacts_per_s) > 0
+    # ECMA-418-2 is not rated by default ([fit] ecma418_s = 0): the panel says why
+    assert np.isnan(m.loudness_ecma_sone).all() and "ecma418_s = 0" in m.ecma_note

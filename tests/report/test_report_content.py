@@ -373,3 +373,22 @@ def test_shock_page_renders_from_content_without_a_store() -> None:
     axes = [ax for ax in fig.axes if ax.get_lines()]
     assert len(axes) == 2
     np.testing.assert_array_equal(axes[0].get_lines()[0].get_ydata(), traces[0].y)
+
+
+@pytest.mark.parametrize("flags, ecma, says", [
+    (["ecma418_unavailable"], None, "sottek-hearing-model is not installed"),
+    (["uncalibrated_no_loudness"], None, "microphone uncalibrated"),
+    ([], None, "ecma418_s = 0"),
+    ([], 3.5, ""),
+])
+def test_the_listener_page_says_why_ecma_418_is_absent(flags, ecma, says) -> None:
+    from rattle_lab.workflow._report._content_runs import listener_metrics
+
+    rows = [{"acoustics": {"psychoacoustic_flags": flags, "loudness_ecma_sone": ecma,
+                           "impulse_penalty_db": 4.5, "impacts_per_s": None}}]
+    m = listener_metrics(rows)
+    assert (says in m.ecma_note) if says else m.ecma_note == ""
+    assert m.flags == tuple(flags) and m.impulse_penalty_db[0] == 4.5
+    assert np.isnan(m.impacts_per_s[0])
+    assert (np.isnan(m.loudness_ecma_sone[0]) if ecma is None
+            else m.loudness_ecma_sone[0] == ecma)

@@ -104,7 +104,7 @@ def test_cache_and_exact_reruns_and_outside_fits_are_noticed(small_campaign_reco
     rep = run_pipeline(_pipe(["report"], detect={"on": 11.0}, fit={"outlier_k": 4.0},
                              report={"model": False}), rec, store=store, out_dir=tmp_path)
     assert rep.executed == ["report"] and rep.outputs["report"] == tmp_path / "t.pdf"
-    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 8  # two summary pages, acoustics
+    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 9  # two summary pages, acoustics 2
     # a lost output is remade even with an unchanged key
     (tmp_path / "t.pdf").unlink()
     rep2 = run_pipeline(_pipe(["report"], detect={"on": 11.0}, fit={"outlier_k": 4.0},
@@ -114,7 +114,7 @@ def test_cache_and_exact_reruns_and_outside_fits_are_noticed(small_campaign_reco
     with_model = run_pipeline(_pipe(["report"], detect={"on": 11.0}, fit={"outlier_k": 4.0}),
                               rec, store=store, out_dir=tmp_path)
     assert with_model.executed == ["report"]
-    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 10
+    assert len(pypdf.PdfReader(tmp_path / "t.pdf").pages) == 11
     # `rattle-lab fit` run on the store by hand replaces /results: the fit stage is stale
     fit_store(store, detect={"on": 11.0}, fit={"outlier_k": 3.0})
     after = run_pipeline(_pipe(["results"], detect={"on": 11.0}, fit={"outlier_k": 4.0}),
@@ -143,8 +143,8 @@ def test_shipped_pipelines_run(small_campaign_record: Path, tmp_path: Path) -> N
     assert full.executed == ["simulate", "ingest", "detect", "thresholds", "fit", "report"]
     assert set(full.outputs) == {"store", "results", "report"}
     reader = pypdf.PdfReader(full.outputs["report"])
-    # summary 2 pages, rig, thresholds, patterns, waveforms, SPL, acoustics, 2 model pages
-    assert len(reader.pages) == 10 and "model onset" in reader.pages[-1].extract_text()
+    # summary 2 pages, rig, thresholds, patterns, waveforms, SPL, acoustics 2, 2 model pages
+    assert len(reader.pages) == 11 and "model onset" in reader.pages[-1].extract_text()
     again = run_pipeline(full_pipe, [scene], out_dir=tmp_path)
     assert again.executed == []
     assert again.cached == ["simulate:small_campaign.h5", "ingest", "detect", "thresholds", "fit",

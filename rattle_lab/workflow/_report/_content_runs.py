@@ -15,7 +15,7 @@ import numpy as np
 
 from rattle_lab.acoustics import energy_mean_db
 from rattle_lab.plot import db_slope_guide, power_law_guide
-from rattle_lab.report import (WAVEFORM_QUANTITIES, AcousticsContent, Trace,
+from rattle_lab.report import (WAVEFORM_QUANTITIES, AcousticsContent, ListenerMetrics, Trace,
                                WaveformColumn, WaveformContent)
 from ._content import Missing, require_results
 from ._gather import ReportData
@@ -169,4 +169,30 @@ def acoustics_content(data: ReportData) -> AcousticsContent:
     loudness_guide = power_law_guide(v[sel], n5[sel], 0.602) if sel.any() else None
     fields = tuple(sorted({str(r["acoustics"].get("sound_field") or "free") for r in rows}))
     return AcousticsContent(tuple(rows), tuple(traces), means, v, laeq, lafmax, n5, nmax,
-                            level_guide, loudness_guide, calibration_note(rows), fields)
+                            level_guide, loudness_guide, calibration_note(rows), fields,
+                            listener_metrics(rows))
+
+
+def listener_metrics(rows: list[dict[str, Any]]) -> ListenerMetrics:
+    """Impulsiveness, impact rate, loudness above the background and the ECMA-418-2 metrics
+    of each run (issue 26), for the acoustics section's second page."""
+    def col(key: str) -> np.ndarray:
+        return np.array([_num(r["acoustics"].get(key)) for r in rows])
+
+    flags = tuple(dict.fromkeys(str(f) for r in rows
+                                for f in r["acoustics"].get("psychoacoustic_flags") or []))
+    ecma = col("loudness_ecma_sone")
+    if np.isfinite(ecma).any():
+        note = ""
+    elif "ecma418_unavailable" in flags:
+        note = ("ECMA-418-2 loudness, tonality and roughness: not computed, the optional "
+                "package sottek-hearing-model is not installed")
+    elif any("uncalibrated" in f for f in flags):
+        note = "ECMA-418-2 loudness, tonality and roughness: not computed, microphone uncalibrated"
+    else:
+        note = ("ECMA-418-2 loudness, tonality and roughness: not computed ([fit] ecma418_s = 0, "
+                "the default; give the seconds of rattle per run to rate)")
+    return ListenerMetrics(col("impulse_prominence"), col("impulse_penalty_db"),
+                           col("impacts_per_s"), col("loudness_above_background_sone"),
+                           col("background_loudness_spread_sone"), ecma, col("tonality_tu"),
+                           col("roughness_asper"), note, flags)
