@@ -331,8 +331,9 @@ def _run(p: np.ndarray, da: np.ndarray, gain: np.ndarray, smooth: np.ndarray,
             a1[s, bnd] = -2.0 - da[bnd, s, 0]
             a2[s, bnd] = 1.0 - da[bnd, s, 1]
     z1 = np.zeros((3, N_BANDS))
+    sb1_0, sb1_1, sb1_2 = _SECTION_B1[0], _SECTION_B1[1], _SECTION_B1[2]
+    sb2_0, sb2_1, sb2_2 = _SECTION_B2[0], _SECTION_B2[1], _SECTION_B2[2]
     z2 = np.zeros((3, N_BANDS))
-    v = np.empty(N_BANDS)
     sm = np.zeros((3, N_BANDS))
     c0 = 1.0 - smooth
     gain2 = gain * gain
@@ -355,19 +356,20 @@ def _run(p: np.ndarray, da: np.ndarray, gain: np.ndarray, smooth: np.ndarray,
             lo = 0 if frame == 0 else (frame - 1) * _DEC_LEVEL + 1
             for i in range(lo, frame * _DEC_LEVEL + 1):
                 x = p[i]
+                # each band through its three sections (direct form II transposed, as
+                # sosfilt) and its three smoothing low-passes in one pass: the bands are
+                # the inner loop, so the compiler runs several side by side in SIMD lanes
                 for bnd in range(N_BANDS):
-                    v[bnd] = x
-                for s in range(3):
-                    b1 = _SECTION_B1[s]
-                    b2 = _SECTION_B2[s]
-                    for bnd in range(N_BANDS):   # direct form II transposed, as sosfilt
-                        vi = v[bnd]
-                        y = vi + z1[s, bnd]
-                        z1[s, bnd] = vi * b1 - a1[s, bnd] * y + z2[s, bnd]
-                        z2[s, bnd] = vi * b2 - a2[s, bnd] * y
-                        v[bnd] = y
-                for bnd in range(N_BANDS):
-                    w = gain2[bnd] * (v[bnd] * v[bnd])
+                    y0 = x + z1[0, bnd]
+                    z1[0, bnd] = x * sb1_0 - a1[0, bnd] * y0 + z2[0, bnd]
+                    z2[0, bnd] = x * sb2_0 - a2[0, bnd] * y0
+                    y1 = y0 + z1[1, bnd]
+                    z1[1, bnd] = y0 * sb1_1 - a1[1, bnd] * y1 + z2[1, bnd]
+                    z2[1, bnd] = y0 * sb2_1 - a2[1, bnd] * y1
+                    y2 = y1 + z1[2, bnd]
+                    z1[2, bnd] = y1 * sb1_2 - a1[2, bnd] * y2 + z2[2, bnd]
+                    z2[2, bnd] = y1 * sb2_2 - a2[2, bnd] * y2
+                    w = gain2[bnd] * (y2 * y2)
                     a = smooth[bnd]
                     c = c0[bnd]
                     s0 = c * w + a * sm[0, bnd]
