@@ -86,6 +86,12 @@ PACKAGES: dict[str, list[str]] = {
         "RINGING_RESIDUAL_RATIO", "base_velocity_at", "onto_grid", "detect_shock",
         # issue 28: the channel timing the fit checks
         "DelayEstimate", "delay_contradicted", "measurand_share",
+        # issue 29: detection in one room
+        "DetectParams", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
+        "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
+        "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
+        "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",
+        "run_chain_flags", "transient_shocks", "velocity_delay_flags",
     ],
     "rattle_lab.explorer": [
         "Explorer", "Histories", "compute_histories", "save_histories", "impacts_path",
