@@ -99,14 +99,14 @@ PACKAGES: dict[str, list[str]] = {
         "DEFAULT_SAVE_PATH"
     ],
     "rattle_lab.fit": [
-        "DbLaw", "analyse_run", "check_fit_params", "fit_runs", "json_ready",
+        "DbLaw", "check_fit_params", "fit_runs", "json_ready",
         "load_pipeline",
         "summarise_fits", "LinearLaw", "RestitutionStats",
         "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
         "pooled_ringing_share", "ratios_of_runs", "restitution_from_ratios",
         "ringing_corrected_ratios", "saddle_node_threshold_ms2",
         "ModelThreshold", "RampSpec", "fit_zeta_ramp", "model_threshold", "fit_grazing_ramp",
-        "RunResult", "StoreFit",
+        "StoreFit",
         "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
         "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
         "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun",
