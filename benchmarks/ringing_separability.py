@@ -36,7 +36,7 @@ import numpy as np
 from rattle_lab.detect import ImpactParams, detect_impacts
 from rattle_lab.detect._flights import flight_velocities
 from rattle_lab.detect._pairing import base_velocity_at
-from rattle_lab.fit._chain import _fs_of, _t0_of, paired_plate_channels
+from rattle_lab.detect._chain import _fs_of, _t0_of, paired_plate_channels
 from rattle_lab.rig import load_scene, synthesize
 from rattle_lab.rig._build import resolve_modal
 

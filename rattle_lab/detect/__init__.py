@@ -9,7 +9,15 @@ from typing import TYPE_CHECKING
 from rattle_lab._lazy import lazy_names
 
 if TYPE_CHECKING:
+    from ._campaign import campaign_ringing
+    from ._chain import (CAUSE_QUANTITIES, FLAG_DELAY_CONTRADICTED, FLAG_DELAY_ESTIMATED,
+                         FLAG_MEASURAND_INFERRED, FLAG_MEASURAND_UNDETERMINED, SHOCK_QUANTITIES,
+                         infer_measurand, median_and_error, paired_plate_channels,
+                         relative_to_striker, run_chain_flags, transient_shocks,
+                         velocity_delay_flags)
     from ._common import n_samples_of, parabolic_peak, robust_sigma
+    from ._params import SOUND_KEYS, DetectParams
+    from ._run import RunResult, analyse_run
     from ._flights import RingingProblem, campaign_ring_modes
     from ._impacts import ImpactLog, ImpactParams, detect_impacts
     from ._ringing import RINGING_RESIDUAL_RATIO
@@ -24,6 +32,16 @@ if TYPE_CHECKING:
 #: public name -> submodule that defines it; loaded on first use (SciPy's signal package, the
 #: flight model and the trigger only when detection runs)
 _LAZY: dict[str, str] = {
+    "campaign_ringing": "_campaign",
+    **dict.fromkeys(("CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
+                     "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED",
+                     "SHOCK_QUANTITIES", "infer_measurand", "median_and_error",
+                     "paired_plate_channels", "relative_to_striker", "run_chain_flags",
+                     "transient_shocks", "velocity_delay_flags"), "_chain"),
+    "DetectParams": "_params",
+    "SOUND_KEYS": "_params",
+    "RunResult": "_run",
+    "analyse_run": "_run",
     "n_samples_of": "_common",
     "parabolic_peak": "_common",
     "robust_sigma": "_common",
@@ -61,6 +79,13 @@ __all__ = [
     "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle",
     "RINGING_RESIDUAL_RATIO", "base_velocity_at", "onto_grid", "detect_shock",
     "DelayEstimate", "delay_contradicted", "measurand_share",
+    # issue 29: detection in one room (the [detect] parameters, the per-run analysis, the
+    # measurement chain of a run, the campaign's ringing search)
+    "DetectParams", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
+    "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
+    "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
+    "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",
+    "run_chain_flags", "transient_shocks", "velocity_delay_flags",
 ]
 
 

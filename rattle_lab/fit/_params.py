@@ -7,7 +7,6 @@ same tables of ``rattle-lab run``) are read and checked here; :data:`FIT_KEYS` a
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 from collections.abc import Mapping
@@ -16,12 +15,11 @@ from typing import Any
 import numpy as np
 
 from rattle_lab._resources import read_pipeline_toml
-from rattle_lab.detect import ImpactParams
+from rattle_lab.detect import SOUND_KEYS, DetectParams
 from rattle_lab.exceptions import ParameterError
 
 #: Methods of the fit of e to the disappearance thresholds (:func:`fit_restitution_down`).
 METHODS: tuple[str, ...] = ("ramp", "quasi-static")
-SOUND_KEYS = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01, "channel": None}
 FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0,
             "conf_interval": True, "speed_of_sound_m_s": 343.0, "n_confirm": 3,
             "restitution_method": "ramp", "level_hold_periods": 1,
@@ -32,9 +30,11 @@ FIT_KEYS = {"participation": None, "vary_participation": False, "outlier_k": 5.0
 def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, Any]]:
     """Keyword parameters ``{"detect": {...}, "fit": {...}}`` from a pipeline TOML (or defaults).
 
-    ``[detect]`` takes the fields of :class:`~rattle_lab.detect.ImpactParams`,
-    ``window_s``, ``first_fraction``, ``max_lag_s`` and ``channel`` (the channel to detect
-    on; default: chosen by what each channel measures); ``[fit]`` takes
+    ``[detect]`` takes the fields of :class:`~rattle_lab.detect.DetectParams` (those of
+    :class:`~rattle_lab.detect.ImpactParams`, ``window_s``, ``first_fraction``,
+    ``max_lag_s`` and ``channel``, the channel to detect on; default: chosen by what each
+    channel measures), checked by :meth:`~rattle_lab.detect.DetectParams.from_mapping`
+    and returned as the table gave them; ``[fit]`` takes
     ``participation`` (``Q1/Q2``; absent: from the records' rig metadata, see
     :func:`~rattle_lab.fit._store.store_participation`), ``vary_participation``, ``outlier_k``, ``conf_interval``,
     ``speed_of_sound_m_s``, ``n_confirm``, ``restitution_method`` (``"ramp"``, the
@@ -52,23 +52,24 @@ def load_pipeline(path: str | os.PathLike[str] | None) -> dict[str, dict[str, An
     Raises
     ------
     ParameterError
-        For an unreadable file, an unknown key, an unknown ``restitution_method`` or a
-        ``level_hold_periods`` that is not an integer >= 1.
+        For an unreadable file, an unknown key, a ``[detect]`` value out of range, an
+        unknown ``restitution_method`` or a ``level_hold_periods`` that is not an
+        integer >= 1.
     """
     out: dict[str, dict[str, Any]] = {"detect": {}, "fit": {}}
     if path is None:
         return out
     doc, path = read_pipeline_toml(path)
-    allowed = {"detect": {f.name for f in dataclasses.fields(ImpactParams)} | set(SOUND_KEYS),
-               "fit": set(FIT_KEYS)}
     for table in ("detect", "fit"):
         values = doc.get(table, {})
         if not isinstance(values, dict):
             raise ParameterError(f"{path}: [{table}] must be a table")
-        unknown = sorted(set(values) - allowed[table])
+        if table == "detect":
+            DetectParams.from_mapping(values, f"{path}: [detect]: ")
+        unknown = sorted(set(values) - set(FIT_KEYS)) if table == "fit" else []
         if unknown:
-            raise ParameterError(f"{path}: [{table}]: unknown key {unknown[0]!r} "
-                                 f"(known: {', '.join(sorted(allowed[table]))})")
+            raise ParameterError(f"{path}: [fit]: unknown key {unknown[0]!r} "
+                                 f"(known: {', '.join(sorted(FIT_KEYS))})")
         out[table] = dict(values)
     _check_fit_values(out["fit"], f"{path}: [fit]: ")
     return out

@@ -1,12 +1,9 @@
-"""The ``rattle-lab fit`` pipeline: detect events in every stored run, then fit.
+"""The fit of a store's detections: thresholds, grazing, restitution, SPL laws.
 
-Per run: impacts from the plate velocity and/or plate acceleration; sound
-peaks, acoustic delay and SPL with a microphone; the impact pattern with an
-excitation frequency; the ramp threshold on ``amplitude_ramp_up/down`` runs
-with a base accelerometer.  Then over the store: the threshold curve, the
-grazing fit (>= 4 upward thresholds), ``e`` from velocity ratios and from the
-downward thresholds, and the SPL laws.  A run without the channels it needs is
-*skipped* with its reason; a run without impacts is a valid result.
+The per-run analysis (:func:`~rattle_lab.detect.analyse_run`, re-exported here) lives in
+:mod:`rattle_lab.detect` (issue 29).  Over the store: the threshold curve, the grazing fit
+(>= 4 upward thresholds), ``e`` from velocity ratios and from the downward thresholds, and
+the SPL laws.
 """
 
 from __future__ import annotations
@@ -21,19 +18,16 @@ from typing import Any
 import numpy as np
 
 from rattle_lab._version import __version__
-from rattle_lab.acoustics import campaign_background, run_acoustics  # [issue 17, 26]
-from rattle_lab.detect import (ImpactLog, ImpactParams, cross_correlation_delay, detect_impacts,
-                               impact_pattern, impulse_train, rms_spl_db, sound_peaks)
+from rattle_lab.acoustics import campaign_background  # [issue 26]
+from rattle_lab.detect import DetectParams, analyse_run
 from rattle_lab.exceptions import RattleLabError
-from rattle_lab.records import (FLAG_MEASURAND_UNDECLARED, Participation, declared_delay_s,
-                                resolve_participation)
+from rattle_lab.records import Participation, resolve_participation
 from rattle_lab.fit._results import RunResult, StoreFit
 from rattle_lab.store import (input_hashes, open_stored_record, read_catalogue)
-from rattle_lab.detect.thresholds import Threshold, ramp_threshold, tabulate_thresholds
-from ._chain import (SHOCK_QUANTITIES, _crossing_curve, _fs_of, _t0_of, delay_systematic,
-                     infer_measurand, measurand_systematic,
+from rattle_lab.detect.thresholds import Threshold, tabulate_thresholds
+from ._chain import (_crossing_curve, delay_systematic, measurand_systematic,  # noqa: F401
                      paired_plate_channels, relative_to_striker, run_chain_flags, runs_thresholds,
-                     transient_shocks, velocity_delay_flags)
+                     transient_shocks)
 from ._grazing import fit_grazing
 from ._plate_check import check_plate_model
 from ._grazing_ramp import fit_grazing_ramp
@@ -45,136 +39,7 @@ from ._estimates import (DownRestitution, Fits, GrazingSummary, RampDamping, Ram
                          SplLawSummary)
 from ._summary import (FitSummary, ParticipationInfo, RunRow, SkippedRun, ThresholdTable,
                        TransientRun)
-from ._params import FIT_KEYS, SOUND_KEYS, check_fit_params, load_pipeline
-
-_QUANTITIES = ("plate_velocity", "plate_acceleration", "sound_pressure", "base_acceleration")
-
-
-def _analyse_transient(run: Any, detect: Mapping[str, Any], base: dict[str, Any]) -> RunResult:
-    """One event per transient run: the shock on the cause channel (see :func:`transient_shocks`)."""
-    rows = transient_shocks(run, on=float(detect.get("on", ImpactParams.on)),
-                            channel=detect.get("channel"))
-    if not rows:
-        return RunResult(status="skipped", reason="transient run without a channel to find its "
-                         "shock in (" + ", ".join(SHOCK_QUANTITIES) + ")", **base)
-    cause = rows[0]
-    ch = run.channel(cause["channel"])
-    t = np.array([cause["onset_s"]]) if cause["found"] else np.zeros(0)
-    nan = np.full(t.size, np.nan)
-    log = ImpactLog(t_s=t, onset_s=t.copy(), v_in_m_s=nan, v_out_m_s=nan.copy(), e=nan.copy(),
-                    strength=np.array([cause["strength"]])[:t.size], channels=(ch.name,),
-                    fs_hz=_fs_of(run, ch))
-    return RunResult(status="ok", channels_used=tuple(r["channel"] for r in rows), impacts=log,
-                     pattern="single shock" if t.size else "no shock", pattern_n=int(t.size),
-                     shocks=tuple(rows), **base)
-
-
-def analyse_run(input_key: str, run: Any, *, detect: Mapping[str, Any], fit: Mapping[str, Any],
-                mic_distance_m: float | None = None) -> RunResult:
-    """Detection results of one :class:`~rattle_lab.records.Run`."""
-    by_q: dict[str, Any] = {}
-    for ch in run.channels:
-        by_q.setdefault(ch.quantity, ch)
-    freq = float(run.excitation_freq_hz) if run.excitation_freq_hz else float("nan")
-    vel, acc = by_q.get("plate_velocity"), by_q.get("plate_acceleration")
-    base = dict(input_key=input_key, run_id=run.run_id, protocol=run.protocol, freq_hz=freq,
-                chain_flags=tuple(run_chain_flags(run)))
-    if run.protocol == "transient":
-        return _analyse_transient(run, detect, base)
-    wanted = detect.get("channel") or getattr(run, "detect_channel", None)
-    if wanted is not None:
-        named = next((c for c in run.channels if c.name == wanted), None)
-        if named is None:
-            return RunResult(status="skipped", reason=f"no channel {wanted!r} to detect on",
-                             **base)
-        if named.quantity not in ("plate_velocity", "plate_acceleration"):
-            return RunResult(status="skipped", reason=f"channel {wanted!r} measures "
-                             f"{named.quantity}: impacts are detected on a plate_velocity or "
-                             "plate_acceleration", **base)
-        vel, acc = (named, None) if named.quantity == "plate_velocity" else (None, named)
-    if vel is None and acc is None:
-        return RunResult(status="skipped", reason="no plate_velocity or plate_acceleration channel",
-                         **base)
-    used = [c for c in (vel, acc) if c is not None]
-    # issue 15: each channel's time base less its declared filter delay; two channels at
-    # different rates or offsets are brought onto the grid of the faster one before pairing
-    fs, t0, v_si, a_si = paired_plate_channels(run, vel, acc)
-    params = ImpactParams(**{k: v for k, v in detect.items() if k not in SOUND_KEYS})
-    # a constant excitation frequency lets the velocity fits use the forced-mode basis
-    f_end = getattr(run, "freq_end_hz", None)
-    f_fit = freq if (math.isfinite(freq) and 0 < freq < fs / 2
-                     and (f_end is None or f_end == freq)) else None
-    delay_declared = vel is not None and declared_delay_s(vel) is not None
-    log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=params,
-                         start_time_s=t0, excitation_freq_hz=f_fit,
-                         velocity_delay_declared=delay_declared)
-    # issue 28: the vibrometer's delay measured from the impacts; its measurand, when the
-    # record does not say, inferred from the data
-    base["chain_flags"] = base["chain_flags"] + velocity_delay_flags(log, delay_declared)
-    measurand = getattr(vel, "measurand", None) if vel is not None else None
-    if vel is not None and measurand is None and v_si is not None:
-        log, flags = infer_measurand(run, log, v_si, fs, t0, by_q.get("base_acceleration"),
-                                     f_fit)
-        base["chain_flags"] = tuple(f for f in base["chain_flags"]
-                                    if f != FLAG_MEASURAND_UNDECLARED) + flags
-    if vel is not None and measurand == "panel_absolute":
-        log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
-    if log.velocity_note:   # the flight model gave no ringing share, or used some impacts only
-        what = "ringing_velocities_missing" if log.ring_modes else "ringing_share_missing"
-        base["chain_flags"] = base["chain_flags"] + (f"{what}: {log.velocity_note}",)
-    names = tuple(c.name for c in used)
-    duration = (v_si if v_si is not None else a_si).size / fs  # type: ignore[union-attr]
-    pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)
-    if math.isfinite(freq) and freq > 0 and duration * freq >= 1:
-        lo, hi = t0, t0 + duration
-        if run.protocol.startswith("amplitude_ramp") and log.n_impacts:
-            # a ramp: the pattern while impacting (from the first to the last impact's cycle)
-            lo = t0 + np.floor((log.t_s[0] - t0) * freq) / freq
-            hi = min(t0 + duration, t0 + (np.floor((log.t_s[-1] - t0) * freq) + 1) / freq)
-        pr = impact_pattern(log.t_s, freq, lo, hi)
-        pattern, pattern_n, counts = pr.pattern, pr.n, pr.counts
-    sk = {**SOUND_KEYS, **{k: v for k, v in detect.items() if k in SOUND_KEYS}}
-    peaks, delay, expected, spl, spl_a = None, np.nan, np.nan, np.nan, np.nan
-    acoustic = None  # [issue 17]
-    mic = by_q.get("sound_pressure")
-    if mic is not None:
-        fs_mic = _fs_of(run, mic)
-        p = mic.read()
-        t0_mic = _t0_of(run, mic)
-        names = names + (mic.name,)
-        # issue 15: each sound paired with its impact through the declared propagation delay
-        d_prop = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0)) \
-            if mic_distance_m else 0.0
-        peaks = sound_peaks(p, fs_mic, log.t_s, window_s=sk["window_s"], delay_s=d_prop,
-                            first_fraction=sk["first_fraction"], start_time_s=t0_mic,
-                            excitation_freq_hz=f_fit if f_fit is not None and f_fit < fs_mic / 2
-                            else None)
-        spl = rms_spl_db(p)
-        spl_a = rms_spl_db(p, fs_mic, a_weighted=True)
-        if log.n_impacts:
-            train = impulse_train(log.t_s, p.size, fs_mic, t0_mic)
-            delay = cross_correlation_delay(train, p, fs_mic, max_lag_s=sk["max_lag_s"])
-        if mic_distance_m:
-            expected = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0))
-        # [issue 17 acoustics hook] levels, bands, loudness, calibration of the microphone
-        acoustic = run_acoustics(p, fs_mic, log.t_s, start_time_s=t0_mic, channel=mic,
-                                 field_type=run.extra.get("x_sound_field",
-                                                          fit.get("sound_field", "free")),
-                                 with_loudness=bool(fit.get("loudness", True)),
-                                 ecma418_s=float(fit.get("ecma418_s", 0.0)))  # [issue 26]
-    threshold = None
-    if run.protocol in ("amplitude_ramp_up", "amplitude_ramp_down") and math.isfinite(freq):
-        b = by_q.get("base_acceleration")
-        if b is not None:
-            threshold = ramp_threshold(run.run_id, b.read(), _fs_of(run, b), freq, log.t_s,
-                                       "up" if run.protocol.endswith("up") else "down",
-                                       start_time_s=_t0_of(run, b),
-                                       n_confirm=int(fit.get("n_confirm", 3)))
-            names = names + (b.name,)
-    return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
-                     pattern_n=pattern_n, cycle_counts=counts, acoustic_delay_s=delay,
-                     expected_delay_s=expected, spl_rms_db=spl, spl_rms_a_db=spl_a,
-                     threshold=threshold, acoustics=acoustic, **base)
+from ._params import FIT_KEYS, check_fit_params, load_pipeline
 
 
 def _f(x: Any) -> float | None:
@@ -247,7 +112,7 @@ def store_rigs(store: str | os.PathLike[str]) -> list[Any]:
 
 
 def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
-             detect: Mapping[str, Any], fit: Mapping[str, Any], curve: Any = None,
+             detect: DetectParams | Mapping[str, Any], fit: Mapping[str, Any], curve: Any = None,
              participation_source: str = "pipeline",
              provenance: Mapping[str, Any] | None = None) -> StoreFit:
     """The store-level fits of per-run detections: what ``fit`` and the pipeline both write.
@@ -264,8 +129,10 @@ def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
         The ingest store the runs came from.
     runs : list of RunResult
         Every run's detections, skipped runs included.
-    detect, fit : mapping
-        The detection and fit parameters used (``fit`` complete: see ``FIT_KEYS``).
+    detect : DetectParams or mapping
+        The detection parameters used (provenance: :meth:`DetectParams.to_dict`).
+    fit : mapping
+        The fit parameters used (complete: see ``FIT_KEYS``).
     curve : ThresholdCurve, optional
         The threshold table, when already tabulated (the pipeline caches it).
     participation_source : str
@@ -289,7 +156,8 @@ def fit_runs(store: str | os.PathLike[str], runs: list[RunResult], *,
                                 lambda p: summarise_fits(list(runs), curve, fit, participation=p))
     prov = {"function": "rattle_lab.workflow.fit_store", **dict(provenance or {}),
             "rattle_lab_version": __version__, "python": sys.version.split()[0],
-            "parameters": {"detect": dict(detect), "fit": dict(fit)},
+            "parameters": {"detect": DetectParams.from_mapping(detect).to_dict(),
+                           "fit": dict(fit)},
             "inputs": input_hashes(store, list(dict.fromkeys(r.input_key for r in runs)))}
     return StoreFit(tuple(runs), curve, summary, json_ready(prov))
 

@@ -72,7 +72,7 @@ SUMMARY_SCHEMA_VERSION = 1
 
 @dataclass(frozen=True)
 class RunRow(_Normalised):
-    """One analysed run in the summary (see :class:`~rattle_lab.fit.RunResult` for the fields).
+    """One analysed run in the summary (see :class:`~rattle_lab.detect.RunResult` for the fields).
 
     ``acoustics`` and ``calibration`` (runs with a microphone) are
     :meth:`rattle_lab.acoustics.RunAcoustics.summary`'s mappings, as JSON values.

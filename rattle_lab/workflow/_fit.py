@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rattle_lab.workflow.pipeline import detect_runs
 
+if TYPE_CHECKING:
+    from rattle_lab.detect import DetectParams
 
-def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None = None,
+
+def fit_store(store: str | os.PathLike[str], *,
+              detect: DetectParams | Mapping[str, Any] | None = None,
               fit: Mapping[str, Any] | None = None, write: bool = True, quiet: bool = True,
               participation_source: str = "pipeline", scheduler: Any = None) -> Any:
     """Detect and fit everything in an ingest store; write ``/results``: ``rattle-lab fit``.
@@ -23,9 +27,11 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     ----------
     store : path-like
         An ingest store.
-    detect, fit : mapping, optional
-        Keyword parameters of the detection and the fits (see
-        :func:`rattle_lab.fit.load_pipeline`).
+    detect : DetectParams or mapping, optional
+        The detection parameters (a ``[detect]`` table: see
+        :meth:`rattle_lab.detect.DetectParams.from_mapping`).
+    fit : mapping, optional
+        Keyword parameters of the fits (see :func:`rattle_lab.fit.load_pipeline`).
     write : bool
         Write ``/results`` into the store (atomically).
     quiet : bool
@@ -49,7 +55,7 @@ def fit_store(store: str | os.PathLike[str], *, detect: Mapping[str, Any] | None
     """
     from rattle_lab.fit import check_fit_params
 
-    detect = dict(detect or {})
+    detect = detect if detect is not None else {}
     fit_params = check_fit_params(fit)
     # the store is read (and a missing or foreign one refused) before the fits and the
     # acoustics are imported, so that a mistyped path costs a user no more than the store's

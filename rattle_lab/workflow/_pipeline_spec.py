@@ -8,7 +8,6 @@ with rattle_lab.  Nothing here runs a stage.
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -69,8 +68,8 @@ def parse_pipeline(doc: Mapping[str, Any], source: str = "<pipeline>") -> Pipeli
     ParameterError
         For an unknown table, key or output (the message names it).
     """
-    from rattle_lab.fit import FIT_KEYS, SOUND_KEYS
-    from rattle_lab.detect import ImpactParams
+    from rattle_lab.fit import FIT_KEYS
+    from rattle_lab.detect import DetectParams
 
     known = {"pipeline", "simulate", "ingest", "detect", "thresholds", "fit", "report"}
     unknown = sorted(set(doc) - known)
@@ -95,10 +94,13 @@ def parse_pipeline(doc: Mapping[str, Any], source: str = "<pipeline>") -> Pipeli
                                  f"(known: {', '.join(OUTPUTS)})")
     if not outputs:
         raise ParameterError(f"{source}: [pipeline] outputs must name at least one output")
-    allowed = {"detect": {f.name for f in dataclasses.fields(ImpactParams)} | set(SOUND_KEYS),
-               "fit": set(FIT_KEYS), "thresholds": set(), **{k: set(v) for k, v in
+    allowed = {"fit": set(FIT_KEYS), "thresholds": set(), **{k: set(v) for k, v in
                                                              _OWN_KEYS.items()}}
-    params: dict[str, dict[str, Any]] = {}
+    values = doc.get("detect", {})
+    if not isinstance(values, Mapping):
+        raise ParameterError(f"{source}: [detect] must be a table")
+    DetectParams.from_mapping(values, f"{source}: [detect]: ")   # its keys and values checked
+    params: dict[str, dict[str, Any]] = {"detect": dict(values)}
     for table, keys in allowed.items():
         values = doc.get(table, {})
         if not isinstance(values, Mapping):

@@ -22,7 +22,7 @@ stage       calls                                                       depends 
 ==========  ==========================================================  ==================
 simulate    :func:`rattle_lab.rig.write_synthetic`                      scene inputs only
 ingest      :func:`rattle_lab.store.ingest`                             simulate
-detect      :func:`rattle_lab.fit.analyse_run`, per run                 ingest
+detect      :func:`rattle_lab.detect.analyse_run`, per run              ingest
 thresholds  :func:`rattle_lab.detect.thresholds.tabulate_thresholds`    detect
 fit         :func:`rattle_lab.fit.fit_runs` (as ``rattle-lab fit``),    thresholds, detect
             :func:`rattle_lab.store.write_results`
@@ -54,16 +54,13 @@ different code.
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from rattle_lab._atomic import atomic_path
 from rattle_lab._resources import find_resource
@@ -73,6 +70,9 @@ from rattle_lab.store import (CACHE_GROUP, check_linked_inputs, has_path, output
                               read_cache_keys, read_cached, record_cache_keys, store_lock, write_cached)
 from ._pipeline_spec import (DEPENDS, OUTPUTS, STAGES, Pipeline, Stage, load_pipeline_file,
                              parse_pipeline)
+
+if TYPE_CHECKING:
+    from rattle_lab.detect import DetectParams
 
 #: Layout of the cached products (their classes' places and fields); a change re-runs the
 #: stages whose products a store caches.  2: the classes moved with the data-flow layout and
@@ -188,9 +188,10 @@ def read_detections(store: str | os.PathLike[str]) -> tuple[Any, ...]:
 
 # --- stage functions --------------------------------------------------------------------------
 
-def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any],
-               fit: Mapping[str, Any], code: str | None = None) -> Any:
-    """Detection results of one stored run (:func:`rattle_lab.fit.analyse_run`).
+def detect_run(store: str, input_key: str, run_id: str,
+               detect: DetectParams | Mapping[str, Any], fit: Mapping[str, Any],
+               code: str | None = None) -> Any:
+    """Detection results of one stored run (:func:`rattle_lab.detect.analyse_run`).
 
     A pure function of its arguments: what the serial loop and the Dask
     workers call.
@@ -201,8 +202,10 @@ def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any
         The ingest store.
     input_key, run_id : str
         The run.
-    detect, fit : mapping
-        The ``[detect]`` and ``[fit]`` parameters.
+    detect : DetectParams or mapping
+        The ``[detect]`` parameters.
+    fit : mapping
+        The ``[fit]`` parameters.
     code : str, optional
         The caller's :func:`code_fingerprint`; if given, this process must run
         the same code.
@@ -217,7 +220,7 @@ def detect_run(store: str, input_key: str, run_id: str, detect: Mapping[str, Any
         If ``code`` differs from this process's fingerprint (a Dask worker with
         another rattle_lab).
     """
-    from rattle_lab.fit import analyse_run
+    from rattle_lab.detect import analyse_run
     from rattle_lab.store import open_stored_record
 
     if code is not None and code != code_fingerprint():
@@ -278,10 +281,13 @@ def _connect(scheduler: Any) -> tuple[Any, bool]:
                              f"({' '.join(str(exc).split()) or type(exc).__name__})") from None
 
 
-def detect_runs(store: str | os.PathLike[str], detect: Mapping[str, Any],
+def detect_runs(store: str | os.PathLike[str], detect: DetectParams | Mapping[str, Any],
                 fit: Mapping[str, Any], *, scheduler: Any = None, quiet: bool = True
                 ) -> list[Any]:
     """Every stored run's detections (:func:`detect_run`), serially or on a Dask cluster.
+
+    Then the campaign's ringing search (:func:`rattle_lab.detect.campaign_ringing`), which
+    detects runs again through the same serial or cluster path.
 
     The detect stage of a pipeline and of :func:`fit_store`.  The inputs the store links
     to are re-hashed first (they must be the bytes that were ingested).  The progress bar
@@ -303,10 +309,17 @@ def detect_runs(store: str | os.PathLike[str], detect: Mapping[str, Any],
     for k, r, n in zip(channels["input_key"], channels["run_id"], channels["n_samples"]):
         samples[(str(k), str(r))] = samples.get((str(k), str(r)), 0) + int(n)
     weights = [samples.get((k, r), 0) for _, k, r in jobs]
-    results = _map_runs(jobs, detect, fit, scheduler=scheduler, quiet=quiet, desc="detect",
+    from rattle_lab.detect import DetectParams, campaign_ringing
+
+    params = DetectParams.from_mapping(detect)
+    results = _map_runs(jobs, params, fit, scheduler=scheduler, quiet=quiet, desc="detect",
                         weights=weights)
-    return _campaign_ringing(results, jobs, detect, fit, scheduler=scheduler, quiet=quiet,
-                             weights=weights)
+
+    def redetect(indices: list[int], again: DetectParams, label: str) -> list[Any]:
+        return _map_runs([jobs[i] for i in indices], again, fit, scheduler=scheduler,
+                         quiet=quiet, desc=label, weights=[weights[i] for i in indices])
+
+    return campaign_ringing(results, params, redetect)
 
 
 def map_tasks(func: Callable[..., Any], tasks: Sequence[tuple[Any, ...]], *,
@@ -387,7 +400,7 @@ def map_tasks(func: Callable[..., Any], tasks: Sequence[tuple[Any, ...]], *,
                 client.close()
 
 
-def _map_runs(jobs: list[tuple[str, str, str]], detect: Mapping[str, Any],
+def _map_runs(jobs: list[tuple[str, str, str]], detect: DetectParams,
               fit: Mapping[str, Any], *, scheduler: Any, quiet: bool, desc: str,
               weights: Sequence[int] | None = None) -> list[Any]:
     """:func:`detect_run` of every job, in order: serially or on a Dask cluster."""
@@ -395,70 +408,7 @@ def _map_runs(jobs: list[tuple[str, str, str]], detect: Mapping[str, Any],
         return map_tasks(detect_run, jobs, quiet=quiet, desc=desc, weights=weights,
                          detect=detect, fit=fit)
     return map_tasks(detect_run, jobs, scheduler=scheduler, quiet=quiet, desc=desc,
-                     weights=weights, detect=dict(detect), fit=dict(fit), code=code_fingerprint())
-
-
-def _campaign_ringing(results: list[Any], jobs: list[tuple[str, str, str]],
-                      detect: Mapping[str, Any], fit: Mapping[str, Any], *, scheduler: Any,
-                      quiet: bool, weights: Sequence[int] | None = None) -> list[Any]:
-    """Lightly damped ringing, found across the campaign's runs and taken out of each.
-
-    Where runs ring after their impacts and no run's own flight model measured the
-    ringing's share of the velocity jumps (modes that ring on past the next impact), the
-    runs' flights are pooled to find the plate's ringing modes
-    (:func:`rattle_lab.detect.campaign_ring_modes`; the other shaker runs' flights join
-    them: their own test for ringing sees the tails on both sides of an impact and can
-    pass them by), and every shaker run with impacts is
-    detected again with them (``ring_modes``: each impact's ringing carried on, ``v_in``
-    and ``v_out`` from the flight model).  Otherwise, where no mode is found, or where the
-    modes give no run any velocities, the results are returned as they are (the fit then
-    flags the ratios).  The runs' parts of the search are dropped from the results either
-    way.
-    """
-    from rattle_lab.detect import campaign_ring_modes
-
-    logs = [getattr(r, "impacts", None) for r in results]
-    problems = [log.ringing_problem for log in logs if log is not None
-                and log.ringing_problem is not None]
-    shares = [log.ringing_share for log in logs if log is not None]
-    if (problems and not any(np.isfinite(s) for s in shares)
-            and detect.get("velocity_model", "auto") != "local"
-            and not detect.get("ring_modes")):
-        redo = [i for i, r in enumerate(results) if r.status == "ok"
-                and r.impacts is not None and r.impacts.n_impacts
-                and np.isfinite(r.freq_hz) and r.protocol != "transient"
-                and np.isfinite(r.impacts.v_in_m_s).any()]
-        # the tails are in the residual before an impact as well as after it, so the test
-        # for ringing can pass a run by: the other shaker runs' flights join the search
-        others = [i for i in redo if results[i].impacts.ringing_problem is None]
-        w = list(weights) if weights is not None else [1] * len(jobs)
-        more = _map_runs([jobs[i] for i in others], {**detect, "velocity_model": "flights"},
-                         fit, scheduler=scheduler, quiet=quiet, desc="detect (flights)",
-                         weights=[w[i] for i in others])
-        problems += [r.impacts.ringing_problem for r in more
-                     if getattr(r, "impacts", None) is not None
-                     and r.impacts.ringing_problem is not None]
-        from threadpoolctl import threadpool_limits
-
-        with threadpool_limits(limits=1, user_api="blas"):   # as detect_run's
-            modes = campaign_ring_modes(problems)
-        if modes:
-            again = _map_runs([jobs[i] for i in redo],
-                              {**detect, "ring_modes": [list(m) for m in modes],
-                               "ring_modes_runs": len(problems)}, fit,
-                              scheduler=scheduler, quiet=quiet, desc="detect (ringing modes)",
-                              weights=[w[i] for i in redo])
-            if any(np.isfinite(r.impacts.v_in_m_s).any() for r in again
-                   if getattr(r, "impacts", None) is not None):
-                results = list(results)
-                for i, r in zip(redo, again):
-                    results[i] = r
-            # (else the modes gave no run velocities: the first pass stands, and the fit
-            # flags its ratios as uncorrected)
-    return [r if getattr(r, "impacts", None) is None or r.impacts.ringing_problem is None
-            else dataclasses.replace(r, impacts=dataclasses.replace(r.impacts,
-                                                                    ringing_problem=None))
-            for r in results]
+                     weights=weights, detect=detect, fit=dict(fit), code=code_fingerprint())
 
 
 def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipeline) -> None:
@@ -577,7 +527,11 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
     ingest_inputs = [sim_keys[i] if i in sim_keys else _file_hash(Path(i)) for i in items]
     keys["ingest"] = _digest({"stage": "ingest", "v": version, "params": p["ingest"],
                               "inputs": sorted(ingest_inputs)})
-    detect_params = {**p["detect"], **{k: p["fit"][k] for k in _DETECT_FIT_KEYS}}
+    from rattle_lab.detect import DetectParams
+
+    # (DetectParams.to_dict is the [detect] table as given: the keys of existing stores hold)
+    detect_params = {**DetectParams.from_mapping(p["detect"]).to_dict(),
+                     **{k: p["fit"][k] for k in _DETECT_FIT_KEYS}}
     keys["detect"] = _digest({"stage": "detect", "v": version, "cache": CACHE_FORMAT,
                               "params": detect_params,
                               "up": keys["ingest"]})

@@ -122,7 +122,7 @@ def test_declared_delay_is_checked():
     assert log.velocity_delay_applied_s == 0.0
     # declared wrong by 2 samples (a chain 2 samples later than its declaration says): the
     # declaration stands, the measurement contradicts it and the fit says so
-    from rattle_lab.fit._chain import velocity_delay_flags
+    from rattle_lab.detect import velocity_delay_flags
 
     chain2 = Chain(decoder_delay_s=2.0 / fs, ring_in_velocity=False)
     _, ch2, _ = _run(chain2)

@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 from rattle_lab.detect import ImpactParams, impact_pattern
-from rattle_lab.fit import analyse_run
+from rattle_lab.detect import analyse_run
 from rattle_lab.records import read
 from rattle_lab.rig import load_scene
 

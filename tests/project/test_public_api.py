@@ -86,6 +86,12 @@ PACKAGES: dict[str, list[str]] = {
         "RINGING_RESIDUAL_RATIO", "base_velocity_at", "onto_grid", "detect_shock",
         # issue 28: the channel timing the fit checks
         "DelayEstimate", "delay_contradicted", "measurand_share",
+        # issue 29: detection in one room
+        "DetectParams", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
+        "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
+        "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
+        "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",
+        "run_chain_flags", "transient_shocks", "velocity_delay_flags",
     ],
     "rattle_lab.explorer": [
         "Explorer", "Histories", "compute_histories", "save_histories", "impacts_path",
@@ -93,14 +99,14 @@ PACKAGES: dict[str, list[str]] = {
         "DEFAULT_SAVE_PATH"
     ],
     "rattle_lab.fit": [
-        "DbLaw", "analyse_run", "check_fit_params", "fit_runs", "json_ready",
+        "DbLaw", "check_fit_params", "fit_runs", "json_ready",
         "load_pipeline",
         "summarise_fits", "LinearLaw", "RestitutionStats",
         "fit_db_law", "fit_grazing", "fit_linear_law", "fit_restitution_down",
         "pooled_ringing_share", "ratios_of_runs", "restitution_from_ratios",
         "ringing_corrected_ratios", "saddle_node_threshold_ms2",
         "ModelThreshold", "RampSpec", "fit_zeta_ramp", "model_threshold", "fit_grazing_ramp",
-        "RunResult", "StoreFit",
+        "StoreFit",
         "SUMMARY_SCHEMA_VERSION", "FitSummary", "Fits", "Estimate", "GrazingParameter",
         "GrazingSummary", "RatioRestitution", "RampDamping", "DownRestitution", "SplLawSummary",
         "LinearLawSummary", "DbLawSummary", "RampGrazing", "RunRow", "SkippedRun",

@@ -16,7 +16,7 @@ import pytest
 
 from rattle_lab.detect._pairing import base_velocity_at, fractional_delay, onto_grid
 from rattle_lab.exceptions import ParameterError
-from rattle_lab.fit._store import paired_plate_channels
+from rattle_lab.detect import paired_plate_channels
 from rattle_lab.records._model import Channel, Run
 
 F_HZ = (97.0, 410.0, 1333.0)

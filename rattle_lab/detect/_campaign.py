@@ -1,0 +1,95 @@
+"""Lightly damped ringing found across a campaign's runs and taken out of each.
+
+Moved from :mod:`rattle_lab.workflow.pipeline` (issue 29: detection in one room).  The
+search needs the runs detected again with other parameters; how they are detected (serially
+or on a Dask cluster) is the caller's: :func:`campaign_ringing` is given a ``redetect``
+function.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ._flights import campaign_ring_modes
+from ._params import DetectParams
+from ._run import RunResult
+
+#: ``redetect(indices, params, label)``: the results of the runs at ``indices`` detected
+#: again with ``params`` (``label`` names the pass, for a progress bar), in that order.
+Redetect = Callable[[list[int], DetectParams, str], Sequence[RunResult]]
+
+
+def campaign_ringing(results: Sequence[RunResult], detect: DetectParams,
+                     redetect: Redetect) -> list[RunResult]:
+    """Lightly damped ringing, found across the campaign's runs and taken out of each.
+
+    Where runs ring after their impacts and no run's own flight model measured the
+    ringing's share of the velocity jumps (modes that ring on past the next impact), the
+    runs' flights are pooled to find the plate's ringing modes
+    (:func:`~rattle_lab.detect.campaign_ring_modes`; the other shaker runs' flights join
+    them, detected again with ``velocity_model = "flights"``: their own test for ringing
+    sees the tails on both sides of an impact and can pass them by), and every shaker run
+    with impacts is detected again with them (``ring_modes``: each impact's ringing carried
+    on, ``v_in`` and ``v_out`` from the flight model).  Otherwise, where no mode is found,
+    or where the modes give no run any velocities, the results are returned as they are
+    (the fit then flags the ratios).  The runs' parts of the search are dropped from the
+    results either way.
+
+    Parameters
+    ----------
+    results : sequence of RunResult
+        Every run's first detection (:func:`analyse_run`), in the order ``redetect`` indexes.
+    detect : DetectParams
+        The parameters they were detected with.
+    redetect : callable
+        ``redetect(indices, params, label)``: the runs at ``indices`` detected again with
+        ``params``, in that order.
+
+    Returns
+    -------
+    list of RunResult
+    """
+    logs = [r.impacts for r in results]
+    problems = [log.ringing_problem for log in logs if log is not None
+                and log.ringing_problem is not None]
+    shares = [log.ringing_share for log in logs if log is not None]
+    if (problems and not any(np.isfinite(s) for s in shares)
+            and detect.velocity_model != "local" and not detect.ring_modes):
+        redo = [i for i, r in enumerate(results) if r.status == "ok"
+                and r.impacts is not None and r.impacts.n_impacts
+                and np.isfinite(r.freq_hz) and r.protocol != "transient"
+                and np.isfinite(r.impacts.v_in_m_s).any()]
+        # the tails are in the residual before an impact as well as after it, so the test
+        # for ringing can pass a run by: the other shaker runs' flights join the search
+        others = [i for i in redo if results[i].impacts.ringing_problem is None]  # type: ignore[union-attr]
+        more = redetect(others, dataclasses.replace(detect, velocity_model="flights"),
+                        "detect (flights)")
+        problems += [r.impacts.ringing_problem for r in more
+                     if r.impacts is not None and r.impacts.ringing_problem is not None]
+        from threadpoolctl import threadpool_limits
+
+        # one BLAS thread, as the per-run detection's (a result must not depend on where
+        # it was computed)
+        with threadpool_limits(limits=1, user_api="blas"):
+            modes = campaign_ring_modes(problems)
+        if modes:
+            again = redetect(redo, dataclasses.replace(
+                detect, ring_modes=[list(m) for m in modes], ring_modes_runs=len(problems)),
+                "detect (ringing modes)")
+            if any(np.isfinite(r.impacts.v_in_m_s).any() for r in again
+                   if r.impacts is not None):
+                results = list(results)
+                for i, r in zip(redo, again):
+                    results[i] = r
+            # (else the modes gave no run velocities: the first pass stands, and the fit
+            # flags its ratios as uncorrected)
+    return [r if r.impacts is None or r.impacts.ringing_problem is None
+            else dataclasses.replace(r, impacts=dataclasses.replace(r.impacts,
+                                                                    ringing_problem=None))
+            for r in results]
+
+
+__all__ = ["campaign_ringing"]

@@ -1,0 +1,150 @@
+"""The ``[detect]`` parameters of a pipeline, typed and checked in one place.
+
+:class:`DetectParams` holds every key a pipeline TOML's ``[detect]`` table (and
+``rattle-lab fit --pipeline``) accepts: the fields of :class:`ImpactParams` and the sound
+keys of :data:`SOUND_KEYS` with ``channel``.  :meth:`DetectParams.from_mapping` builds it
+from the table and refuses an unknown key or a bad value; :meth:`DetectParams.to_dict` gives
+back the keys that were given, with their values as given, which is what the pipeline's
+content keys hash and what ``/results`` records as its provenance ``parameters``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rattle_lab.exceptions import ParameterError
+from ._impacts import ImpactParams
+
+#: The defaults of the sound keys of ``[detect]`` (:func:`~rattle_lab.detect.sound_peaks`'s
+#: window and first-peak fraction, the acoustic delay's largest lag, s) and of ``channel``
+#: (the channel to detect on; None: chosen by what each channel measures).
+SOUND_KEYS: dict[str, Any] = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01,
+                              "channel": None}
+
+_IMPACT_FIELDS = tuple(f.name for f in dataclasses.fields(ImpactParams))
+
+
+@dataclass(frozen=True)
+class DetectParams:
+    """Parameters of the per-run detection (``[detect]`` of a pipeline TOML).
+
+    Attributes
+    ----------
+    on, off, min_separation_s, detrend_window_s, fit_window_s, guard_s, poly_degree, \
+sigma_floor_rel, fit_basis, sine_window_s, sine_degree, sine_guard_s, min_reversal, \
+velocity_model, ring_modes, ring_modes_runs
+        Those of :class:`ImpactParams` (same defaults, same checks).
+    window_s : float
+        Length of the window after each impact the sound peaks are read in, s.
+    first_fraction : float
+        The first sound peak is the first above this fraction of the window's largest.
+    max_lag_s : float
+        Largest lag of the impact-to-sound cross-correlation, s.
+    channel : str or None
+        The channel to detect on in every run (None: the run's ``detect_channel``, else
+        chosen by what each channel measures).
+    given : tuple of str
+        The keys the mapping gave, in its order (:meth:`to_dict`).
+
+    The values are kept as given (a TOML integer stays an integer), so that :meth:`to_dict`
+    is the mapping the parameters were built from.
+    """
+
+    on: float = ImpactParams.on
+    off: float = ImpactParams.off
+    min_separation_s: float = ImpactParams.min_separation_s
+    detrend_window_s: float = ImpactParams.detrend_window_s
+    fit_window_s: float = ImpactParams.fit_window_s
+    guard_s: float = ImpactParams.guard_s
+    poly_degree: int = ImpactParams.poly_degree
+    sigma_floor_rel: float = ImpactParams.sigma_floor_rel
+    fit_basis: str = ImpactParams.fit_basis
+    sine_window_s: float = ImpactParams.sine_window_s
+    sine_degree: int = ImpactParams.sine_degree
+    sine_guard_s: float = ImpactParams.sine_guard_s
+    min_reversal: float = ImpactParams.min_reversal
+    velocity_model: str = ImpactParams.velocity_model
+    ring_modes: Sequence[Sequence[float]] = ImpactParams.ring_modes
+    ring_modes_runs: int = ImpactParams.ring_modes_runs
+    window_s: float = SOUND_KEYS["window_s"]
+    first_fraction: float = SOUND_KEYS["first_fraction"]
+    max_lag_s: float = SOUND_KEYS["max_lag_s"]
+    channel: str | None = SOUND_KEYS["channel"]
+    given: tuple[str, ...] = field(default=(), repr=False)
+
+    def __post_init__(self) -> None:
+        self.impact_params()   # the checks of ImpactParams
+        for name in ("window_s", "max_lag_s", "first_fraction"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) \
+                    or not (np.isfinite(value) and value > 0):
+                raise ParameterError(f"`{name}` must be a number > 0, was {value!r}")
+        if self.first_fraction > 1:
+            raise ParameterError(f"`first_fraction` must be in (0, 1], was {self.first_fraction}")
+        if self.channel is not None and not isinstance(self.channel, str):
+            raise ParameterError(f"`channel` must be a channel name, was {self.channel!r}")
+        unknown = sorted(set(self.given) - set(keys()))
+        if unknown:
+            raise ParameterError(f"unknown key {unknown[0]!r}")
+
+    @classmethod
+    def from_mapping(cls, values: Mapping[str, Any] | DetectParams | None,
+                     where: str = "") -> DetectParams:
+        """The parameters of a ``[detect]`` mapping (its keys recorded in ``given``).
+
+        Raises
+        ------
+        ParameterError
+            For an unknown key (named, prefixed with ``where``) or a value out of range.
+        """
+        if isinstance(values, DetectParams):
+            return values
+        values = dict(values or {})
+        unknown = sorted(set(values) - set(keys()))
+        if unknown:
+            raise ParameterError(f"{where}unknown key {unknown[0]!r} "
+                                 f"(known: {', '.join(sorted(keys()))})")
+        try:
+            return cls(**values, given=tuple(values))
+        except ParameterError as exc:
+            raise ParameterError(f"{where}{exc}") from None
+
+    def impact_params(self) -> ImpactParams:
+        """The :class:`ImpactParams` of :func:`~rattle_lab.detect.detect_impacts`."""
+        return ImpactParams(**{k: getattr(self, k) for k in _IMPACT_FIELDS})
+
+    def to_dict(self) -> dict[str, Any]:
+        """The keys that were given, with their values as given, and any value changed
+        since (:func:`dataclasses.replace`) from its default.
+
+        For parameters built by :meth:`from_mapping`, the mapping they were built from: what
+        the pipeline's content key of the detect stage and ``/results``'s provenance hold.
+        """
+        out = {k: getattr(self, k) for k in self.given}
+        for f in dataclasses.fields(self):
+            if f.name != "given" and f.name not in out and _changed(getattr(self, f.name),
+                                                                    f.default):
+                out[f.name] = getattr(self, f.name)
+        return out
+
+
+def _changed(value: Any, default: Any) -> bool:
+    if value is default:
+        return False
+    try:
+        return bool(value != default)
+    except (TypeError, ValueError):
+        return True
+
+
+def keys() -> tuple[str, ...]:
+    """Every key of ``[detect]``."""
+    return _IMPACT_FIELDS + tuple(SOUND_KEYS)
+
+
+__all__ = ["DetectParams", "SOUND_KEYS"]
