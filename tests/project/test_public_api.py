@@ -164,7 +164,7 @@ PACKAGES: dict[str, list[str]] = {
         "write_pdf", "render_pages", "ReportResult", "ReportContent", "PAGES",
         "RigContent", "RecordInfo", "ChannelInfo", "ThresholdContent", "GrazingCurve",
         "PatternContent", "SplContent", "SplCurve", "WaveformContent", "WaveformColumn",
-        "Trace", "WAVEFORM_QUANTITIES", "AcousticsContent", "ModelContent", "SweepComparison",
+        "Trace", "WAVEFORM_QUANTITIES", "AcousticsContent", "ListenerMetrics", "ModelContent", "SweepComparison",
         "Field", "ShockContent", "ShockRun", "ShockTrace",
         "TEXT_WIDTH", "fmt", "wrapped", "pdf_output"
     ],
