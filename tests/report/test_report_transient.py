@@ -13,21 +13,20 @@ and its peak (6600).
 
 from __future__ import annotations
 
-import os
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pypdf
 import pytest
+from conftest import REALDATA
 from record_factory import run_cli
 
 from rattle_lab.records import read
 
 ROOT = Path(__file__).resolve().parents[2]
-REALDATA = Path(os.environ.get("RATTLE_LAB_REALDATA", ROOT / ".." / "shared" / "realdata"))
 MAPPING = ROOT / "data_schema" / "mappings" / "forced_shock_lvm.toml"
-LVM = REALDATA / "forced_shock" / "vibration_0.2.lvm"
+LVM = REALDATA / "forced_shock" / "vibration_0.2.lvm"  # conftest: the one real-data setting
 
 pytestmark = pytest.mark.skipif(not LVM.is_file(),
                                 reason=f"real records not available: {LVM} is absent")
