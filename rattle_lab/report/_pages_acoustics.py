@@ -125,12 +125,9 @@ def listener_page(v: np.ndarray, m: ListenerMetrics) -> Figure:
               label="impacts per second of rattle")
     ax_r.set_ylabel("impact rate (1/s)")
     ax_r.set_title("Impact rate in the rattle episodes", fontsize=9)
-    for ax in (ax_i, ax_b, ax_r):
-        ax.set_xscale("log")
-        _label_log_axis(ax.xaxis, v[ok])
-        ax.set_xlabel("RMS impact velocity of the run (m/s)")
-        ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=7)
+    for ax, values in ((ax_i, (m.impulse_penalty_db, m.impulse_prominence)),
+                       (ax_b, (m.above_background_sone,)), (ax_r, (m.impacts_per_s,))):
+        _velocity_axis(ax, v, ok, values)
     # (d) ECMA-418-2, where computed
     if m.ecma_note:
         ax_e.axis("off")
@@ -141,17 +138,32 @@ def listener_page(v: np.ndarray, m: ListenerMetrics) -> Figure:
                                       (m.tonality_tu, "^", "tonality (tu_HMS)"),
                                       (m.roughness_asper, "s", "roughness (asper_HMS)")):
             ax_e.plot(v[ok], values[ok], marker, label=label)
-        ax_e.set_xscale("log")
-        _label_log_axis(ax_e.xaxis, v[ok])
-        ax_e.set_xlabel("RMS impact velocity of the run (m/s)")
         ax_e.set_ylabel("ECMA-418-2 value (unit in legend)")
         ax_e.set_title("ECMA-418-2 (hearing model of Sottek)", fontsize=9)
-        ax_e.grid(alpha=0.3, which="both")
-        ax_e.legend(fontsize=7)
+        _velocity_axis(ax_e, v, ok, (m.loudness_ecma_sone, m.tonality_tu, m.roughness_asper))
     flags = ("flags: " + ", ".join(m.flags)) if m.flags else "no psychoacoustic flag"
     fig.suptitle("Rattle as a listener hears it: impulsiveness, loudness above the background, "
                  "impact rate\n" + flags, fontsize=11)
     return fig
+
+
+def _velocity_axis(ax: Any, v: np.ndarray, ok: np.ndarray,
+                   values: tuple[np.ndarray, ...]) -> None:
+    """A log impact-velocity axis under ``values``; a note instead where no run has both a
+    velocity and a value (a log axis cannot be drawn without data)."""
+    ax.set_xlabel("RMS impact velocity of the run (m/s)")
+    drawn = ok & np.any([np.isfinite(y) for y in values], axis=0)
+    if not drawn.any():
+        ax.text(0.5, 0.5, "no run has both an impact velocity and this value\n"
+                "(see the flags above)", ha="center", va="center", fontsize=8,
+                transform=ax.transAxes)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        return
+    ax.set_xscale("log")
+    _label_log_axis(ax.xaxis, v[drawn])
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
 
 
 def _label_log_axis(axis: Any, values: np.ndarray) -> None:

@@ -392,3 +392,22 @@ def test_the_listener_page_says_why_ecma_418_is_absent(flags, ecma, says) -> Non
     assert np.isnan(m.impacts_per_s[0])
     assert (np.isnan(m.loudness_ecma_sone[0]) if ecma is None
             else m.loudness_ecma_sone[0] == ecma)
+
+
+def test_the_listener_page_draws_a_note_where_no_run_has_a_value() -> None:
+    # a campaign without background stretches has no loudness above the background and no
+    # impulsiveness: the page says so instead of a log axis without data (which cannot draw)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from rattle_lab.report._pages_acoustics import listener_page
+    from rattle_lab.workflow._report._content_runs import listener_metrics
+
+    rows = [{"acoustics": {"psychoacoustic_flags": ["no_background"], "impacts_per_s": 95.0 + k,
+                           "impulse_penalty_db": None}} for k in range(3)]
+    fig = listener_page(np.array([0.04, 0.05, np.nan]), listener_metrics(rows))
+    FigureCanvasAgg(fig).draw()
+    texts = _texts(fig)
+    assert texts.count("no run has both an impact velocity and this value") == 2
+    assert "flags: no_background" in texts
+    rate = next(ax for ax in fig.axes if ax.get_title().startswith("Impact rate"))
+    assert rate.get_xscale() == "log" and len(rate.lines[0].get_xdata()) == 2
