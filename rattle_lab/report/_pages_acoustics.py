@@ -125,9 +125,9 @@ def listener_page(v: np.ndarray, m: ListenerMetrics) -> Figure:
               label="impacts per second of rattle")
     ax_r.set_ylabel("impact rate (1/s)")
     ax_r.set_title("Impact rate in the rattle episodes", fontsize=9)
-    for ax, values in ((ax_i, (m.impulse_penalty_db, m.impulse_prominence)),
-                       (ax_b, (m.above_background_sone,)), (ax_r, (m.impacts_per_s,))):
-        _velocity_axis(ax, v, ok, values)
+    for ax, shown in ((ax_i, (m.impulse_penalty_db, m.impulse_prominence)),
+                      (ax_b, (m.above_background_sone,)), (ax_r, (m.impacts_per_s,))):
+        _velocity_axis(ax, v, ok, shown)
     # (d) ECMA-418-2, where computed
     if m.ecma_note:
         ax_e.axis("off")
