@@ -29,8 +29,12 @@ JOB = ("model", "map", "--kind", "regime", "--F", "0.05:0.5", "--omega", "0.8:1.
 
 
 def _start() -> tuple[subprocess.Popen[str], list[psutil.Process]]:
+    # the child gets the default SIGINT action, as a command typed at a terminal has: a test
+    # run started in the background by a shell inherits SIGINT ignored, and Python then
+    # leaves it ignored (the map would run on for minutes)
     proc = subprocess.Popen([str(RATTLE_LAB), *JOB], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     parent = psutil.Process(proc.pid)
     deadline = time.monotonic() + 120.0
     while time.monotonic() < deadline:  # the pool's two workers are running chunks

@@ -136,19 +136,10 @@ def _run_pool(func: Callable[[T], Any], chunks: Sequence[T], workers: int, desc:
 
     warm_cache()  # load the compiled kernels here, so that forked workers inherit them
     method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-    # Ctrl-C and SIGTERM are held (pending) while the pool starts and the chunks are
-    # submitted: a KeyboardInterrupt raised inside the executor's own lock-holding code
-    # could leave it locked and the clean-up below waiting on it for ever.  The pool's
-    # threads and forked workers start with the signals blocked; the threads keep them so
-    # (a signal is then always the main thread's) and the workers unblock them.
-    held = _hold_signals()
     pool = ProcessPoolExecutor(max_workers=min(workers, len(chunks)),
                                mp_context=mp.get_context(method), initializer=_worker_signals)
     try:
-        try:
-            futures = {pool.submit(func, c): i for i, c in enumerate(chunks)}
-        finally:
-            _release_signals(held)  # one that came meanwhile is raised here, in this try
+        futures = {pool.submit(func, c): i for i, c in enumerate(chunks)}
         results: list[Any] = [None] * len(chunks)
         for fut in progress(as_completed(futures), total=len(futures), desc=desc, quiet=quiet,
                             unit="chunk"):
@@ -169,28 +160,6 @@ def _worker_signals() -> None:
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    if hasattr(signal, "pthread_sigmask"):  # forked from a thread that held them
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
-
-
-def _hold_signals() -> Any:
-    """Block Ctrl-C and SIGTERM in this thread (they stay pending); the previous mask, or
-    None where threads have no signal mask (not POSIX) or this is not the main thread."""
-    import signal
-    import threading
-
-    if (not hasattr(signal, "pthread_sigmask")
-            or threading.current_thread() is not threading.main_thread()):
-        return None
-    return signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-
-
-def _release_signals(previous: Any) -> None:
-    """Restore the mask :func:`_hold_signals` returned (a pending signal is delivered)."""
-    import signal
-
-    if previous is not None:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _stop_pool(pool: Any) -> None:
