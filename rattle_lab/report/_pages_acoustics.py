@@ -47,30 +47,26 @@ def acoustics_page(c: AcousticsContent) -> list[Figure]:
     if c.level_guide is not None:
         ax_l.plot(*c.level_guide, "--", color="0.4",
                   label="20 dB per decade (p proportional to v, the SPL law)")
-    ax_l.set_xscale("log")
     ax_l.set_xlabel("RMS impact velocity of the run (m/s)")
     ax_l.set_ylabel("A-weighted level (dB re 20 uPa)")
     ax_l.set_title("Level against impact velocity (IEC 61672-1)", fontsize=9)
-    ax_l.grid(alpha=0.3, which="both")
-    ax_l.legend(fontsize=7)
     # (c) loudness against impact velocity: is the SPL law a loudness law?
     ax_n.plot(v[ok], n5[ok], "o", color="tab:green", label="N5 (exceeded 5 % of the time)")
     ax_n.plot(v[ok], nmax[ok], "s", mfc="none", color="tab:green", label="Nmax")
     if c.loudness_guide is not None:
         ax_n.plot(*c.loudness_guide, "--", color="0.4",
                   label="N proportional to v^0.6 (SPL law with loudness doubling per 10 dB)")
-    ax_n.set_xscale("log")
-    ax_n.set_yscale("log")
-    finite_n = np.concatenate([n5[ok], nmax[ok]])
-    finite_n = finite_n[np.isfinite(finite_n) & (finite_n > 0)]
-    for axis, values in ((ax_l.xaxis, v[ok]), (ax_n.xaxis, v[ok]), (ax_n.yaxis, finite_n)):
-        _label_log_axis(axis, values)
     ax_n.set_xlabel("RMS impact velocity of the run (m/s)")
     ax_n.set_ylabel("ISO 532-1 loudness (sone)")
     ax_n.set_title(f"Loudness against impact velocity ({'/'.join(c.sound_fields)} field)",
                    fontsize=9)
-    ax_n.grid(alpha=0.3, which="both")
-    ax_n.legend(fontsize=7)
+    finite_n = np.concatenate([n5[ok], nmax[ok]])
+    finite_n = finite_n[np.isfinite(finite_n) & (finite_n > 0)]
+    # log axes need data: a campaign where no run has an impact velocity (no impact found,
+    # a campaign below the rattle onset) gets a note instead
+    _log_axes(ax_l, v[ok] if np.isfinite(np.concatenate([laeq[ok], lafmax[ok]])).any()
+              else v[:0], None)
+    _log_axes(ax_n, v[ok] if finite_n.size else v[:0], finite_n)
     # (d) the table
     ax_t.axis("off")
     cols = ["run", "LAeq", "LAFmax", "LCpeak", "N5", "Nmax", "S", "calibration"]
@@ -145,6 +141,25 @@ def listener_page(v: np.ndarray, m: ListenerMetrics) -> Figure:
     fig.suptitle("Rattle as a listener hears it: impulsiveness, loudness above the background, "
                  "impact rate\n" + flags, fontsize=11)
     return fig
+
+
+def _log_axes(ax: Any, v: np.ndarray, y: np.ndarray | None) -> None:
+    """Log velocity axis (and log ``y`` axis where ``y`` is given) labelled for reading; a
+    note instead where there is no point to draw (a log axis without data cannot draw)."""
+    if not v.size:
+        ax.text(0.5, 0.5, "no run has an impact velocity and this value\n"
+                "(no impacts detected: see the summary's flags)", ha="center", va="center",
+                fontsize=8, transform=ax.transAxes)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        return
+    ax.set_xscale("log")
+    _label_log_axis(ax.xaxis, v)
+    if y is not None:
+        ax.set_yscale("log")
+        _label_log_axis(ax.yaxis, y)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
 
 
 def _velocity_axis(ax: Any, v: np.ndarray, ok: np.ndarray,

@@ -411,3 +411,35 @@ def test_the_listener_page_draws_a_note_where_no_run_has_a_value() -> None:
     assert "flags: no_background" in texts
     rate = next(ax for ax in fig.axes if ax.get_title().startswith("Impact rate"))
     assert rate.get_xscale() == "log" and len(rate.lines[0].get_xdata()) == 2
+
+
+def test_the_acoustics_page_draws_a_note_where_no_run_has_an_impact_velocity() -> None:
+    # a campaign below the rattle onset (no impact detected in any run) still has levels and
+    # loudness, but no impact velocity: the two velocity panels say so instead of log axes
+    # without data (matplotlib refuses to draw those: "Data cannot be log-scaled")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    f_b = np.array([100.0, 125.0, 160.0])
+    rows = tuple({"run_id": f"r{k}", "v_rms_m_s": None,
+                  "acoustics": {"laeq_db": 40.0 + k, "lafmax_db": 45.0 + k,
+                                "loudness_n5_sone": 1.0, "loudness_max_sone": 1.5}}
+                 for k in range(2))
+    nan = np.full(2, np.nan)
+    content = AcousticsContent(rows, (("background", f_b, np.array([30.0, 31.0, 29.0])),),
+                               {"rattle": None, "background": (f_b, np.array([30.0, 31.0, 29.0]))},
+                               nan, np.array([40.0, 41.0]), np.array([45.0, 46.0]),
+                               np.array([1.0, 1.0]), np.array([1.5, 1.5]), None, None,
+                               "a hand-built calibration note", ("free",))
+    (fig,) = acoustics_page(content)
+    FigureCanvasAgg(fig).draw()   # raised ValueError before the note
+    texts = _texts(fig)
+    assert texts.count("no run has an impact velocity and this value") == 2
+    velocity_axes = [ax for ax in fig.axes if ax.get_xlabel().startswith("RMS impact velocity")]
+    assert len(velocity_axes) == 2 and all(ax.get_xscale() == "linear" for ax in velocity_axes)
+    # with one run that has a velocity the panels are drawn on log axes as before
+    one = dataclasses.replace(content, v_rms_m_s=np.array([0.2, np.nan]))
+    (fig,) = acoustics_page(one)
+    FigureCanvasAgg(fig).draw()
+    assert "no run has an impact velocity" not in _texts(fig)
+    assert all(ax.get_xscale() == "log" for ax in fig.axes
+               if ax.get_xlabel().startswith("RMS impact velocity"))
