@@ -473,9 +473,12 @@ def stationary_loudness(third_octave_db: object, *, diffuse: bool = False
     --------
     >>> import numpy as np
     >>> levels = np.full(28, -60.0)
-    >>> levels[17] = 40.0            # 40 dB in the 1 kHz band: 1 sone by definition
-    >>> round(stationary_loudness(levels)[0], 2)
-    1.0
+    >>> levels[16] = 40.0            # 40 dB in the 1 kHz band alone
+    >>> stationary_loudness(levels)[0]
+    0.927
+
+    (A 1 kHz tone at 40 dB is 1 sone: through the band filters it also leaves levels in the
+    neighbouring bands, which this example leaves out.)
     """
     levels = np.asarray(third_octave_db, dtype=float)
     if levels.shape != (N_BANDS,) or not np.all(np.isfinite(levels)):
