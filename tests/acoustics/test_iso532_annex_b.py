@@ -38,8 +38,9 @@ details (gating, timing, phase) were identified from the standard's distributed 
   with its plateau from 123 ms to 131 ms), 1 s long: at most 7 LSB (0.7 % of the 70 dB peak)
   from the files, whose plateau edges lie 0.6 samples away from the round times used here;
   the loudness of these signals and of the files differs by at most 0.013 sone;
-* test signals 2-4 (B.3): steady tones; signal 1 (B.2): third-octave levels printed in the
-  annex.
+* test signals 2-4 (B.3): steady sines starting at phase 0 at t = 0, equal to the files (10 s)
+  within 0.5 LSB; 1 s of each here, which N(t) reaches its steady value well within;
+* test signal 1 (B.2): third-octave levels printed in the annex.
 
 Not generated: the pink noises (signals 5 and 9, random) and the recordings of annex B.5
 (signals 14-25).
