@@ -1,7 +1,9 @@
 """Test signals for ISO 532-1 loudness, and MoSQITo's loudness of them stored as the reference.
 
 :func:`iso532_signals` makes synthetic signals of the kinds of ISO 532-1 annex B.4/B.5 with
-NumPy from their definitions (the standard's own recordings are not distributed).
+NumPy from their definitions, including kinds the annex has no signal of (AM tone, impacts).
+The comparison with the standard's own published results for its annex B test signals is
+``tests/acoustics/test_iso532_annex_b.py``.
 ``tests/data/mosqito_loudness.npz`` holds MoSQITo's ``loudness_zwtv`` of each (free and
 diffuse field): MoSQITo, the reference implementation, runs at about real time in Python
 (36 s for these signals), so the suite compares with its stored output and checks on one
@@ -38,7 +40,8 @@ def iso532_signals() -> dict[str, np.ndarray]:
     100 ms at 70 dB, a 250 Hz tone rising in 10 dB steps from 30 to 80 dB, a 1 kHz tone
     amplitude-modulated at 4 Hz, pink noise at 60 dB, a 100 Hz tone at 80 dB (the
     low-frequency weighting) and decaying impacts in silence (rattle).  All generated here
-    with NumPy from their definitions; the standard's own recordings are not distributed."""
+    with NumPy from their definitions (the annex's own signals, with the standard's results,
+    are in ``tests/acoustics/test_iso532_annex_b.py``)."""
     rng = np.random.default_rng(29)
     out = {"tone_1k_40dB": tone(1000.0, 40.0, 0.6), "tone_1k_60dB": tone(1000.0, 60.0, 0.6),
            "tone_1k_80dB": tone(1000.0, 80.0, 0.6), "tone_100_80dB": tone(100.0, 80.0, 0.6)}

@@ -1,7 +1,8 @@
 """NVH acoustics: calibrated levels (IEC 61672-1), third-octave bands (IEC 61260-1), loudness
-(ISO 532-1) and sharpness (DIN 45692), calibration from calibrator records; impulsiveness
-(ISO/PAS 1996-3), ECMA-418-2 loudness, tonality and roughness (optional package) and the
-rattle per episode against the campaign's background (issue 26).
+(ISO 532-1: time-varying, and stationary from third-octave levels) and sharpness (DIN 45692),
+calibration from calibrator records; impulsiveness (ISO/PAS 1996-3), ECMA-418-2 loudness,
+tonality and roughness (optional package) and the rattle per episode against the campaign's
+background (issue 26).
 
 It depends only on NumPy, SciPy and numba (compiled loudness), not on the rest of the
 package apart from its exceptions, so that every stage after ``records`` may use it.
@@ -17,6 +18,7 @@ if TYPE_CHECKING:
     from ._filters import (NOMINAL_THIRD_OCTAVE_HZ, apply_weighting, band_edges_hz, band_gain,
                            band_mean_squares, weighting_db, weighting_response)
     from ._impulsiveness import Onsets, adjustment_db, find_onsets, laf_db, prominence
+    from ._iso532 import stationary_loudness
     from ._levels import (P_REF_PA, SoundLevels, energy_mean_db, fast_time_weighted, rattle_episodes,
                           sound_levels)
     from ._loudness import Loudness, loudness
@@ -49,6 +51,7 @@ _LAZY: dict[str, str] = {
     "fast_time_weighted": "_levels",
     "rattle_episodes": "_levels",
     "sound_levels": "_levels",
+    "stationary_loudness": "_iso532",
     "Loudness": "_loudness",
     "loudness": "_loudness",
     "RunAcoustics": "_run",
@@ -62,7 +65,7 @@ __all__ = [
     "fast_time_weighted", "loudness", "rattle_episodes", "run_acoustics", "sound_levels",
     "weighting_db", "weighting_response", "energy_mean_db",
     "Ecma418", "Onsets", "adjustment_db", "campaign_background", "ecma418", "ecma418_available",
-    "episode_psychoacoustics", "find_onsets", "laf_db", "prominence",
+    "episode_psychoacoustics", "find_onsets", "laf_db", "prominence", "stationary_loudness",
 ]
 
 

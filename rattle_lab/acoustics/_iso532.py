@@ -37,6 +37,8 @@ import math
 import numba
 import numpy as np
 
+from rattle_lab.exceptions import ParameterError
+
 from ._nl_decay import NL_ITER, _coefficients
 
 #: ISO 532-1 table A.1: the denominators' deviations (a1, a2) from (-2, 1) of the three
@@ -439,4 +441,53 @@ def time_varying_loudness(p48: np.ndarray, *, diffuse: bool = False
     return n_out[:count], spec_sum / max(count, 1)
 
 
-__all__ = ["FS_HZ", "time_varying_loudness"]
+def stationary_loudness(third_octave_db: object, *, diffuse: bool = False
+                        ) -> tuple[float, np.ndarray]:
+    """ISO 532-1 loudness of a stationary sound from its third-octave band levels (clause 5).
+
+    The method for stationary sounds with measured band levels as input: the core loudness
+    of the 20 critical bands (tables A.3-A.7) and the slopes of table A.8, the same steps as
+    each frame of :func:`time_varying_loudness` without the temporal ones.
+
+    Parameters
+    ----------
+    third_octave_db : array_like, shape (28,)
+        Sound pressure levels of the third-octave bands 25 Hz ... 12.5 kHz, dB re 20 uPa.
+    diffuse : bool
+        Diffuse field instead of free (frontal) field.
+
+    Returns
+    -------
+    n_sone : float
+        Total loudness, sone, rounded as the standard prints it (0.001 sone up to 16 sone,
+        0.01 sone above).
+    spec : ndarray, shape (240,)
+        Specific loudness ``N'(z)``, sone/Bark, at z = 0.1, 0.2, ... 24 Bark.
+
+    Raises
+    ------
+    ParameterError
+        For anything but 28 finite levels.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> levels = np.full(28, -60.0)
+    >>> levels[16] = 40.0            # 40 dB in the 1 kHz band alone
+    >>> stationary_loudness(levels)[0]
+    0.927
+
+    (A 1 kHz tone at 40 dB is 1 sone: through the band filters it also leaves levels in the
+    neighbouring bands, which this example leaves out.)
+    """
+    levels = np.asarray(third_octave_db, dtype=float)
+    if levels.shape != (N_BANDS,) or not np.all(np.isfinite(levels)):
+        raise ParameterError(f"`third_octave_db` must be {N_BANDS} finite third-octave levels "
+                             f"(25 Hz ... 12.5 kHz), dB; got shape {levels.shape}")
+    core = np.zeros(N_CORE)
+    spec = np.zeros(N_BARK)
+    _core_loudness(10.0 ** (levels / 10.0), *_core_tables(bool(diffuse)), core)
+    return float(_slopes(core, spec, True)), spec
+
+
+__all__ = ["FS_HZ", "stationary_loudness", "time_varying_loudness"]

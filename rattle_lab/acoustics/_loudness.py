@@ -3,10 +3,11 @@
 :mod:`rattle_lab.acoustics._iso532` implements ISO 532-1 method 1 for time-varying sounds
 (third-octave levels every 0.5 ms, core loudness, nonlinear decay, slopes, temporal
 weighting; output every 2 ms) as one compiled pass over the samples.  MoSQITo
-(``mosqito.sq_metrics.loudness_zwtv``) is its test reference: ``tests/acoustics/test_acoustics.py``
+(``mosqito.sq_metrics.loudness_zwtv``) is one test reference: ``tests/acoustics/test_acoustics.py``
 checks ``N(t)`` against it to ISO 532-1 annex B's tolerances on synthetic annex-B-like
 signals, and the standard's anchors (1 kHz tone at 40 dB -> 1 sone, 60 dB -> 4 sone) and
-the DIN 45692 reference sound (1 acum).
+the DIN 45692 reference sound (1 acum).  ``tests/acoustics/test_iso532_annex_b.py`` checks
+it against the standard's own published results for its annex B.2-B.4 test signals.
 
 * ``N5``: the loudness exceeded 5 % of the time (the 95th percentile of ``N(t)``),
   ``Nmax`` its maximum, sone.

@@ -59,6 +59,8 @@ PACKAGES: dict[str, list[str]] = {
         # issue 26: impulsiveness, ECMA-418-2, episodes against the campaign's background
         "Ecma418", "Onsets", "adjustment_db", "campaign_background", "ecma418", "ecma418_available",
         "episode_psychoacoustics", "find_onsets", "laf_db", "prominence",
+        # issue 26 item 5: ISO 532-1 stationary loudness from third-octave levels (annex B.2)
+        "stationary_loudness",
     ],
     "rattle_lab.exchange": ["UFF_TYPE_OF_QUANTITY", "export_uff", "uff_sets"],
     "rattle_lab.model.analysis": [
