@@ -20,7 +20,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import signal
 
 from rattle_lab.exceptions import ParameterError
 from ._filters import apply_weighting, band_mean_squares
@@ -81,6 +80,8 @@ def fast_time_weighted(mean_square_in: np.ndarray, fs_hz: float,
 
     ``a = exp(-1 / (fs tau))``: the sampled first-order lag of IEC 61672-1, from rest.
     """
+    from scipy import signal   # here: scipy.signal costs about 1 s to import
+
     a = float(np.exp(-1.0 / (fs_hz * tau_s)))
     return signal.lfilter([1.0 - a], [1.0, -a], np.asarray(mean_square_in, dtype=float))
 

@@ -26,7 +26,6 @@ from fractions import Fraction
 from typing import Any, Literal
 
 import numpy as np
-from scipy import signal
 
 from rattle_lab.exceptions import ParameterError
 from ._iso532 import time_varying_loudness
@@ -68,6 +67,8 @@ def _at_48k(p: np.ndarray, fs_hz: float) -> np.ndarray:
     ratio = Fraction(_FS_LOUDNESS_HZ / fs_hz).limit_denominator(1000)
     if abs(float(ratio) * fs_hz - _FS_LOUDNESS_HZ) > 1e-6 * _FS_LOUDNESS_HZ:
         raise ParameterError(f"cannot resample {fs_hz} Hz to 48 kHz by a ratio of small integers")
+    from scipy import signal   # here: scipy.signal costs about 1 s to import
+
     return signal.resample_poly(p, ratio.numerator, ratio.denominator)
 
 

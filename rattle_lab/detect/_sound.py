@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, n_samples_of, parabolic_peak
@@ -161,6 +160,8 @@ def cross_correlation_delay(cause: object, response: object, fs_hz: float, *,
     if envelope:
         x, y = np.abs(x - np.mean(x)), np.abs(y - np.mean(y))
     x, y = x - np.mean(x), y - np.mean(y)
+    from scipy import signal   # here: scipy.signal costs about 1 s to import
+
     corr = signal.correlate(y, x, mode="full", method="fft")
     lags = signal.correlation_lags(y.size, x.size, mode="full")
     k_lo = n_samples_of(min_lag_s, fs_hz, name="min_lag_s")

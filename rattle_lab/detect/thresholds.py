@@ -30,7 +30,6 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
-from scipy import signal
 
 from rattle_lab.detect._common import as_signal
 from rattle_lab.exceptions import ParameterError
@@ -71,6 +70,8 @@ def fundamental_amplitude(x: object, fs_hz: float, freq_hz: float, *,
         raise ParameterError(f"`lowpass_hz` must be in (0, fs_hz/2), was {cutoff}")
     t = np.arange(xs.size) / fs_hz
     z = xs * np.exp(-2j * np.pi * freq_hz * t)
+    from scipy import signal   # here: scipy.signal costs about 1 s to import
+
     sos = signal.butter(order, cutoff, fs=fs_hz, output="sos")
     if xs.size <= 3 * (2 * sos.shape[0] + 1):
         raise ParameterError(f"`x` has {xs.size} samples, too few for the low-pass")

@@ -61,3 +61,17 @@ def test_fit_start_up_imports_only_what_fit_runs(tmp_path) -> None:
             "rattle_lab.explorer", "rattle_lab.rig", "distributed", "mosqito")
     eager = sorted(n for n in names if n.startswith(lazy))
     assert eager == [], f"`rattle-lab fit` imported {eager[:10]}"
+
+
+def test_the_report_does_not_import_scipy_signal() -> None:
+    # `rattle-lab report` reads stored results and draws them: scipy.signal (about 1 s to
+    # import, 20 % of a small report's time) is imported inside the functions that filter
+    # samples, not by the modules the report imports for their helpers (energy_mean_db)
+    import sys
+
+    code = ("import sys, rattle_lab.workflow._report, rattle_lab.acoustics._levels, "
+            "rattle_lab.detect._sound, rattle_lab.detect.thresholds, "
+            "rattle_lab.acoustics._loudness; print('scipy.signal' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, check=True)
+    assert out.stdout.strip() == "False"
