@@ -38,7 +38,10 @@ from rattle_lab.store import ingest  # noqa: E402
 from rattle_lab.workflow import fit_store  # noqa: E402
 
 
-def campaign(folder: Path, seed: int, zeta_j: float) -> tuple[Path, Chain]:
+def campaign(folder: Path, seed: int, zeta_j: float, ringing: bool = True
+             ) -> tuple[Path, Chain]:
+    """The campaign, ingested; ``ringing=False``: the vibrometer on a nodal line of the modes
+    (``benchmarks/ringing_cost.py`` compares the two)."""
     plant = Plant()
 
     def grazing(f: float) -> float:
@@ -55,10 +58,11 @@ def campaign(folder: Path, seed: int, zeta_j: float) -> tuple[Path, Chain]:
                      "levels": np.linspace(1.5 * grazing(f), 0.3 * grazing(f), n)})
     runs.append({"run_id": "dwell_97", "protocol": "sine_dwell", "freq_hz": 97.0,
                  "levels": np.full(100, 1.3 * grazing(97.0))})
-    chain = Chain(ring_zeta=(zeta_j,) * 3)
-    write_campaign(folder / "c.h5", plant, chain, runs, seed=seed)
-    ingest([folder / "c.h5"], folder / "s.h5", quiet=True)
-    return folder / "s.h5", chain
+    chain = Chain(ring_zeta=(zeta_j,) * 3, ring_in_velocity=ringing)
+    name = "ringing" if ringing else "quiet"
+    write_campaign(folder / f"{name}.h5", plant, chain, runs, seed=seed)
+    ingest([folder / f"{name}.h5"], folder / f"{name}_store.h5", quiet=True)
+    return folder / f"{name}_store.h5", chain
 
 
 def main() -> None:
