@@ -143,13 +143,13 @@ def listener_page(v: np.ndarray, m: ListenerMetrics) -> Figure:
     return fig
 
 
-def _log_axes(ax: Any, v: np.ndarray, y: np.ndarray | None) -> None:
-    """Log velocity axis (and log ``y`` axis where ``y`` is given) labelled for reading; a
-    note instead where there is no point to draw (a log axis without data cannot draw)."""
+def _log_axes(ax: Any, v: np.ndarray, y: np.ndarray | None,
+              note: str = "no run has an impact velocity and this value\n"
+                          "(no impacts detected: see the summary's flags)") -> None:
+    """Log velocity axis (and log ``y`` axis where ``y`` is given) labelled for reading;
+    ``note`` instead where there is no point to draw (a log axis without data cannot draw)."""
     if not v.size:
-        ax.text(0.5, 0.5, "no run has an impact velocity and this value\n"
-                "(no impacts detected: see the summary's flags)", ha="center", va="center",
-                fontsize=8, transform=ax.transAxes)
+        ax.text(0.5, 0.5, note, ha="center", va="center", fontsize=8, transform=ax.transAxes)
         ax.set_xticks([])
         ax.set_yticks([])
         return
@@ -168,17 +168,8 @@ def _velocity_axis(ax: Any, v: np.ndarray, ok: np.ndarray,
     velocity and a value (a log axis cannot be drawn without data)."""
     ax.set_xlabel("RMS impact velocity of the run (m/s)")
     drawn = ok & np.any([np.isfinite(y) for y in values], axis=0)
-    if not drawn.any():
-        ax.text(0.5, 0.5, "no run has both an impact velocity and this value\n"
-                "(see the flags above)", ha="center", va="center", fontsize=8,
-                transform=ax.transAxes)
-        ax.set_xticks([])
-        ax.set_yticks([])
-        return
-    ax.set_xscale("log")
-    _label_log_axis(ax.xaxis, v[drawn])
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
+    _log_axes(ax, v[drawn], None, note="no run has both an impact velocity and this value\n"
+                                       "(see the flags above)")
 
 
 def _label_log_axis(axis: Any, values: np.ndarray) -> None:
