@@ -81,6 +81,23 @@ def _release_signals(previous: set[int | signal.Signals] | None) -> None:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
+def check_output_path(target: str | os.PathLike[str]) -> Path:
+    """The directory ``target`` will be written in; refused before any work is done.
+
+    Raises
+    ------
+    OutputError
+        If the directory does not exist or ``target`` is a directory: one line naming it.
+    """
+    target = Path(target)
+    directory = target.parent if str(target.parent) else Path(".")
+    if not directory.is_dir():
+        raise OutputError(f"{target}: output directory {directory} does not exist")
+    if target.is_dir():
+        raise OutputError(f"{target}: is a directory; give a file name for the output")
+    return directory
+
+
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike[str], suffix: str | None = None) -> Iterator[Path]:
     """Yield a temporary path; on success rename it onto ``target``.
@@ -104,11 +121,7 @@ def atomic_path(target: str | os.PathLike[str], suffix: str | None = None) -> It
         folder, full disk): one line naming the target.
     """
     target = Path(target)
-    directory = target.parent if str(target.parent) else Path(".")
-    if not directory.is_dir():
-        raise OutputError(f"{target}: output directory {directory} does not exist")
-    if target.is_dir():
-        raise OutputError(f"{target}: is a directory; give a file name for the output")
+    directory = check_output_path(target)
     remove_stale_temporaries(directory)
     # Ctrl-C and SIGTERM are held from the temporary file's creation until the clean-up below
     # is in place (a signal in between left the file behind); one that came meanwhile lands

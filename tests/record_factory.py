@@ -126,3 +126,42 @@ def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[
     env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
     return subprocess.run([str(RATTLE_LAB), *args], capture_output=True, text=True, cwd=cwd,
                           env=env, timeout=120)
+
+
+def run_command(*args: str) -> subprocess.CompletedProcess[str]:
+    """Run one ``rattle-lab`` command in this process: :func:`rattle_lab.cli.main`, the code
+    behind the entry point, from argument parsing to the exit status and the one-line errors.
+
+    For the tests of what a command computes (a chain's fit, a reader's refusal): they pay
+    the command's work but not a new interpreter's start (about 3 s of imports and numba's
+    start for ``fit``, most of such a test's time).  What only a process shows (the installed
+    script, signals, a terminal, concurrent writers, another folder) stays in ``tests/cli``
+    and the store tests, through :func:`run_cli`.  Warnings are filtered as in a fresh
+    interpreter and printed to the captured stderr, as the entry point would, not raised by
+    the suite's warning filter.
+    """
+    import contextlib
+    import io
+    import warnings
+
+    from rattle_lab.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+
+    def show(message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
+        err.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
+            warnings.catch_warnings():
+        # the filters of a fresh interpreter (Python's defaults), printed to the stderr
+        warnings.simplefilter("default")
+        for quiet in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
+                      ResourceWarning):
+            warnings.simplefilter("ignore", quiet)
+        warnings.showwarning = show
+        try:
+            code = main(list(args))
+        except SystemExit as exc:  # argparse's usage errors
+            code = exc.code if isinstance(exc.code, int) else 2
+    return subprocess.CompletedProcess(["rattle-lab", *args], code, out.getvalue(),
+                                       err.getvalue())

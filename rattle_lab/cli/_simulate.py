@@ -25,6 +25,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _run(args: argparse.Namespace) -> int:
+    from rattle_lab._atomic import check_output_path
+
+    check_output_path(args.output)  # a bad output is refused before anything is imported
     from rattle_lab.rig import load_scene
 
     scene = load_scene(args.scene)  # refused (SceneError) before the simulator is imported

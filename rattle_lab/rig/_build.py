@@ -8,13 +8,12 @@ import math
 import os
 from dataclasses import dataclass
 from datetime import datetime, timedelta
-from pathlib import Path
 
 import numpy as np
 
 from rattle_lab._progress import progress
 from rattle_lab._version import __version__
-from rattle_lab.exceptions import OutputError
+from rattle_lab._atomic import check_output_path
 from rattle_lab.model.plate import Plate
 from rattle_lab.records import (Channel, ImpactTable, Record, Rig, Run, Sensor, ThresholdTable,
                                 Truth, as_source, scale_to_si, write_record)
@@ -366,12 +365,10 @@ def write_synthetic(scene: Scene | str | os.PathLike[str], output: str | os.Path
     SceneError
         If the scene is invalid.
     OutputError
-        If the output directory does not exist or the file cannot be written.
+        If the output directory does not exist, the output is a directory (both refused
+        before simulating), or the file cannot be written.
     """
-    output = Path(output)
-    directory = output.parent if str(output.parent) else Path(".")
-    if not directory.is_dir():   # fail before simulating, not after
-        raise OutputError(f"{output}: output directory {directory} does not exist")
+    check_output_path(output)   # fail before simulating, not after
     result = synthesize(scene, seed=seed, counter=counter, quiet=quiet)
     write_record(output, result.record)
     return result

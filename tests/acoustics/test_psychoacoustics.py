@@ -183,9 +183,9 @@ def test_uncalibrated_microphone_gives_no_loudness_but_a_flag():
     assert unc["impacts_per_s"] == pytest.approx(cal["impacts_per_s"], rel=1e-12)
 
 
-@pytest.mark.slow  # the installed CLI: ingest and fit (~15-60 s on a loaded machine)
+@pytest.mark.slow  # the CLI's ingest and fit
 def test_fit_json_has_the_psychoacoustic_keys(tmp_path):
-    # The installed CLI on a record made here: a microphone hearing a steady 1 kHz tone of
+    # `rattle-lab ingest` and `fit` on a record made here: a microphone hearing a steady 1 kHz tone of
     # 70 dB SPL (faded in over 50 ms) beside a plate that never reaches the striker.  No
     # impact: the whole run is background, whose ISO 532-1 N5 is the tone's
     # 2^((70 - 40)/10) = 8 sone (+-3 %: the standard's tables' rounding, as in
@@ -194,7 +194,7 @@ def test_fit_json_has_the_psychoacoustic_keys(tmp_path):
 
     from rattle_lab.records import Channel, Record, Run, write_record
 
-    from record_factory import plate_rig, run_cli
+    from record_factory import plate_rig, run_command
 
     n = int(1.0 * FS)
     t = np.arange(n) / FS
@@ -209,8 +209,8 @@ def test_fit_json_has_the_psychoacoustic_keys(tmp_path):
         start_time_iso="2024-03-01T14:10:00Z")
     src = write_record(tmp_path / "rec.h5", Record("tone", "measured", plate_rig(), (run,)))
     store = tmp_path / "store.h5"
-    assert run_cli("ingest", str(src), "-o", str(store), "--quiet").returncode == 0
-    proc = run_cli("fit", str(store), "--json", "--quiet")
+    assert run_command("ingest", str(src), "-o", str(store), "--quiet").returncode == 0
+    proc = run_command("fit", str(store), "--json", "--quiet")
     assert proc.returncode == 0, proc.stderr
     (row,) = json.loads(proc.stdout)["runs"]
     ac = row["acoustics"]

@@ -26,7 +26,7 @@ from independent_campaign import Chain, Plant, iir_dc_delay_s, measure, write_ca
 from rattle_lab.detect import detect_impacts
 from rattle_lab.detect._timing import channel_delay, coarse_lag, measurand_share
 from rattle_lab.store import ingest
-from record_factory import run_cli
+from record_factory import run_command
 
 
 def _grazing_ms2(plant: Plant, f_hz: float) -> float:
@@ -184,7 +184,7 @@ def test_schema_v1_nothing_declared_through_the_cli(tmp_path, measurand):
     write_campaign(path, plant, chain, runs, seed=3)
     store = tmp_path / "s.h5"
     ingest([path], store, quiet=True)
-    proc = run_cli("fit", str(store), "--json", "--quiet")
+    proc = run_command("fit", str(store), "--json", "--quiet")
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     flags = out["data_quality"]

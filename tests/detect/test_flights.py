@@ -232,15 +232,15 @@ def test_analyse_run_default_measures_the_ringing_share_on_a_written_record(tmp_
     np.testing.assert_array_equal(local.impacts.e, auto.impacts.e)   # the logs keep raw ratios
 
 
-def test_fit_pools_the_runs_shares_through_the_installed_cli(tmp_path, record):
-    """Three runs of the generator (noise seeds 3-5) in one file, ingested and fitted by the
-    installed ``rattle-lab``: e from the ratios within 3 % of the truth, the share and its
-    runs reported with the note; with ``velocity_model = "local"`` the ratios stay > 10 %
-    high.  (Tolerances as in the single-run test above.)"""
+def test_fit_pools_the_runs_shares_through_the_cli(tmp_path, record):
+    """Three runs of the generator (noise seeds 3-5) in one file, ingested and fitted by
+    ``rattle-lab ingest`` and ``fit`` (in this process, :func:`record_factory.run_command`):
+    e from the ratios within 3 % of the truth, the share and its runs reported with the
+    note; with ``velocity_model = "local"`` the ratios stay > 10 % high.  (Tolerances as in
+    the single-run test above.)"""
     import json
-    import subprocess
-    import sys
-    from pathlib import Path
+
+    from record_factory import run_command
 
     from rattle_lab.records import Record, read, write_record
 
@@ -251,16 +251,16 @@ def test_fit_pools_the_runs_shares_through_the_installed_cli(tmp_path, record):
         runs.append(dataclasses.replace(r, run_id=f"dwell_082_s{seed}"))
     first = read(tmp_path / "s3.h5")
     path = write_record(tmp_path / "campaign.h5", Record("campaign", "measured", first.rig, runs))
-    exe = Path(sys.executable).with_name("rattle-lab")
     out = {}
     store = tmp_path / "store.h5"   # one store: each fit reads the records, and its JSON is read
-    subprocess.run([str(exe), "ingest", str(path), "-o", str(store), "--quiet"], check=True)
+    proc = run_command("ingest", str(path), "-o", str(store), "--quiet")
+    assert proc.returncode == 0, proc.stderr
     for model in ("auto", "local"):
         pipe = tmp_path / f"{model}.toml"
         pipe.write_text(f'[detect]\nvelocity_model = "{model}"\n')
-        res = subprocess.run([str(exe), "fit", str(store), "--pipeline", str(pipe), "--json",
-                              "--quiet"], check=True, capture_output=True, text=True)
-        out[model] = json.loads(res.stdout)["fits"]["restitution_ratio"]
+        proc = run_command("fit", str(store), "--pipeline", str(pipe), "--json", "--quiet")
+        assert proc.returncode == 0, proc.stderr
+        out[model] = json.loads(proc.stdout)["fits"]["restitution_ratio"]
     auto, local = out["auto"], out["local"]
     assert abs(auto["value"] / E_TRUE - 1) < 0.03, auto
     assert auto["ringing_runs"] == 3

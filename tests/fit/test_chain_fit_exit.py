@@ -1,8 +1,8 @@
 """Issue 15, part E: a fit in which every run is skipped ends with exit 2 and the reasons.
 
 ``synthetic/threshold_only.toml`` records only the base accelerometer: no run has a plate
-channel to detect impacts on, so nothing can be fitted, and the installed ``rattle-lab
-fit`` says so (it used to exit 0).
+channel to detect impacts on, so nothing can be fitted, and ``rattle-lab fit`` says so (it
+used to exit 0).
 """
 
 from __future__ import annotations
@@ -13,14 +13,14 @@ import h5py
 import pytest
 
 from rattle_lab.store import ingest, read_results
-from record_factory import run_cli
+from record_factory import run_command
 
 
 def test_fit_with_every_run_skipped_exits_2_with_the_reasons(synthetic_threshold_record,
                                                               tmp_path):
     store = tmp_path / "store.h5"
     ingest([synthetic_threshold_record], store, quiet=True)
-    proc = run_cli("fit", str(store), "--json")
+    proc = run_command("fit", str(store), "--json")
     assert proc.returncode == 2
     out = json.loads(proc.stdout)          # the summary is still printed (nothing is lost)
     assert out["n_ok"] == 0 and len(out["skipped"]) == out["n_runs"] > 0
@@ -38,7 +38,7 @@ def test_fit_with_some_runs_analysed_exits_0(small_campaign_record, tmp_path):
     # and fits, which is what this exit status and these notes depend on
     store = tmp_path / "store.h5"
     ingest([small_campaign_record], store, quiet=True)
-    proc = run_cli("fit", str(store), "--quiet")
+    proc = run_command("fit", str(store), "--quiet")
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ""
     # the default scene's rig carries the plate's participation (about 1.24, not 1.0), and

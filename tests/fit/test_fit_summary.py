@@ -26,7 +26,7 @@ from rattle_lab.workflow import fit_store
 from rattle_lab.records import write_record
 from rattle_lab.rig._handbuilt import synthetic_campaign
 from rattle_lab.store import ingest, read_results
-from record_factory import run_cli
+from record_factory import run_command
 
 PROFILE = settings(max_examples=150, deadline=None, derandomize=True,
                    suppress_health_check=[HealthCheck.too_slow])
@@ -316,7 +316,7 @@ def test_one_class_per_fit(fitted):
 
 def test_cli_json_is_the_summary_dict(fitted):
     store, result, _ = fitted
-    proc = run_cli("fit", str(store), "--participation", "1.2", "--json", "--quiet")
+    proc = run_command("fit", str(store), "--participation", "1.2", "--json", "--quiet")
     assert proc.returncode == 0 and proc.stderr == ""
     out = json.loads(proc.stdout)
     assert out["schema_version"] == SUMMARY_SCHEMA_VERSION

@@ -16,7 +16,7 @@ import pytest
 
 from rattle_lab.exceptions import SchemaError
 from rattle_lab.records import read
-from record_factory import run_cli
+from record_factory import run_command
 
 G0 = 9.80665
 FS_HZ = 10000.0
@@ -123,11 +123,11 @@ def test_negative_gain_is_refused(tmp_path):
 
 
 def test_ingested_counts_read_back_in_si_from_the_store(tmp_path):
-    # Through the installed CLI: the store keeps the counts (linked) and the reader of the
+    # Through `rattle-lab ingest`: the store keeps the counts (linked) and the reader of the
     # store applies gain and offset.
     path = _write(tmp_path / "adc.h5")
     store = tmp_path / "store.h5"
-    proc = run_cli("ingest", str(path), "-o", str(store))
+    proc = run_command("ingest", str(path), "-o", str(store))
     assert proc.returncode == 0, proc.stderr
     from rattle_lab.store import open_stored_record, read_catalogue
     cat = read_catalogue(store)

@@ -27,7 +27,7 @@ from rattle_lab.records._chain import (FLAG_PARTICIPATION_ASSUMED, FLAG_POISSON_
                                        rig_participation)
 from rattle_lab.records._model import Rig
 from rattle_lab.store import read_results
-from record_factory import make_record, run_cli
+from record_factory import make_record, run_command
 
 ROOT = Path(__file__).resolve().parents[2]
 THESIS_PLATE = ["--a", "0.254", "--b", "0.2286", "--h", "0.001", "--E", "7e10", "--nu", "0.34",
@@ -42,14 +42,14 @@ def test_thesis_plate_is_105_5_hz_with_the_thesis_edges_through_the_cli():
     # Tolerance 0.5 %: Leissa's lambda has three digits and, like every beam-function Ritz
     # value with a free edge, sits above the converged value: the converged Ritz solver gives
     # 27.31 (0.33 % below 27.4; issue 13).  The other edge reading is 20 % away.
-    proc = run_cli("model", "plate", *THESIS_PLATE, "--edges", "CFCF", "--modes", "1", "--json")
+    proc = run_command("model", "plate", *THESIS_PLATE, "--edges", "CFCF", "--modes", "1", "--json")
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["edge_order"] == list(EDGE_ORDER)
     assert out["modes"][0]["lambda"] == pytest.approx(27.4, rel=5e-3)
     assert out["modes"][0]["f_hz"] == pytest.approx(105.5, rel=5e-3)
     # the other reading of the four letters (length-b sides clamped) is another plate
-    other = json.loads(run_cli("model", "plate", *THESIS_PLATE, "--edges", "FCFC", "--modes",
+    other = json.loads(run_command("model", "plate", *THESIS_PLATE, "--edges", "FCFC", "--modes",
                                "1", "--json").stdout)
     assert other["modes"][0]["f_hz"] < 90.0
 
@@ -72,7 +72,7 @@ def test_rig_participation_from_the_plate_geometry_matches_model_scale():
     # The record's CFCF geometry goes through the same plate model as `model scale`.
     rig = Rig("plate_striker", plate_length_m=0.254, plate_width_m=0.2286, edge_conditions="CFCF",
               plate_poisson_ratio=0.34)
-    proc = run_cli("model", "scale", *THESIS_PLATE, "--edges", "CFCF", "--gap", "0.001",
+    proc = run_command("model", "scale", *THESIS_PLATE, "--edges", "CFCF", "--gap", "0.001",
                    "--accel", "1.0", "--json")
     assert proc.returncode == 0, proc.stderr
     expected = json.loads(proc.stdout)["participation"]
@@ -174,7 +174,7 @@ def stores(tmp_path_factory):
 
 def test_fit_takes_the_participation_from_the_record(stores):
     out, pipeline, truth = stores
-    proc = run_cli("fit", str(out["declared"]), "--pipeline", str(pipeline), "--json")
+    proc = run_command("fit", str(out["declared"]), "--pipeline", str(pipeline), "--json")
     assert proc.returncode == 0, proc.stderr
     res = json.loads(proc.stdout)
     assert res["participation"] == {"value": 1.2, "source": "rig modal_participation"}
@@ -191,7 +191,7 @@ def test_fit_takes_the_participation_from_the_record(stores):
 
 def test_fit_without_participation_assumes_one_and_flags_it(stores):
     out, pipeline, truth = stores
-    proc = run_cli("fit", str(out["bare"]), "--pipeline", str(pipeline))
+    proc = run_command("fit", str(out["bare"]), "--pipeline", str(pipeline))
     assert proc.returncode == 0, proc.stderr
     assert "data-quality flag: participation_assumed" in proc.stdout
     assert re.search(r"participation Q1/Q2 = 1 \(assumed\)", proc.stdout)
@@ -202,7 +202,7 @@ def test_fit_without_participation_assumes_one_and_flags_it(stores):
     # what the flag warns of: only gap/participation is identified, the gap is 1/1.2 of truth
     assert res["fits"]["grazing"]["gap_m"]["value"] == pytest.approx(truth.gap_m / 1.2, rel=0.02)
     # the command line overrides and removes the flag
-    over = json.loads(run_cli("fit", str(out["bare"]), "--pipeline", str(pipeline),
+    over = json.loads(run_command("fit", str(out["bare"]), "--pipeline", str(pipeline),
                               "--participation", "1.2", "--json").stdout)
     assert over["participation"] == {"value": 1.2, "source": "command line"}
     assert not [f for f in over["data_quality"] if "participation" in f]
@@ -211,7 +211,7 @@ def test_fit_without_participation_assumes_one_and_flags_it(stores):
 
 def test_fit_rejects_a_bad_participation_on_the_command_line(stores):
     out, _, _ = stores
-    proc = run_cli("fit", str(out["bare"]), "--participation", "0")
+    proc = run_command("fit", str(out["bare"]), "--participation", "0")
     assert proc.returncode == 2
     assert "participation" in proc.stderr and "Traceback" not in proc.stderr
 
@@ -227,7 +227,7 @@ def test_group_delay_longer_than_a_forcing_period_is_refused(tmp_path):
     with pytest.raises(SchemaError, match=r"attribute 'group_delay_s': 0\.018 s is not less than "
                                           r"a forcing period of the run \(0\.0106383 s\)"):
         read(path)
-    proc = run_cli("ingest", str(path), "-o", str(tmp_path / "s.h5"))
+    proc = run_command("ingest", str(path), "-o", str(tmp_path / "s.h5"))
     assert proc.returncode == 2 and "group_delay_s" in proc.stderr
     assert "Traceback" not in proc.stderr
 

@@ -20,7 +20,7 @@ from nptdms import ChannelObject, GroupObject, RootObject, TdmsWriter
 from rattle_lab.exceptions import FileFormatError, RattleLabError
 from rattle_lab.records import read
 from rattle_lab.records._errors import MappingError
-from record_factory import run_cli
+from record_factory import run_command
 from test_readers import MAT_MAPPING, make_mat
 
 
@@ -154,7 +154,7 @@ def test_each_reader_refuses_what_it_does_not_handle_in_one_line(tmp_path, make,
     assert path.name in message or (mapping is not None and mapping.name in message)
     # the CLI: the same line, exit 2, no traceback
     args = ["ingest", str(path), "-o", str(tmp_path / "s.h5")]
-    proc = run_cli(*args, *(["--mapping", str(mapping)] if mapping is not None else []))
+    proc = run_command(*args, *(["--mapping", str(mapping)] if mapping is not None else []))
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
     assert path.name in proc.stderr or (mapping is not None and mapping.name in proc.stderr)

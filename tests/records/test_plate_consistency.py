@@ -29,7 +29,7 @@ from rattle_lab.records._chain import (FLAG_PARTICIPATION_ASSUMED, PlateF1,
 from rattle_lab.records._convert import edges_from_v1, edges_to_v1
 from rattle_lab.rig._handbuilt import synthetic_campaign
 from rattle_lab.store import ingest, open_stored_record, read_catalogue, read_results
-from record_factory import make_record, run_cli
+from record_factory import make_record, run_command
 
 A, B, H = 0.254, 0.2286, 0.00096
 E, RHO, NU = 7.0e10, 2700.0, 0.33      # the plate model's aluminium; nu assumed (v1)
@@ -157,7 +157,7 @@ def v1_stores(tmp_path_factory):
 
 
 def _fit(store, pipeline) -> dict:
-    proc = run_cli("fit", str(store), "--pipeline", str(pipeline), "--json")
+    proc = run_command("fit", str(store), "--pipeline", str(pipeline), "--json")
     assert proc.returncode == 0, proc.stderr
     return json.loads(proc.stdout)
 
@@ -176,7 +176,7 @@ def test_fit_of_a_v1_file_uses_the_v1_plate_and_finds_it_consistent(v1_stores):
 def test_fit_flags_a_plate_model_that_disagrees_and_does_not_use_its_participation(
         v1_stores):
     out, pipeline, truth = v1_stores
-    text = run_cli("fit", str(out["FCFC"]), "--pipeline", str(pipeline))
+    text = run_command("fit", str(out["FCFC"]), "--pipeline", str(pipeline))
     assert text.returncode == 0, text.stderr
     assert "data-quality flag: plate_model_disagrees" in text.stdout
     res = read_results(out["FCFC"]).summary   # what that fit wrote (what --json prints)
@@ -198,7 +198,7 @@ def test_fit_flags_a_plate_model_that_disagrees_and_does_not_use_its_participati
 def test_a_declared_participation_is_kept_and_the_disagreement_still_flagged(v1_stores,
                                                                             tmp_path):
     out, pipeline, _ = v1_stores
-    proc = run_cli("fit", str(out["FCFC"]), "--pipeline", str(pipeline), "--participation",
+    proc = run_command("fit", str(out["FCFC"]), "--pipeline", str(pipeline), "--participation",
                    "1.2", "--json")
     assert proc.returncode == 0, proc.stderr
     res = json.loads(proc.stdout)

@@ -28,7 +28,7 @@ from conftest import realdata
 
 from rattle_lab.records import read
 from rattle_lab.records._readers.lvm import LvmHeaderWarning, parse_lvm
-from record_factory import run_cli
+from record_factory import run_command
 
 ROOT = Path(__file__).resolve().parents[2]
 MAPPINGS = ROOT / "data_schema" / "mappings"
@@ -44,7 +44,7 @@ def _bracket(x: np.ndarray, fs: float, t0: float, quiet: slice, after: int) -> t
 
 
 def _fit(store: Path, *extra: str) -> dict:
-    proc = run_cli("fit", str(store), "--json", "--quiet", *extra)
+    proc = run_command("fit", str(store), "--json", "--quiet", *extra)
     assert proc.returncode == 0, proc.stderr
     return json.loads(proc.stdout)
 
@@ -52,7 +52,7 @@ def _fit(store: Path, *extra: str) -> dict:
 def test_droptable_one_shock_per_channel_at_its_onset(tmp_path):
     lvm = realdata("droptable/Test_001.lvm")
     store = tmp_path / "drop.h5"
-    proc = run_cli("ingest", str(lvm), "--mapping", str(MAPPINGS / "droptable_lvm.toml"),
+    proc = run_command("ingest", str(lvm), "--mapping", str(MAPPINGS / "droptable_lvm.toml"),
                    "-o", str(store))
     assert proc.returncode == 0, proc.stderr
     out = _fit(store)
@@ -74,7 +74,7 @@ def test_droptable_one_shock_per_channel_at_its_onset(tmp_path):
     # the board answers the table within a millisecond (README: base-to-board delay)
     assert 0.0 <= rows["board"]["delay_s"] < 1e-3
     # the table: no rattle fits are attempted on a store of single shocks
-    table = run_cli("fit", str(store), "--quiet").stdout
+    table = run_command("fit", str(store), "--quiet").stdout
     assert "transient records only (single shocks)" in table and "not fitted" not in table
     assert "participation" not in table
 
@@ -89,7 +89,7 @@ def test_hammer_folder_detects_on_the_force_and_pairs_the_response(tmp_path):
         scaled[1:] *= 1.0 + 0.1 * k
         np.save(hits / f"hit_{k:02d}.npy", scaled)
     store = tmp_path / "hammer.h5"
-    proc = run_cli("ingest", *sorted(str(p) for p in hits.iterdir()), "--mapping",
+    proc = run_command("ingest", *sorted(str(p) for p in hits.iterdir()), "--mapping",
                    str(MAPPINGS / "hammer_npy.toml"), "-o", str(store))
     assert proc.returncode == 0, proc.stderr          # no "run id already ingested"
     out = _fit(store)
@@ -158,7 +158,7 @@ def test_forced_shock_one_shock_per_accelerometer_none_in_the_sine(tmp_path):
     store = tmp_path / "forced.h5"
     # the quality scan flags the commanded pulse's exact zeros as clipping (and the two
     # clocks): ingested with the flags kept
-    proc = run_cli("ingest", str(lvm), "--mapping", str(MAPPINGS / "forced_shock_lvm.toml"),
+    proc = run_command("ingest", str(lvm), "--mapping", str(MAPPINGS / "forced_shock_lvm.toml"),
                    "-o", str(store), "--allow-flagged")
     assert proc.returncode == 0, proc.stderr
     out = _fit(store)

@@ -16,7 +16,7 @@ from rattle_lab.exceptions import FileFormatError
 from rattle_lab.store import open_stored_record, read_catalogue
 from rattle_lab.records import Channel, Record, Run, detect_format, read, write_record
 
-from record_factory import plate_rig, run_cli
+from record_factory import plate_rig, run_command
 
 FS = 25600.0
 
@@ -86,12 +86,12 @@ def _record() -> Record:
 def test_export_round_trip_and_ingest_of_the_export(tmp_path):
     src = write_record(tmp_path / "rec.h5", _record())
     store = tmp_path / "store.h5"
-    assert run_cli("ingest", str(src), "-o", str(store), "--quiet").returncode == 0
-    fitted = run_cli("fit", str(store), "--json", "--quiet")
+    assert run_command("ingest", str(src), "-o", str(store), "--quiet").returncode == 0
+    fitted = run_command("fit", str(store), "--json", "--quiet")
     assert fitted.returncode == 0, fitted.stderr
     bands = json.loads(fitted.stdout)["runs"][0]["acoustics"]["third_octave_db"]
     out = tmp_path / "runs.uff"
-    proc = run_cli("export", str(store), "-o", str(out))
+    proc = run_command("export", str(store), "-o", str(out))
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == str(out) and "UFF 58 datasets" in proc.stderr
 
@@ -119,14 +119,14 @@ def test_export_round_trip_and_ingest_of_the_export(tmp_path):
         assert got[round(float(label), 3)] == pytest.approx(db, abs=1e-9)
     # and the export is an input format: it ingests into a new store
     store2 = tmp_path / "store2.h5"
-    proc = run_cli("ingest", str(out), "-o", str(store2), "--quiet")
+    proc = run_command("ingest", str(out), "-o", str(store2), "--quiet")
     assert proc.returncode == 0, proc.stderr
 
 
 def test_export_of_a_non_store_is_one_line_exit_2(tmp_path):
     bogus = tmp_path / "x.h5"
     bogus.write_bytes(b"not hdf5")
-    proc = run_cli("export", str(bogus), "-o", str(tmp_path / "o.uff"))
+    proc = run_command("export", str(bogus), "-o", str(tmp_path / "o.uff"))
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
     assert not (tmp_path / "o.uff").exists()

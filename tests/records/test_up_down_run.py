@@ -13,7 +13,7 @@ import pytest
 
 from rattle_lab.exceptions import SchemaError
 from rattle_lab.records import read
-from record_factory import run_cli
+from record_factory import run_command
 
 FS_DRIVE_HZ = 5000.0
 FS_VEL_HZ = 8000.0
@@ -113,7 +113,7 @@ def test_an_up_down_run_that_cannot_be_split_is_refused(tmp_path, kwargs, match)
 def test_ingest_stores_the_up_and_down_runs(tmp_path):
     store = tmp_path / "store.h5"
     # (ingest refuses channels of one run at different rates: one rate here)
-    proc = run_cli("ingest", str(_write(tmp_path / "a.h5", fs_vel_hz=FS_DRIVE_HZ)), "-o",
+    proc = run_command("ingest", str(_write(tmp_path / "a.h5", fs_vel_hz=FS_DRIVE_HZ)), "-o",
                    str(store))
     assert proc.returncode == 0, proc.stderr
     from rattle_lab.store import read_catalogue

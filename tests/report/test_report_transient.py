@@ -20,7 +20,7 @@ import numpy as np
 import pypdf
 import pytest
 from conftest import REALDATA
-from record_factory import run_cli
+from record_factory import run_command
 
 from rattle_lab.records import read
 
@@ -36,10 +36,10 @@ pytestmark = pytest.mark.skipif(not LVM.is_file(),
 def shock_store(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     """The record ingested (flags kept) and fitted; ``(store, fit table)``."""
     store = tmp_path_factory.mktemp("shock") / "store.h5"
-    proc = run_cli("ingest", str(LVM), "--mapping", "forced_shock_lvm", "-o", str(store),
+    proc = run_command("ingest", str(LVM), "--mapping", "forced_shock_lvm", "-o", str(store),
                    "--allow-flagged", "--quiet")
     assert proc.returncode == 0, proc.stderr
-    proc = run_cli("fit", str(store), "--quiet")
+    proc = run_command("fit", str(store), "--quiet")
     assert proc.returncode == 0, proc.stderr
     return store, proc.stdout
 
@@ -71,7 +71,7 @@ def test_the_report_of_a_transient_store_shows_the_shocks(shock_store,
                                                           tmp_path: Path) -> None:
     store, _ = shock_store
     out = tmp_path / "shock.pdf"
-    proc = run_cli("report", str(store), "-o", str(out))
+    proc = run_command("report", str(store), "-o", str(out))
     assert proc.returncode == 0, proc.stderr
     reader = pypdf.PdfReader(out)
     texts = [" ".join(p.extract_text().split()) for p in reader.pages]

@@ -1,9 +1,10 @@
 """The rig's opt-in multi-mode model (``[model] kind = "modal"``, issue 14 item 5).
 
-The scene synthetic/modal_lab.toml is written through the installed ``rattle-lab
-simulate``; its truth is checked against a direct run of :mod:`rattle_lab.model.modal` built
-here from the scene's numbers (the inertial pressure ``rho h A`` and the settling time
-computed independently), and ``rattle-lab ingest`` + ``fit`` must find its impacts.
+The scene synthetic/modal_lab.toml is written through ``rattle-lab simulate`` (in this
+process, :func:`record_factory.run_command`); its truth is checked against a direct run of
+:mod:`rattle_lab.model.modal` built here from the scene's numbers (the inertial pressure
+``rho h A`` and the settling time computed independently), and ``rattle-lab ingest`` +
+``fit`` must find its impacts.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from record_factory import run_cli
+from record_factory import run_command
 from rattle_lab.model.modal import KelvinVoigtContact, modal_channels, plate_system, simulate_modal
 from rattle_lab.model.plate import Plate
 from rattle_lab.rig import load_scene
@@ -30,7 +31,7 @@ SCENE = Path(__file__).resolve().parents[2] / "synthetic" / "modal_lab.toml"
 @pytest.fixture(scope="module")
 def record(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("modal") / "modal.h5"
-    proc = run_cli("simulate", str(SCENE), "-o", str(out), "--quiet")
+    proc = run_command("simulate", str(SCENE), "-o", str(out), "--quiet")
     assert proc.returncode == 0, proc.stderr
     return out
 
@@ -111,8 +112,8 @@ def test_sound_and_vibrometer_match_modal_channels(record: Path) -> None:
                           "under load (124 s for the old record, same load; limit 120 s): for the detect owners")
 def test_ingest_and_fit_detect_the_impacts(record: Path, tmp_path: Path) -> None:
     store = tmp_path / "store.h5"
-    assert run_cli("ingest", str(record), "-o", str(store), "--quiet").returncode == 0
-    proc = run_cli("fit", str(store), "--json", "--quiet")
+    assert run_command("ingest", str(record), "-o", str(store), "--quiet").returncode == 0
+    proc = run_command("fit", str(store), "--json", "--quiet")
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["n_ok"] == 2

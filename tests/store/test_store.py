@@ -13,7 +13,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from record_factory import RATTLE_LAB, make_record, run_cli, write
+from record_factory import RATTLE_LAB, make_record, run_cli, run_command, write
 
 from rattle_lab._atomic import TMP_MARKER, atomic_write_text, remove_stale_temporaries
 from rattle_lab.cli import main
@@ -222,27 +222,27 @@ def test_a_changed_input_is_caught_by_verify_and_replace_recovers(tmp_path):
     src = write(tmp_path, "rec.h5")
     store = tmp_path / "store.h5"
     ingest([src], store)
-    assert run_cli("verify", str(store)).returncode == 0
+    assert run_command("verify", str(store)).returncode == 0
     _same_size_same_mtime_edit(src)
-    proc = run_cli("verify", str(store))
+    proc = run_command("verify", str(store))
     assert proc.returncode == 2, proc.stderr
     assert "MISMATCH" in proc.stdout and "rec.h5 has changed since it was ingested" in proc.stdout
     assert "1 mismatches" in proc.stdout
     # fit and report check before reading: exit 2, one line naming the file and the way out
     for command in (["fit", str(store), "--quiet"],
                     ["report", str(store), "-o", str(tmp_path / "r.pdf"), "--quiet"]):
-        proc = run_cli(*command)
+        proc = run_command(*command)
         assert proc.returncode == 2, proc.stderr
         assert proc.stderr.count("\n") == 1 and "rec.h5 has changed" in proc.stderr
         assert "--replace" in proc.stderr
     assert not (tmp_path / "r.pdf").exists()
     # without --replace, the new content's run collides with the stored one ...
-    proc = run_cli("ingest", str(src), "-o", str(store), "--quiet")
+    proc = run_command("ingest", str(src), "-o", str(store), "--quiet")
     assert proc.returncode == 2 and "--replace" in proc.stderr
     # ... and the advised --replace works
-    proc = run_cli("ingest", str(src), "-o", str(store), "--replace", "--quiet")
+    proc = run_command("ingest", str(src), "-o", str(store), "--replace", "--quiet")
     assert proc.returncode == 0, proc.stderr
-    assert run_cli("verify", str(store)).returncode == 0
+    assert run_command("verify", str(store)).returncode == 0
     assert _runs(store) == {("plate96", "dwell_094")}
     assert len(read_catalogue(store)) == 5  # one record's channels, the old one gone
 
@@ -252,7 +252,7 @@ def test_verify_notes_a_changed_copied_input_without_failing(tmp_path):
     store = tmp_path / "store.h5"
     ingest([src], store, storage="copy")
     _same_size_same_mtime_edit(src)
-    proc = run_cli("verify", str(store))
+    proc = run_command("verify", str(store))
     assert proc.returncode == 0 and "note:" in proc.stdout and "0 mismatches" in proc.stdout
 
 
@@ -263,8 +263,8 @@ def test_a_mapping_with_a_native_record_warns(tmp_path):
                        'apparatus = "other"\n[[runs]]\nrun_id = "r"\nprotocol = "transient"\n'
                        '[[runs.channels]]\nname = "a"\nsource = "a"\n'
                        'quantity = "base_acceleration"\n')
-    proc = run_cli("ingest", str(src), "-o", str(tmp_path / "s.h5"), "--mapping", str(mapping),
-                   "--quiet")
+    proc = run_command("ingest", str(src), "-o", str(tmp_path / "s.h5"), "--mapping", str(mapping),
+                       "--quiet")
     assert proc.returncode == 0, proc.stderr
     assert "MappingIgnoredWarning" in proc.stderr and "native rattle record" in proc.stderr
 

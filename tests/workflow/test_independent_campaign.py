@@ -5,7 +5,7 @@ and forced response, bisection for the impacts), its own measurement chain (vibr
 decoder delay of 18 us after an 8 kHz low-pass, DC offsets, 50 Hz hum, noise, 16-bit
 quantisation, higher plate modes ringing in the plate accelerometer after every impact),
 written straight into the data_schema layout with h5py.  The record is ingested and
-fitted through the installed ``rattle-lab``.
+fitted through ``rattle-lab``'s commands (:func:`record_factory.run_command`).
 
 Tolerances: impact times within 10 us (a fifth of a sample at 25.6 kHz); the median ``e`` of the impacts with
 ``|v_in| >= 0.1 m/s`` within 5 % (the per-impact scatter from noise and truncated fit
@@ -29,7 +29,7 @@ import pytest
 
 from independent_campaign import Chain, Plant, write_campaign
 from rattle_lab.store import ingest
-from record_factory import run_cli
+from record_factory import run_command
 
 FREQS_HZ = (93.0, 99.0)
 
@@ -48,7 +48,7 @@ def _campaign(tmp_path, chain: Chain, seed: int = 3):
     truth = write_campaign(path, plant, chain, runs, seed=seed)
     store = tmp_path / f"store_{seed}.h5"
     ingest([path], store, quiet=True)
-    proc = run_cli("fit", str(store), "--json", "--quiet")
+    proc = run_command("fit", str(store), "--json", "--quiet")
     assert proc.returncode == 0, proc.stderr
     return plant, truth, store, json.loads(proc.stdout)
 
@@ -134,7 +134,7 @@ def test_undeclared_or_uncorrectable_measurand_is_flagged(tmp_path):
         del fh["runs/undeclared/channels/velocity"].attrs["measurand"]
     store = tmp_path / "s.h5"
     ingest([path], store, quiet=True)
-    proc = run_cli("fit", str(store), "--json", "--quiet")
+    proc = run_command("fit", str(store), "--json", "--quiet")
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     key = out["runs"][0]["input_key"]
@@ -143,7 +143,7 @@ def test_undeclared_or_uncorrectable_measurand_is_flagged(tmp_path):
     # issue 28: the undeclared measurand is inferred from the data, or named undetermined
     assert len(flags) == 2 and re.match(
         rf"{key}/undeclared: measurand_(inferred: panel_absolute|undetermined)", flags[1]), flags
-    table = run_cli("fit", str(store), "--quiet").stdout
+    table = run_command("fit", str(store), "--quiet").stdout
     assert f"data-quality flag: {key}/no_base: velocity_panel_absolute" in table
 
 
@@ -186,7 +186,7 @@ def test_ringing_modes_from_one_run_are_flagged(tmp_path):
                      "levels": np.full(100, 1.3 * _grazing_ms2(plant, 97.0))}], seed=1)
     store = tmp_path / "one_store.h5"
     ingest([path], store, quiet=True)
-    proc = run_cli("fit", str(store), "--json", "--quiet")
+    proc = run_command("fit", str(store), "--json", "--quiet")
     assert proc.returncode == 0, proc.stderr
     summary = json.loads(proc.stdout)
     assert "e_ratio_ring_modes_one_run" in summary["data_quality"]
