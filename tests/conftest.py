@@ -2,7 +2,8 @@
 
 Each fixture returns the path of a written record (a rattle HDF5 file with ``/truth``),
 made by the synthetic rig (:mod:`rattle_lab.rig`) from a scene with its own seed.
-Treat the files as read-only: they are shared by every test in the session.
+Treat the files as read-only: they are shared by every test in the session, in every
+test process (each is simulated once, :func:`_simulated_once`).
 
 * ``synthetic_campaign_record``: the embedded default scene (``rattle-lab simulate
   default``): thesis CFCF plate, 1.3 mm gap, 8 ramps (up/down at 95-98 Hz, 3 s) and 2
@@ -113,12 +114,40 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     items.sort(key=lambda item: item.path not in slow_files)  # stable: order kept otherwise
 
 
+def _simulated_once(tmp_path_factory: pytest.TempPathFactory, scene: str | Path,
+                    name: str) -> Path:
+    """The record of ``scene``, simulated once for the whole session, whatever the number
+    of test processes.
+
+    ``make test`` runs the files in several processes (pytest-xdist), and a session fixture
+    is a per-process thing: each process used to simulate the same seeded scene again.  The
+    first process to need the record writes it (atomically, as every output) into the
+    session's common base folder, under a lock; the others wait for it and read that file.
+    Without ``fcntl`` (not POSIX) each process simulates its own.
+    """
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # popen-gwN's parent: this session's folder, common to all
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        path = tmp_path_factory.mktemp("synthetic") / name
+        write_synthetic(scene, path)
+        return path
+    folder = base / "simulated-once"
+    folder.mkdir(exist_ok=True)
+    path = folder / name
+    with open(folder / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not path.is_file():
+            write_synthetic(scene, path)
+    return path
+
+
 @pytest.fixture(scope="session")
 def synthetic_campaign_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Path of the default scene's record (all five channels, ramps and dwells)."""
-    path = tmp_path_factory.mktemp("synthetic") / "campaign.h5"
-    write_synthetic("default", path)
-    return path
+    return _simulated_once(tmp_path_factory, "default", "campaign.h5")
 
 
 SMALL_CAMPAIGN = Path(__file__).resolve().parent / "data" / "small_campaign.toml"
@@ -129,25 +158,19 @@ def small_campaign_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Path of the shortened default scene's record (``tests/data/small_campaign.toml``): for
     the tests of plumbing (caching, Dask, progress, exit codes), where 18 s of record serve
     as well as the default scene's 40 s."""
-    path = tmp_path_factory.mktemp("synthetic") / "small_campaign.h5"
-    write_synthetic(SMALL_CAMPAIGN, path)
-    return path
+    return _simulated_once(tmp_path_factory, SMALL_CAMPAIGN, "small_campaign.h5")
 
 
 @pytest.fixture(scope="session")
 def synthetic_threshold_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Path of the threshold-only record (slow ramps, base accelerometer only)."""
-    path = tmp_path_factory.mktemp("synthetic") / "thresholds.h5"
-    write_synthetic(SCENES / "threshold_only.toml", path)
-    return path
+    return _simulated_once(tmp_path_factory, SCENES / "threshold_only.toml", "thresholds.h5")
 
 
 @pytest.fixture(scope="session")
 def synthetic_noisy_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Path of the noisy real-world record (fan, harmonics, strong noise)."""
-    path = tmp_path_factory.mktemp("synthetic") / "noisy.h5"
-    write_synthetic(SCENES / "noisy_lab.toml", path)
-    return path
+    return _simulated_once(tmp_path_factory, SCENES / "noisy_lab.toml", "noisy.h5")
 
 
 # --- the report the report tests look at (built once per session) -----------------------------

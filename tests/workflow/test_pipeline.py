@@ -153,11 +153,13 @@ def test_shipped_pipelines_run(small_campaign_record: Path, tmp_path: Path) -> N
 
 def test_scene_input_is_simulated_once(tmp_path: Path) -> None:
     pipe = _pipe(["store"])
-    first = run_pipeline(pipe, ["default"], out_dir=tmp_path)
+    scene = [str(SMALL_CAMPAIGN)]  # a scene file (a shipped scene's name is resolved as in
+    # test_input_errors and the CLI tests)
+    first = run_pipeline(pipe, scene, out_dir=tmp_path)
     assert first.executed == ["simulate", "ingest"]
-    assert (tmp_path / "default.h5").is_file() and first.store == tmp_path / "t.h5"
-    assert run_pipeline(pipe, ["default"], out_dir=tmp_path).executed == []
-    seeded = run_pipeline(_pipe(["store"], simulate={"seed": 5}), ["default"], out_dir=tmp_path)
+    assert (tmp_path / "small_campaign.h5").is_file() and first.store == tmp_path / "t.h5"
+    assert run_pipeline(pipe, scene, out_dir=tmp_path).executed == []
+    seeded = run_pipeline(_pipe(["store"], simulate={"seed": 5}), scene, out_dir=tmp_path)
     assert seeded.executed == ["simulate", "ingest"]  # same run ids, new data: store rebuilt
     from rattle_lab.store import read_catalogue
 
