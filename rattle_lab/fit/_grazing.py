@@ -113,8 +113,12 @@ def fit_grazing(freq_hz: object, accel_ms2: object, *, participation: float = 1.
                              participation=dict(value=participation, min=0.0,
                                                 vary=vary_participation))
     weights = 1.0 / ao
-    robust = model.fit(ao, pars, freq_hz=fo, weights=weights, method="least_squares",
-                       fit_kws={"loss": "soft_l1", "f_scale": 0.05})
+    # an unidentifiable pair (gap and participation both varied) leaves a singular
+    # covariance whose square roots lmfit takes anyway: said below as a note, not as
+    # numpy's "invalid value in sqrt" warnings
+    with np.errstate(invalid="ignore"):
+        robust = model.fit(ao, pars, freq_hz=fo, weights=weights, method="least_squares",
+                           fit_kws={"loss": "soft_l1", "f_scale": 0.05})
     rel = (robust.eval(freq_hz=fo) - ao) / ao
     # Measured thresholds do not repeat to better than about 1 % (envelope noise, one
     # forcing period's level change, the ramp lag that eq. 3.4 leaves out); with few points
@@ -124,8 +128,9 @@ def fit_grazing(freq_hz: object, accel_ms2: object, *, participation: float = 1.
     inlier = np.abs(rel - np.median(rel)) <= outlier_k * scale
     if inlier.sum() < 4:
         raise ConvergenceError(f"the grazing fit kept only {int(inlier.sum())} inliers")
-    final = model.fit(ao[inlier], robust.params, freq_hz=fo[inlier], weights=weights[inlier],
-                      method="leastsq")
+    with np.errstate(invalid="ignore"):  # as above
+        final = model.fit(ao[inlier], robust.params, freq_hz=fo[inlier],
+                          weights=weights[inlier], method="leastsq")
     if not final.success:
         raise ConvergenceError(f"the grazing fit did not converge: {final.message}")
     varied = tuple(final.var_names)
