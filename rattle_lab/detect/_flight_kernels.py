@@ -8,7 +8,8 @@ two parts: the forced response's, hat functions in time that are zero on all but
 columns of each row (stored by rows: ``indptr``, ``indices``, ``values``), and a few dense
 columns ``r`` (the ringing).  :func:`free_sums` forms the per-flight sums of the free
 response's normal equations, :func:`residual_ss` the residual's sum of squares,
-:func:`sparse_cross` the products of the two parts, and :func:`tail_columns` the ringing
+:func:`sparse_cross` the products of the two parts, :func:`added_sums` what new dense
+columns add to a model whose other parts are fixed, and :func:`tail_columns` the ringing
 carried on over later flights.  numba compiles them on first use and caches them on disk.
 """
 
@@ -99,6 +100,37 @@ def residual_ss(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: 
         res -= z[i].real * gamma[s, 0] + z[i].imag * gamma[s, 1]
         total += res * res
     return total
+
+
+@numba.njit(cache=True, nogil=True)
+def added_sums(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
+               p: int, r: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """What dense columns ``r`` add to a model whose other parts are fixed, in one pass:
+    ``(R'R, R'X, R'y, Z_s'R_s)`` (``X`` stored by rows, ``p`` columns; ``z`` the free
+    response of :func:`free_response`, per flight ``s``)."""
+    n, m = r.shape
+    rr = np.zeros((m, m))
+    rx = np.zeros((m, p))
+    ry = np.zeros(m)
+    zr = np.zeros((n_seg, 2, m))
+    for i in range(n):
+        s = seg[i]
+        z0 = z[i].real
+        z1 = z[i].imag
+        for a in range(m):
+            ra = r[i, a]
+            ry[a] += ra * y[i]
+            zr[s, 0, a] += z0 * ra
+            zr[s, 1, a] += z1 * ra
+            for b in range(a, m):
+                rr[a, b] += ra * r[i, b]
+            for k in range(indptr[i], indptr[i + 1]):
+                rx[a, indices[k]] += ra * values[k]
+    for a in range(m):
+        for b in range(a):
+            rr[a, b] = rr[b, a]
+    return rr, rx, ry, zr
 
 
 @numba.njit(cache=True, nogil=True)

@@ -175,6 +175,57 @@ def _forced_columns(t_s: np.ndarray, omega: float, t_total_s: float) -> np.ndarr
 
 
 @dataclass(frozen=True)
+class _Rows:
+    """Run-wide columns kept by rows, only their nonzero entries (CSR): ``p`` columns."""
+
+    indptr: np.ndarray
+    indices: np.ndarray
+    values: np.ndarray
+    p: int
+
+    @classmethod
+    def from_dense(cls, x: np.ndarray) -> _Rows:
+        x = np.asarray(x, float)
+        nz = x != 0.0
+        return cls(np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int64),
+                   np.nonzero(nz)[1].astype(np.int64), np.ascontiguousarray(x[nz]), x.shape[1])
+
+
+def _forced_rows(t_s: np.ndarray, omega: float, t_total_s: float, keep: np.ndarray) -> _Rows:
+    """``_Rows.from_dense(_forced_columns(t_s, omega, t_total_s)[:, keep])``, bit for bit,
+    without the dense matrix: a sample lies between two knots, so at most five of its
+    ``1 + 2 n_knots`` columns are nonzero (the dense matrix of a 50 s run at 25.6 kHz was
+    about 1 GB).  Each hat's value is computed as :func:`numpy.interp` computes it."""
+    t_s = np.asarray(t_s, float)
+    n_knots = max(2, int(np.ceil(t_total_s / KNOT_S)) + 1)
+    knots = np.linspace(0.0, t_total_s, n_knots)
+    j = np.clip(np.searchsorted(knots, t_s, side="right") - 1, 0, n_knots - 2)
+    width = knots[j + 1] - knots[j]
+    off = t_s - knots[j]
+    on_knot = t_s == knots[j]
+    beyond = t_s >= knots[-1]     # numpy.interp: the last value (of hat n_knots - 1)
+    h_left = np.where(on_knot, 1.0, ((0.0 - 1.0) / width) * off + 1.0)
+    h_right = np.where(on_knot, 0.0, ((1.0 - 0.0) / width) * off + 0.0)
+    h_left[beyond], h_right[beyond] = 0.0, 1.0
+    c, s = np.cos(omega * t_s), np.sin(omega * t_s)
+    n = t_s.size
+    cols = np.empty((n, 5), np.int64)
+    cols[:, 0] = 0
+    cols[:, 1], cols[:, 2] = 1 + 2 * j, 2 + 2 * j
+    cols[:, 3], cols[:, 4] = 3 + 2 * j, 4 + 2 * j
+    vals = np.empty((n, 5))
+    vals[:, 0] = 1.0
+    vals[:, 1], vals[:, 2] = h_left * c, h_left * s
+    vals[:, 3], vals[:, 4] = h_right * c, h_right * s
+    keep = np.asarray(keep, bool)
+    new_index = np.cumsum(keep) - 1
+    nz = (vals != 0.0) & keep[cols]
+    return _Rows(np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int64),
+                 new_index[cols[nz]].astype(np.int64), np.ascontiguousarray(vals[nz]),
+                 int(keep.sum()))
+
+
+@dataclass(frozen=True)
 class _Pairs:
     """Every (sample, earlier impact) pair within ``reach``: where each impact's ringing lies."""
 
@@ -261,19 +312,16 @@ class _Model:
     entries: hat functions in time) and dense columns ``r`` added by :meth:`extended`.
     """
 
-    def __init__(self, y: np.ndarray, sg: _Segments, fs_hz: float, x: np.ndarray):
+    def __init__(self, y: np.ndarray, sg: _Segments, fs_hz: float, x: np.ndarray | _Rows):
         self.y, self.sg, self.fs = np.ascontiguousarray(y, float), sg, fs_hz
         self.tau = (sg.k - sg.ref[sg.seg]) / fs_hz
         self.seg = np.ascontiguousarray(sg.seg, np.int64)
         self.n_seg = sg.starts.size
         # consecutive samples of one flight: the free response rotates from one to the next
         self.next_ = np.r_[False, (np.diff(sg.k) == 1) & (np.diff(sg.seg) == 0)]
-        x = np.asarray(x, float)
-        nz = x != 0.0
-        self.p = x.shape[1]
-        self.indptr = np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int64)
-        self.indices = np.nonzero(nz)[1].astype(np.int64)
-        self.values = np.ascontiguousarray(x[nz])
+        rows = x if isinstance(x, _Rows) else _Rows.from_dense(x)
+        self.p, self.indptr, self.indices, self.values = (rows.p, rows.indptr, rows.indices,
+                                                          rows.values)
         self.r = np.zeros((self.y.size, 0))
         # what does not change with (f_s, sigma): the run-wide columns' normal equations
         from ._flight_kernels import sparse_gram
@@ -326,6 +374,10 @@ class _Model:
                           float(f_hz), float(sigma), 1.0 / self.fs)
         return float(rss), beta, gamma
 
+    def at(self, f_hz: float, sigma: float) -> _Fixed:
+        """This model at fixed ``(f_s, sigma)``, for the residual with columns added."""
+        return _Fixed(self, f_hz, sigma)
+
     def search(self, f0_hz: float, sigma0: float, *, grid: bool) -> tuple[float, float]:
         """``(f_s, sigma)`` minimising the residual (Nelder-Mead; first a scan if ``grid``)."""
         f1 = f0_hz
@@ -342,6 +394,62 @@ class _Model:
                                                                           [f1, sigma0 * 1.5]],
                                                       "maxfev": 80})
         return float(res.x[0]), abs(float(res.x[1]))
+
+
+class _Fixed:
+    """A :class:`_Model` at fixed ``(f_s, sigma)``: the residual sum of squares with dense
+    columns ``R`` added, as ``_Model.extended(R).solve(f_s, sigma)[0]`` computes it but from
+    the model's own fit, without solving it again.
+
+    With the flights' free amplitudes eliminated, the model's normal equations are
+    ``A beta = b``; adding ``R`` lowers the residual by ``c' S^-1 c``, where
+    ``c = b_R - A_RX beta`` and ``S = A_RR - A_RX A^-1 A_XR`` (the Schur complement, the
+    standard update of least squares by added regressors).  Only the sums that involve
+    ``R`` are formed, in one compiled pass (:func:`added_sums`): the searches for ringing
+    modes evaluate thousands of ``R`` at one ``(f_s, sigma)``.  The result equals the
+    direct solution up to rounding, relative to the residual without ``R``.
+    """
+
+    def __init__(self, model: _Model, f_hz: float, sigma: float):
+        from ._flight_kernels import free_response, free_sums
+
+        self.m = model
+        sparse = (model.indptr, model.indices, model.values, model.p, model.r)
+        zz, zx, zy = free_sums(model.y, *sparse, model.tau, model.seg, model.next_,
+                               model.n_seg, float(f_hz), float(sigma), 1.0 / model.fs)
+        zz = zz + 1e-12 * np.trace(zz, axis1=1, axis2=2)[:, None, None] * np.eye(2)
+        self.h = np.linalg.inv(zz)
+        self.gx = np.linalg.solve(zz, zx)
+        self.gy = np.linalg.solve(zz, zy[:, :, None])[:, :, 0]
+        q = zx.shape[2]
+        scale = model.scale
+        a = (model.xtx - zx.reshape(-1, q).T @ self.gx.reshape(-1, q)) / np.outer(scale, scale)
+        self.a_inv = np.linalg.pinv(a, rcond=1e-12) / np.outer(scale, scale)
+        self.rss0, self.beta, _ = model.solve(f_hz, sigma)
+        self.z = free_response(model.tau, model.next_, float(f_hz), float(sigma),
+                               1.0 / model.fs)
+
+    def rss(self, r: np.ndarray) -> float:
+        """The residual sum of squares with the columns ``r`` added."""
+        if r.shape[1] == 0:
+            return self.rss0
+        rr, rx, ry, zr = self._sums(np.ascontiguousarray(r, float))
+        a_rr = rr - np.einsum("sia,sij,sjb->ab", zr, self.h, zr)
+        a_rx = rx - np.einsum("sia,sib->ab", zr, self.gx)
+        c = ry - np.einsum("sia,si->a", zr, self.gy) - a_rx @ self.beta
+        schur = a_rr - a_rx @ self.a_inv @ a_rx.T
+        gain = float(c @ np.linalg.lstsq(schur, c, rcond=1e-12)[0])
+        return self.rss0 - gain
+
+    def _sums(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        from ._flight_kernels import added_sums
+
+        m = self.m
+        rr, rx, ry, zr = added_sums(m.y, m.indptr, m.indices, m.values, m.p, r, self.z, m.seg,
+                                    m.n_seg)
+        if m.r.shape[1]:   # the model's own dense columns: R'[X r0]
+            rx = np.hstack([rx, r.T @ m.r])
+        return rr, rx, ry, zr
 
 
 def _pack(modes: list[tuple[float, float]]) -> np.ndarray:
@@ -376,9 +484,16 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
     s_max = 0.05 * fs_hz
 
     forced = _Model(y, sub, fs_hz, xf)
+    at_fixed: dict[tuple[float, float], _Fixed] = {}
 
     def model(modes: list[tuple[float, float]]) -> _Model:
         return forced.extended(_ring_columns(pairs, dv, modes)) if modes else forced
+
+    def rss_at(modes: list[tuple[float, float]], fs_: float, sig_: float) -> float:
+        """``model(modes).solve(fs_, sig_)[0]``, from the forced model's fit at (fs_, sig_)."""
+        if (fs_, sig_) not in at_fixed:
+            at_fixed[fs_, sig_] = forced.at(fs_, sig_)
+        return at_fixed[fs_, sig_].rss(_ring_columns(pairs, dv, modes))
 
     def refine(modes: list[tuple[float, float]], fixed: list[tuple[float, float]],
                fs_: float, sig_: float, maxfev: int) -> tuple[list[tuple[float, float]], float]:
@@ -386,7 +501,7 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
             ms = _unpack(p)
             if any(not (f_lo_hz <= f <= f_hi_hz and s_min <= s <= s_max) for f, s in ms):
                 return np.inf
-            return model(fixed + ms).solve(fs_, sig_)[0]
+            return rss_at(fixed + ms, fs_, sig_)
         p0 = _pack(modes)
         from scipy.optimize import minimize  # here: importing detect stays light
 
@@ -399,7 +514,7 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
     bic = n * np.log(model(modes).solve(f_s, sigma)[0])
     f_grid = np.geomspace(f_lo_hz, f_hi_hz, 16)
     for _ in range(MAX_RING_MODES):
-        scan = [(model(modes + [(f, q * 2 * np.pi * f)]).solve(f_s, sigma)[0], f,
+        scan = [(rss_at(modes + [(f, q * 2 * np.pi * f)], f_s, sigma), f,
                  q * 2 * np.pi * f) for f in f_grid for q in (0.05, 0.15, 0.4)
                 if q * 2 * np.pi * f >= s_min]
         _, f0, s0 = min(scan, key=lambda c: c[0])
@@ -495,9 +610,8 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
                        note="local fits kept: no ringing found after the impacts")
     model = forced_sub.extended(ring(sub.k / fs_hz, dv, modes))
     f_s, sigma = model.search(f_s, sigma, grid=False)
-    xf, _ = _forced(sg.k / fs_hz, omega, t_total, keep)
     vin, vout = v_in_local, v_out_local
-    forced_all = _Model(y_all[sg.k], sg, fs_hz, xf)
+    forced_all = _Model(y_all[sg.k], sg, fs_hz, _forced_rows(sg.k / fs_hz, omega, t_total, keep))
     for _ in range(2):   # then with the impacts' own velocity changes weighting the ringing
         dv = np.where(np.isfinite(vout - vin), vout - vin, np.nan_to_num(dv))
         model = forced_all.extended(ring(sg.k / fs_hz, dv, modes))
@@ -598,17 +712,15 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
     if not ok:
         return ()
     tails = [_tails(p.segments.k / p.fs_hz, p.t_imp_s, p.fs_hz) for p in ok]
-    forced = [_Model(p.y, p.segments, p.fs_hz, p.forced) for p in ok]
-    base = [m.solve(p.f_s_hz, p.sigma_1_s)[0] for m, p in zip(forced, ok)]
+    # each run at its own fixed (f_s, sigma): the residual with ringing columns added
+    fixed = [_Model(p.y, p.segments, p.fs_hz, p.forced).at(p.f_s_hz, p.sigma_1_s) for p in ok]
+    base = [f.rss0 for f in fixed]
     n_all = sum(p.y.size for p in ok)
     f_s = float(np.median([p.f_s_hz for p in ok]))
     f_lo, f_hi = 1.1 * f_s, min(6.0 * f_s, 0.2 * min(p.fs_hz for p in ok))
 
-    def model(i: int, modes: list[tuple[float, float]]) -> _Model:
-        return forced[i].extended(_tail_columns(tails[i], ok[i].dv, modes))
-
     def rss(modes: list[tuple[float, float]]) -> np.ndarray:
-        return np.array([model(i, modes).solve(ok[i].f_s_hz, ok[i].sigma_1_s)[0]
+        return np.array([fixed[i].rss(_tail_columns(tails[i], ok[i].dv, modes))
                          for i in range(len(ok))])
 
     def objective(par: np.ndarray) -> float:
@@ -627,8 +739,15 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
     best = bic(modes)
     grid = np.geomspace(f_lo, f_hi, 30)
     for _ in range(MAX_RING_MODES):
-        scan = [(objective(_pack(modes + [(fr, q * 2 * np.pi * fr)])), fr, q * 2 * np.pi * fr)
-                for fr in grid for q in (0.005, 0.02, 0.06, 0.15)]
+        # the scan moves the new mode only: the modes found so far are fixed columns (the
+        # grid's modes are all within the objective's bounds)
+        prev = fixed if not modes else [
+            f.m.extended(_tail_columns(tails[i], ok[i].dv, modes)).at(ok[i].f_s_hz,
+                                                                       ok[i].sigma_1_s)
+            for i, f in enumerate(fixed)]
+        scan = [(float(np.mean([prev[i].rss(_tail_columns(tails[i], ok[i].dv, [(fr, s)]))
+                                / base[i] for i in range(len(ok))])), fr, s)
+                for fr in grid for s in (q * 2 * np.pi * fr for q in (0.005, 0.02, 0.06, 0.15))]
         _, f0, s0 = min(scan, key=lambda c: c[0])
         trial = modes + [(f0, s0)]
         p0 = _pack(trial)
