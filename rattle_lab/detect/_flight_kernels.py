@@ -134,6 +134,29 @@ def added_sums(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: n
 
 
 @numba.njit(cache=True, nogil=True)
+def eliminate_free(rr: np.ndarray, rx: np.ndarray, ry: np.ndarray, zr: np.ndarray,
+                   h: np.ndarray, gx: np.ndarray, gy: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """The sums of :func:`added_sums` with each flight's free response eliminated:
+    ``R'R - sum_s zr_s' H_s zr_s``, ``R'X - sum_s zr_s' G_s`` and ``R'y - sum_s zr_s' g_s``
+    (``H_s = (Z_s'Z_s)^-1``, ``G_s = H_s Z_s'X_s``, ``g_s = H_s Z_s'y_s``)."""
+    n_seg, _, m = zr.shape
+    p = gx.shape[2]
+    a_rr, a_rx, b_r = rr.copy(), rx.copy(), ry.copy()
+    for s in range(n_seg):
+        for a in range(m):
+            z0, z1 = zr[s, 0, a], zr[s, 1, a]
+            for b in range(m):
+                hz0 = h[s, 0, 0] * zr[s, 0, b] + h[s, 0, 1] * zr[s, 1, b]
+                hz1 = h[s, 1, 0] * zr[s, 0, b] + h[s, 1, 1] * zr[s, 1, b]
+                a_rr[a, b] -= z0 * hz0 + z1 * hz1
+            for q in range(p):
+                a_rx[a, q] -= z0 * gx[s, 0, q] + z1 * gx[s, 1, q]
+            b_r[a] -= z0 * gy[s, 0] + z1 * gy[s, 1]
+    return a_rr, a_rx, b_r
+
+
+@numba.njit(cache=True, nogil=True)
 def sparse_cross(indptr: np.ndarray, indices: np.ndarray, values: np.ndarray, p: int,
                  r: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
     """``X' r`` for ``X`` stored by rows (``p`` columns) and dense ``r``."""

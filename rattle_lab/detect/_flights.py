@@ -418,9 +418,9 @@ class _Fixed:
         zz, zx, zy = free_sums(model.y, *sparse, model.tau, model.seg, model.next_,
                                model.n_seg, float(f_hz), float(sigma), 1.0 / model.fs)
         zz = zz + 1e-12 * np.trace(zz, axis1=1, axis2=2)[:, None, None] * np.eye(2)
-        self.h = np.linalg.inv(zz)
-        self.gx = np.linalg.solve(zz, zx)
-        self.gy = np.linalg.solve(zz, zy[:, :, None])[:, :, 0]
+        self.h = np.ascontiguousarray(np.linalg.inv(zz))
+        self.gx = np.ascontiguousarray(np.linalg.solve(zz, zx))
+        self.gy = np.ascontiguousarray(np.linalg.solve(zz, zy[:, :, None])[:, :, 0])
         q = zx.shape[2]
         scale = model.scale
         a = (model.xtx - zx.reshape(-1, q).T @ self.gx.reshape(-1, q)) / np.outer(scale, scale)
@@ -431,12 +431,13 @@ class _Fixed:
 
     def rss(self, r: np.ndarray) -> float:
         """The residual sum of squares with the columns ``r`` added."""
+        from ._flight_kernels import eliminate_free
+
         if r.shape[1] == 0:
             return self.rss0
-        rr, rx, ry, zr = self._sums(np.ascontiguousarray(r, float))
-        a_rr = rr - np.einsum("sia,sij,sjb->ab", zr, self.h, zr)
-        a_rx = rx - np.einsum("sia,sib->ab", zr, self.gx)
-        c = ry - np.einsum("sia,si->a", zr, self.gy) - a_rx @ self.beta
+        a_rr, a_rx, b_r = eliminate_free(*self._sums(np.ascontiguousarray(r, float)), self.h,
+                                         self.gx, self.gy)
+        c = b_r - a_rx @ self.beta
         schur = a_rr - a_rx @ self.a_inv @ a_rx.T
         gain = float(c @ np.linalg.lstsq(schur, c, rcond=1e-12)[0])
         return self.rss0 - gain
