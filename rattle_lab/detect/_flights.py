@@ -405,8 +405,10 @@ class _Fixed:
     ``A beta = b``; adding ``R`` lowers the residual by ``c' S^-1 c``, where
     ``c = b_R - A_RX beta`` and ``S = A_RR - A_RX A^-1 A_XR`` (the Schur complement, the
     standard update of least squares by added regressors).  Only the sums that involve
-    ``R`` are formed, in one compiled pass (:func:`added_sums`): the searches for ringing
-    modes evaluate thousands of ``R`` at one ``(f_s, sigma)``.  The result equals the
+    ``R`` are formed, in one compiled pass (:func:`added_sums`), and the flights' free
+    responses are eliminated from them in another (:func:`eliminate_free`): the searches for
+    ringing modes evaluate thousands of ``R`` at one ``(f_s, sigma)``.  (Its set-up repeats
+    :meth:`_Model.solve`'s elimination once, to keep the per-flight factors.)  The result equals the
     direct solution up to rounding, relative to the residual without ``R``.
     """
 
