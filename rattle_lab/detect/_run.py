@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -120,7 +120,8 @@ def _analyse_transient(run: Any, detect: DetectParams, base: dict[str, Any]) -> 
 
 
 def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str, Any] | None,
-                fit: Mapping[str, Any], mic_distance_m: float | None = None) -> RunResult:
+                fit: Mapping[str, Any], mic_distance_m: float | None = None,
+                reuse: RunResult | None = None) -> RunResult:
     """Detection results of one :class:`~rattle_lab.records.Run`.
 
     Parameters
@@ -135,6 +136,14 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
         ``n_confirm``, ``sound_field``, ``loudness`` and ``ecma418_s``.
     mic_distance_m : float, optional
         The rig's microphone distance (the expected acoustic delay).
+    reuse : RunResult, optional
+        This run's result from an earlier call with the same ``fit`` and the same
+        ``[detect]`` parameters but for the velocity model's (``velocity_model``,
+        ``ring_modes``, ``ring_modes_runs``; the caller's to ensure: the campaign's ringing
+        passes, :func:`rattle_lab.workflow.detect_runs`).  Where the impacts come out at the
+        same times, bit for bit, what follows from their times alone (the sound peaks,
+        acoustic delay, levels and acoustics, pattern and threshold) is taken from it
+        instead of being computed again; otherwise it is ignored.
 
     Raises
     ------
@@ -192,6 +201,12 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
     if log.velocity_note:   # the flight model gave no ringing share, or used some impacts only
         what = "ringing_velocities_missing" if log.ring_modes else "ringing_share_missing"
         base["chain_flags"] = base["chain_flags"] + (f"{what}: {log.velocity_note}",)
+    if (reuse is not None and reuse.status == "ok" and reuse.impacts is not None
+            and (reuse.input_key, reuse.run_id) == (input_key, run.run_id)
+            and np.array_equal(reuse.impacts.t_s, log.t_s)):
+        # the same impact times: the same sound, pattern and threshold (issue 29: the
+        # ringing passes detect again for the velocities only)
+        return replace(reuse, impacts=log, chain_flags=base["chain_flags"])
     names = tuple(c.name for c in used)
     duration = (v_si if v_si is not None else a_si).size / fs  # type: ignore[union-attr]
     pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)

@@ -58,7 +58,7 @@ import hashlib
 import json
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -190,7 +190,7 @@ def read_detections(store: str | os.PathLike[str]) -> tuple[Any, ...]:
 
 def detect_run(store: str, input_key: str, run_id: str,
                detect: DetectParams | Mapping[str, Any], fit: Mapping[str, Any],
-               code: str | None = None) -> Any:
+               code: str | None = None, reuse: Any = None) -> Any:
     """Detection results of one stored run (:func:`rattle_lab.detect.analyse_run`).
 
     A pure function of its arguments: what the serial loop and the Dask
@@ -209,6 +209,9 @@ def detect_run(store: str, input_key: str, run_id: str,
     code : str, optional
         The caller's :func:`code_fingerprint`; if given, this process must run
         the same code.
+    reuse : RunResult, optional
+        The run's result from an earlier pass whose parameters differ in the velocity
+        model's only (``analyse_run``'s ``reuse``).
 
     Returns
     -------
@@ -236,7 +239,14 @@ def detect_run(store: str, input_key: str, run_id: str,
     with open_stored_record(store, input_key) as record, \
             threadpool_limits(limits=1, user_api="blas"):
         return analyse_run(input_key, record.run(run_id), detect=detect, fit=fit,
-                           mic_distance_m=record.rig.mic_distance_m)
+                           mic_distance_m=record.rig.mic_distance_m, reuse=reuse)
+
+
+def redetect_run(store: str, input_key: str, run_id: str, reuse: Any,
+                 detect: DetectParams | Mapping[str, Any], fit: Mapping[str, Any],
+                 code: str | None = None) -> Any:
+    """:func:`detect_run` with ``reuse`` given per run: the campaign's ringing passes."""
+    return detect_run(store, input_key, run_id, detect, fit, code, reuse)
 
 
 def _refused_at_once(address: str) -> None:
@@ -315,9 +325,17 @@ def detect_runs(store: str | os.PathLike[str], detect: DetectParams | Mapping[st
     results = _map_runs(jobs, params, fit, scheduler=scheduler, quiet=quiet, desc="detect",
                         weights=weights)
 
+    velocity_fields = ("velocity_model", "ring_modes", "ring_modes_runs")
+
     def redetect(indices: list[int], again: DetectParams, label: str) -> list[Any]:
+        # the passes change the velocity model only: the impacts come out at the same times,
+        # and their sound, levels, pattern and threshold are taken from the first pass
+        # (analyse_run checks the times; other parameters changed: nothing is reused)
+        same = replace(again, **{k: getattr(params, k) for k in velocity_fields})
+        reuse = [results[i] for i in indices] if same == params else None
         return _map_runs([jobs[i] for i in indices], again, fit, scheduler=scheduler,
-                         quiet=quiet, desc=label, weights=[weights[i] for i in indices])
+                         quiet=quiet, desc=label, weights=[weights[i] for i in indices],
+                         reuse=reuse)
 
     return campaign_ringing(results, params, redetect)
 
@@ -402,12 +420,18 @@ def map_tasks(func: Callable[..., Any], tasks: Sequence[tuple[Any, ...]], *,
 
 def _map_runs(jobs: list[tuple[str, str, str]], detect: DetectParams,
               fit: Mapping[str, Any], *, scheduler: Any, quiet: bool, desc: str,
-              weights: Sequence[int] | None = None) -> list[Any]:
-    """:func:`detect_run` of every job, in order: serially or on a Dask cluster."""
+              weights: Sequence[int] | None = None, reuse: Sequence[Any] | None = None
+              ) -> list[Any]:
+    """:func:`detect_run` of every job, in order: serially or on a Dask cluster (with
+    ``reuse``, one earlier result per job: :func:`redetect_run`)."""
+    func: Callable[..., Any] = detect_run
+    tasks: list[tuple[Any, ...]] = list(jobs)
+    if reuse is not None:
+        func, tasks = redetect_run, [(*job, r) for job, r in zip(jobs, reuse, strict=True)]
     if scheduler is None:
-        return map_tasks(detect_run, jobs, quiet=quiet, desc=desc, weights=weights,
+        return map_tasks(func, tasks, quiet=quiet, desc=desc, weights=weights,
                          detect=detect, fit=fit)
-    return map_tasks(detect_run, jobs, scheduler=scheduler, quiet=quiet, desc=desc,
+    return map_tasks(func, tasks, scheduler=scheduler, quiet=quiet, desc=desc,
                      weights=weights, detect=detect, fit=dict(fit), code=code_fingerprint())
 
 
