@@ -18,13 +18,13 @@ $(BIN)/python:
 $(STAMP_RUN): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e .
 	$(BIN)/python -m compileall -q rattle_lab
-	$(BIN)/python -m rattle_lab.model.sdf._compiled
+	$(BIN)/python -m rattle_lab._warmup
 	touch $@
 
 $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	$(BIN)/python -m compileall -q rattle_lab
-	$(BIN)/python -m rattle_lab.model.sdf._compiled
+	$(BIN)/python -m rattle_lab._warmup
 	touch $@ $(STAMP_RUN)
 
 $(STAMP_DEV): pyproject.toml | $(BIN)/python
@@ -59,7 +59,7 @@ test-fast: $(STAMP)
 ## and numba code for a generic CPU, compiled into a numba cache folder of its own
 FOREIGN_ENV = OPENBLAS_CORETYPE=Nehalem NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=$(CURDIR)/.numba-generic
 test-foreign: $(STAMP)
-	$(FOREIGN_ENV) $(BIN)/python -m rattle_lab.model.sdf._compiled
+	$(FOREIGN_ENV) $(BIN)/python -m rattle_lab._warmup
 	$(FOREIGN_ENV) $(BIN)/python -m pytest -q $(XDIST) -m numerics -p no:cacheprovider \
 		$(PYTEST_ARGS)
 

@@ -4,7 +4,7 @@ numba compiles the exact simulator's kernels on their first call and caches them
 (``cache=True``); a fresh ``pip install .`` has no cache, and the first ``rattle-lab
 simulate`` would sit silent for about half a minute.  A wheel install runs no code of the
 package, so the compile cannot happen at install time there (``make install`` and ``make
-demo`` do run it: ``python -m rattle_lab.model.sdf._compiled``).  Instead the commands that
+demo`` do run it: ``python -m rattle_lab._warmup``).  Instead the commands that
 simulate check the cache first and, when a kernel is missing, say so on stderr and
 compile the kernels one by one with a progress line each.
 """

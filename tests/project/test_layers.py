@@ -35,7 +35,7 @@ PACKAGE = Path(__file__).resolve().parents[2] / "rattle_lab"
 
 #: top-level part -> layer (lower = upstream).  Infrastructure modules are layer 0.
 LAYER: dict[str, int] = {
-    "__init__": 0, "__main__": 99, "_version": 0, "exceptions": 0, "_atomic": 0,
+    "__init__": 0, "__main__": 99, "_warmup": 99, "_version": 0, "exceptions": 0, "_atomic": 0,
     "_progress": 0, "_resources": 0, "_lazy": 0, "data": 0,
     "model": 1,
     "records": 2, "acoustics": 2,
