@@ -330,14 +330,41 @@ def detect_runs(store: str | os.PathLike[str], detect: DetectParams | Mapping[st
     def redetect(indices: list[int], again: DetectParams, label: str) -> list[Any]:
         # the passes change the velocity model only: the impacts come out at the same times,
         # and their sound, levels, pattern and threshold are taken from the first pass
-        # (analyse_run checks the times; other parameters changed: nothing is reused)
+        # (analyse_run checks the times; other parameters changed: nothing is reused).  The
+        # tasks get only what recognises a run's impacts (a cluster would ship the rest both
+        # ways); the rest is put back here, from the first pass
         same = replace(again, **{k: getattr(params, k) for k in velocity_fields})
-        reuse = [results[i] for i in indices] if same == params else None
-        return _map_runs([jobs[i] for i in indices], again, fit, scheduler=scheduler,
-                         quiet=quiet, desc=label, weights=[weights[i] for i in indices],
-                         reuse=reuse)
+        if same != params:
+            return _map_runs([jobs[i] for i in indices], again, fit, scheduler=scheduler,
+                             quiet=quiet, desc=label, weights=[weights[i] for i in indices])
+        out = _map_runs([jobs[i] for i in indices], again, fit, scheduler=scheduler,
+                        quiet=quiet, desc=label, weights=[weights[i] for i in indices],
+                        reuse=[_recognisable(results[i]) for i in indices])
+        return [_restored(results[i], r) for i, r in zip(indices, out)]
 
     return campaign_ringing(results, params, redetect)
+
+
+def _recognisable(first: Any) -> Any:
+    """What a detection pass needs of a run's first result to recognise its impacts (their
+    times, :func:`rattle_lab.detect.analyse_run`'s ``reuse``): without the sound, levels,
+    acoustics and threshold, and the flight model's samples (``ringing_problem``)."""
+    if first.impacts is None:
+        return None
+    return replace(first, peaks=None, acoustics=None, threshold=None,
+                   impacts=replace(first.impacts, ringing_problem=None))
+
+
+def _restored(first: Any, again: Any) -> Any:
+    """``again`` with what follows from the impact times taken from ``first`` where the
+    times are the same (where :func:`_recognisable` let the pass reuse them)."""
+    import numpy as np
+
+    if (again.status == "ok" and first.status == "ok" and again.impacts is not None
+            and first.impacts is not None
+            and np.array_equal(again.impacts.t_s, first.impacts.t_s)):
+        return replace(first, impacts=again.impacts, chain_flags=again.chain_flags)
+    return again
 
 
 def map_tasks(func: Callable[..., Any], tasks: Sequence[tuple[Any, ...]], *,

@@ -378,3 +378,56 @@ def test_a_product_cached_by_other_code_is_a_clear_error(tmp_path: Path) -> None
     # velocity offset, ringing share and ringing ratio; 5: its ring_modes; 6, 7: the channel
     # timing and measurand fields of issue 28)
     assert pipeline_module.CACHE_FORMAT == 7
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal to the last bit, through dataclasses, mappings, sequences and arrays."""
+    if dataclasses.is_dataclass(a) and not isinstance(a, type):
+        return type(a) is type(b) and all(_same(getattr(a, f.name), getattr(b, f.name))
+                                          for f in dataclasses.fields(a))
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        return a.shape == b.shape and a.dtype == b.dtype and bool(
+            np.array_equal(a, b, equal_nan=a.dtype.kind in "fc"))
+    if isinstance(a, dict):
+        return isinstance(b, dict) and a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)):
+        return type(a) is type(b) and len(a) == len(b) and all(map(_same, a, b))
+    if isinstance(a, float) and isinstance(b, float) and a != a and b != b:
+        return True
+    return bool(a == b)
+
+
+def test_a_pass_with_another_velocity_model_reuses_what_the_impact_times_give(
+        small_campaign_record: Path) -> None:
+    # issue 29: the campaign's ringing passes detect the runs again with another velocity
+    # model; the sound, levels, acoustics, pattern and threshold follow from the impact
+    # times alone and are taken from the first pass where the times are the same, bit for bit
+    from rattle_lab.detect import analyse_run
+    from rattle_lab.records import read
+
+    rec = read(small_campaign_record)
+    run = next(r for r in rec.runs if r.protocol == "amplitude_ramp_up")
+    flights = {"velocity_model": "flights"}
+
+    def analyse(detect: dict[str, Any], reuse: Any = None) -> Any:
+        return analyse_run("k", run, detect=detect, fit={}, mic_distance_m=rec.rig.mic_distance_m,
+                           reuse=reuse)
+
+    first, fresh = analyse({}), analyse(flights)
+    assert first.threshold is not None and first.acoustics is not None and first.peaks is not None
+    assert np.array_equal(first.impacts.t_s, fresh.impacts.t_s)
+    assert not _same(first.impacts, fresh.impacts)    # the velocities differ: a real second pass
+    reused = analyse(flights, reuse=first)
+    assert reused.acoustics is first.acoustics       # taken, not computed again ...
+    assert _same(reused, fresh)                      # ... and the same as computed again
+    # what a cluster's task gets (no sound, no samples) and the client puts back
+    thin = pipeline_module._recognisable(first)
+    assert thin.acoustics is None and thin.impacts.ringing_problem is None
+    assert _same(pipeline_module._restored(first, analyse(flights, reuse=thin)), fresh)
+    # impacts at other times: nothing is taken
+    moved = dataclasses.replace(first, impacts=dataclasses.replace(
+        first.impacts, t_s=first.impacts.t_s + 1e-4))
+    again = analyse(flights, reuse=moved)
+    assert again.acoustics is not first.acoustics and _same(again, fresh)
+    assert _same(pipeline_module._restored(moved, again), fresh)
