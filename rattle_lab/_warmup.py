@@ -67,7 +67,6 @@ def pipeline() -> None:
     the acoustics, the multi-mode model and the thesis's RK4."""
     import numpy as np
 
-    from rattle_lab.acoustics import run_acoustics
     from rattle_lab.detect import warm_cache
     from rattle_lab.model.modal import plate_system, simulate_modal
     from rattle_lab.model.sdf import SDFParams, simulate
@@ -75,10 +74,7 @@ def pipeline() -> None:
 
     for dtype in (np.float32, np.float64, np.int16, np.int32):
         ChannelChecker(np.dtype(dtype)).update(np.r_[np.zeros(40), np.arange(60)].astype(dtype))
-    warm_cache()
-    fs = 20000.0
-    mic = 1e-3 * np.random.default_rng(1).standard_normal(int(0.6 * fs))
-    run_acoustics(mic, fs, np.arange(0.05, 0.6, 0.01))
+    warm_cache()   # detection and the run's acoustics
     simulate_modal(plate_system(n_modes=2), cycles=3.0)
     # the thesis's RK4 (its own kernel, not the exact simulator's): here, where there is time
     simulate(SDFParams(F=0.2, omega=1.0, zeta=0.05, e=0.6), cycles=5.0, method="rk4-thesis")

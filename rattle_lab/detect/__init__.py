@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from ._patterns import PatternResult, impact_pattern, impacts_per_cycle
     from ._sound import SoundPeaks, cross_correlation_delay, impulse_train, sound_peaks
     from ._spl import P_REF_PA, a_weight, a_weighting_db, rms_spl_db, spl_db
-    from ._warm import warm_cache
+    from ._warm import kernels_cold, warm_cache
 
 #: public name -> submodule that defines it; loaded on first use (SciPy's signal package, the
 #: flight model and the trigger only when detection runs)
@@ -71,6 +71,7 @@ _LAZY: dict[str, str] = {
     "a_weighting_db": "_spl",
     "rms_spl_db": "_spl",
     "spl_db": "_spl",
+    "kernels_cold": "_warm",
     "warm_cache": "_warm",
 }
 
@@ -88,8 +89,8 @@ __all__ = [
     "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
     "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",
     "run_chain_flags", "transient_shocks", "velocity_delay_flags",
-    # the kernels compiled after installing (rattle_lab._warmup)
-    "warm_cache",
+    # the kernels compiled after installing (rattle_lab._warmup) or at a first fit
+    "kernels_cold", "warm_cache",
 ]
 
 

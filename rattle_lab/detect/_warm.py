@@ -27,14 +27,37 @@ def _bouncing(fs_hz: float, f_hz: float, seconds: float
     return v, a, k_imp
 
 
+#: The compiled functions :func:`kernels_cold` looks for in numba's cache (one of each kind).
+_PROBES = ("local_lstsq", "free_sums", "added_sums", "tail_columns")
+
+
+def kernels_cold() -> bool:
+    """Whether numba's on-disk cache lacks some of the detection's compiled functions (a
+    detection would compile them first, about 15 s).  False where it cannot tell (a numba
+    without this cache layout): no notice is better than a wrong one."""
+    from . import _flight_kernels
+
+    for name in _PROBES:
+        try:
+            index = getattr(_flight_kernels, name)._cache._cache_file._load_index()
+        except Exception:  # noqa: BLE001 - numba internals: unknown means "do not say"
+            return False
+        if not index:
+            return True
+    return False
+
+
 def warm_cache() -> None:
-    """Compile the detection's numba kernels now, and write numba's on-disk cache.
+    """Compile the per-run analysis's numba kernels now, and write numba's on-disk cache.
 
     The trigger's local fits, the flight model, its ringing searches (one run's and the
-    campaign's) and the ringing modes carried over impacts, each called once on a made-up
-    record of 0.6 s (``python -m rattle_lab._warmup`` runs it after installing; without it
-    the first detection of a fresh install compiles them, some 10 s).
+    campaign's), the ringing modes carried over impacts, and the run's acoustics (ISO 532-1
+    loudness), each called once on a made-up record of 0.6 s (``python -m rattle_lab._warmup``
+    runs it after installing, and a first ``rattle-lab fit`` where :func:`kernels_cold`;
+    without it the first detection compiles them silently, about 15-18 s).
     """
+    from rattle_lab.acoustics import run_acoustics
+
     fs, f = 20000.0, 100.0
     v, a, k_imp = _bouncing(fs, f, 0.6)
     params = ImpactParams()
@@ -50,3 +73,5 @@ def warm_cache() -> None:
     problem = ringing_problem(v, fs, f, k_imp, pad, v_in, v_out)
     if problem is not None:
         campaign_ring_modes([problem, problem])
+    mic = 1e-3 * np.random.default_rng(1).standard_normal(v.size)
+    run_acoustics(mic, fs, k_imp / fs)

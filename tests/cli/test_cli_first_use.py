@@ -97,3 +97,35 @@ def test_the_first_simulation_says_it_compiles(tmp_path: Path) -> None:
     again = subprocess.run(args, capture_output=True, text=True, env=_env(cache), timeout=300)
     assert again.returncode == 0 and "compiling" not in again.stderr  # cached now
     assert again.stdout == first.stdout
+
+
+def test_kernels_cold_tells_an_empty_cache_from_a_warm_one(tmp_path: Path) -> None:
+    code = "from rattle_lab.detect import kernels_cold; print(kernels_cold())"
+    for cache, cold in ((tmp_path / "empty", "True"), (None, "False")):
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             env=_env(cache), timeout=300, check=True)
+        assert out.stdout.strip() == cold, cache
+
+
+@pytest.mark.parametrize("cold", [True, False])
+def test_a_fit_says_when_it_compiles_the_detection(monkeypatch, capsys, cold: bool) -> None:
+    # after a plain pip install the first fit compiled the detection's kernels (about 15 s)
+    # without a word; now it says so first.  (The compiling itself is what the install's
+    # warm-up runs, python -m rattle_lab._warmup; here it is stood in for.)
+    import rattle_lab.detect as detect
+    from rattle_lab.cli import _first_use
+
+    calls = []
+    monkeypatch.setattr(detect, "kernels_cold", lambda: cold)
+    monkeypatch.setattr(detect, "warm_cache", lambda: calls.append("warm"))
+    monkeypatch.setattr(_first_use, "_compile_simulator", lambda: False)
+    assert _first_use.compile_if_cold("fit") is cold
+    err = capsys.readouterr().err.splitlines()
+    if cold:
+        assert calls == ["warm"] and err[0] == _first_use.DETECT_NOTICE
+        assert err[1].startswith("rattle-lab: detection kernels compiled and cached in ")
+    else:
+        assert calls == [] and err == []
+    calls.clear()
+    assert _first_use.compile_if_cold("simulate") is False   # does not detect: not asked
+    assert calls == []

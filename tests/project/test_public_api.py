@@ -94,8 +94,8 @@ PACKAGES: dict[str, list[str]] = {
         "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
         "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",
         "run_chain_flags", "transient_shocks", "velocity_delay_flags",
-        # the kernels compiled after installing (rattle_lab._warmup)
-        "warm_cache",
+        # the kernels compiled after installing (rattle_lab._warmup) or at a first fit
+        "kernels_cold", "warm_cache",
     ],
     "rattle_lab.explorer": [
         "Explorer", "Histories", "compute_histories", "save_histories", "impacts_path",
