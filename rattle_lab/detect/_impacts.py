@@ -18,7 +18,11 @@
    plastic one, ``2`` for an elastic one) is ringing, hum or a glitch, not an impact, and
    so is one that approaches from the side opposite the striker (the side most triggers
    that do reverse approach from).  This, not a longer dead time, keeps the plate's
-   ringing from re-triggering the detector.
+   ringing from re-triggering the detector.  With a plate accelerometer, a trigger that fails
+   this at the impact time is judged again by the velocity fits at its contact pulse's
+   ends (first touch and separation), provided its pulse has the kept impacts' sign: a
+   contact lasting ``T`` adds the free flight's ``a T`` to the jump, so a slow impact of
+   a long contact shows no reversal at its centroid (:func:`_reversed_at_ends`).
 5. Incoming and rebound velocities: fits to the velocity over a window before and
    after the jump, clear of it by its half-height width plus a guard (a finite contact
    and a band-limited vibrometer spread a jump over several samples), each evaluated at
@@ -42,7 +46,7 @@ from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, n_samples_of
 from ._flights import RingingProblem, flight_velocities, ringing_problem
 from ._local_fits import _fit_windows, _jump_fits, _JumpFits
-from ._offset import _reverses, velocity_offset
+from ._offset import _reversed_at_ends, _reverses, velocity_offset
 from ._ringing import MIN_SHARE_IMPACTS, RINGING_RESIDUAL_RATIO, _ringing_residual_ratio
 from ._trigger import _centroid, _half_region, characteristic, trigger_onsets
 from ._timing import (MAX_COARSE_LAG_S, MAX_EXTRA_GUARD_S, DelayEstimate, channel_delay,
@@ -471,7 +475,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             jfits = [replace(_jump_fits(v, j_lo, j_hi, lo_l, hi_l, n_fit=n_fit,
                                         n_guard=n_guard + extra, degree=degree,
                                         omega_per_sample=omega, accel=None),
-                             t_a=jf.t_a)
+                             t_a=jf.t_a, a_lo=jf.a_lo, a_hi=jf.a_hi, a_sign=jf.a_sign)
                      for jf, (j_lo, j_hi, lo_l, hi_l) in zip(jfits, spans)]
             # the step's centroid over the wider span holds more of a ringing decoder's tail
             est = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits])
@@ -516,9 +520,20 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             v_out.append(vo)
     vin = np.asarray(v_in, dtype=float)
     vout = np.asarray(v_out, dtype=float)
+    keep = _reverses(vin, vout, params.min_reversal) if v is not None else np.ones(vin.size, bool)
+    if v is not None and jfits and not keep.all():
+        # issue 24: a contact that lasts many samples (a compliant striker on a many-mode
+        # plate, ~0.2-0.8 ms) changes the free flight's velocity by a (t_end - t_start) while
+        # it lasts; read at the centroid, a slow one's fits then show no reversal.  Those are
+        # judged again by the fits at the contact pulse's ends, first touch and separation.
+        # Their velocities stay the centroid's (the rigid impact's that the SDF model has)
+        vin_e = np.array([jf.at(jf.a_lo + d_use)[0] for jf in jfits])
+        vout_e = np.array([jf.at(jf.a_hi + d_use)[1] for jf in jfits])
+        sign_a = np.array([jf.a_sign for jf in jfits])
+        keep = keep | _reversed_at_ends(vin, vout, keep, vin_e, vout_e, sign_a,
+                                        params.min_reversal)
     with np.errstate(divide="ignore", invalid="ignore"):
         e = np.where(vin != 0, -vout / vin, np.nan)
-    keep = _reverses(vin, vout, params.min_reversal) if v is not None else np.ones(vin.size, bool)
     offset = 0.0
     if v is not None and excitation_freq_hz is not None:
         # a shaker run: the plate meets the striker at the gap, cycle after cycle

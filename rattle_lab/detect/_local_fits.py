@@ -70,7 +70,16 @@ class _LocalFit:
 
 def pulse_centroid(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: int, degree: int,
                    omega_per_sample: float | None = None) -> float:
-    """Centroid (sample units) of the contact pulse of the plate acceleration near ``k_c``.
+    """Centroid (sample units) of the contact pulse of the plate acceleration near ``k_c``
+    (:func:`contact_pulse`'s first value)."""
+    return contact_pulse(a, k_c, n_half, lo_lim, n_fit=n_fit, degree=degree,
+                         omega_per_sample=omega_per_sample)[0]
+
+
+def contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: int, degree: int,
+                  omega_per_sample: float | None = None) -> tuple[float, float, float, float]:
+    """Centroid, first and last sample and sign of the contact pulse of the plate
+    acceleration near ``k_c`` (sample units; sign +-1 of the pulse).
 
     The smooth acceleration is fitted (:class:`_LocalFit`) over ``n_fit`` samples ending
     ``n_half`` samples before ``k_c`` and extrapolated; in the residual over
@@ -79,24 +88,27 @@ def pulse_centroid(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: 
     half-height width).  A contact pulse is short and large, so its centroid is a far less
     noisy impact time than the velocity step (``sigma_a / peak`` against ``sigma_v / jump``);
     point sampling a half-sine of 4 samples moves its centroid by at most 0.01 sample.
-    Returns NaN without room for the fit.
+    The widened region is the contact's extent (first touch to separation of a half-sine
+    force).  Returns NaNs (sign 0) without room for the fit.
     """
+    nan = float("nan")
     lo, hi = k_c - n_half, k_c + n_half
     f_hi = lo - 1
     f_lo = max(lo_lim, f_hi - n_fit + 1)
     if lo < 0 or hi >= a.size or f_hi - f_lo + 1 < 3:
-        return float("nan")
+        return nan, nan, nan, 0.0
     smooth = _LocalFit(np.arange(f_lo, f_hi + 1.0), a[f_lo:f_hi + 1], degree, omega_per_sample)
     k = np.arange(lo, hi + 1.0)
     r = a[lo:hi + 1] - smooth(k)
     pk = int(np.argmax(np.abs(r)))
-    r = r * np.sign(r[pk])
+    sign = float(np.sign(r[pk]))
+    r = r * sign
     r_lo, r_hi = _half_region(r, pk)
     widen = int(np.ceil(0.25 * (r_hi - r_lo + 1)))
     r_lo, r_hi = max(0, r_lo - widen), min(r.size - 1, r_hi + widen)
     w = r[r_lo:r_hi + 1]
     if not np.sum(w) > 0:
-        return float("nan")
+        return nan, nan, nan, 0.0
     t1 = float(np.sum(k[r_lo:r_hi + 1] * w) / np.sum(w))
     # ringing of the higher modes starts at the impact, ~ sin(omega_j (t - t_i)): its start,
     # a ramp with its curvature (a x + b x**2, x = t - t1) fitted over twice the pulse's
@@ -112,7 +124,8 @@ def pulse_centroid(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: 
         w = w - (coef[0] * xc + coef[1] * xc * xc)
         if np.sum(w) > 0:
             t1 = float(np.sum(k[r_lo:r_hi + 1] * w) / np.sum(w))
-    return t1
+    # the extent: half a sample beyond the first and last samples of the pulse
+    return t1, float(k[r_lo]) - 0.5, float(k[r_hi]) + 0.5, sign
 
 
 def _fit_windows(j_lo: int, j_hi: int, lo_lim: int, hi_lim: int, n_fit: int, n_guard: int
@@ -166,6 +179,9 @@ class _JumpFits:
     t_half: float              # middle of the half-height region
     p: _LocalFit | None
     q: _LocalFit | None
+    a_lo: float = float("nan")  # the contact pulse's extent (NaN: no pulse)
+    a_hi: float = float("nan")
+    a_sign: float = 0.0         # the pulse's sign (+-1; 0: no pulse)
 
     def at(self, t: float) -> tuple[float, float]:
         nan = float("nan")
@@ -194,11 +210,12 @@ def _jump_fits(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: int, *,
     # centroid of ds over [a, b]: b - integral of s (trapezoid; s(a) ~ 0, s(b) ~ 1)
     t = float(post_lo - (np.sum(step) - 0.5 * (step[0] + step[-1])))
     t = min(max(t, float(pre_hi)), float(post_lo))
-    t_a = nan
+    t_a, a_lo, a_hi, a_sign = nan, nan, nan, 0.0
     if accel is not None:
         n_pad = post_lo - j_hi
-        t_a = pulse_centroid(accel, int(round(t)), n_pad + (j_hi - j_lo + 1) // 2, lo_lim,
-                             n_fit=n_fit, degree=degree, omega_per_sample=omega_per_sample)
+        t_a, a_lo, a_hi, a_sign = contact_pulse(
+            accel, int(round(t)), n_pad + (j_hi - j_lo + 1) // 2, lo_lim,
+            n_fit=n_fit, degree=degree, omega_per_sample=omega_per_sample)
         if not (np.isfinite(t_a) and pre_hi <= t_a <= post_lo):
-            t_a = nan
-    return _JumpFits(t, t_a, t_half, p, q)
+            t_a, a_lo, a_hi, a_sign = nan, nan, nan, 0.0
+    return _JumpFits(t, t_a, t_half, p, q, a_lo, a_hi, a_sign)

@@ -73,3 +73,32 @@ def _reverses(vin: np.ndarray, vout: np.ndarray, min_reversal: float) -> np.ndar
         side = np.sign(np.sum(np.sign(vin[reversal & ~unknown])))
         toward = (np.sign(vin) == side) if side != 0 else np.ones(vin.size, dtype=bool)
     return unknown | (reversal & toward)
+
+
+def _reversed_at_ends(vin: np.ndarray, vout: np.ndarray, keep: np.ndarray, vin_e: np.ndarray,
+                      vout_e: np.ndarray, sign_a: np.ndarray, min_reversal: float) -> np.ndarray:
+    """Triggers that :func:`_reverses` did not keep but that are impacts by the velocity fits
+    at their contact pulse's ends (``vin_e`` at first touch, ``vout_e`` at separation).
+
+    A contact lasting ``T`` changes the free flight's velocity by ``a T`` besides its own
+    impulse; read at the centroid, a slow approach (``|v_in| < |a| T / 2``) then shows no
+    reversal.  Kept here: the same reversal as :func:`_reverses` between the two ends,
+    approaching from the striker's side of the impacts kept, with a contact pulse of the
+    sign theirs have relative to their approach (the accelerometer may be mounted either
+    way round).  Without kept impacts the candidates that reverse at their ends set both.
+    """
+    none = np.zeros(vin.size, dtype=bool)
+    if min_reversal == 0.0 or vin.size == 0:
+        return none
+    with np.errstate(invalid="ignore"):
+        cand = ~keep & np.isfinite(vin_e) & np.isfinite(vout_e) & (sign_a != 0)
+        rev_e = cand & (-(vout_e - vin_e) * np.sign(vin_e) >= min_reversal * np.abs(vin_e))
+        ref = keep & np.isfinite(vin) & (sign_a != 0)
+        v_ref = vin
+        if not ref.any():
+            ref, v_ref = rev_e, vin_e
+        side = float(np.sign(np.sum(np.sign(v_ref[ref]))))
+        polarity = float(np.sign(np.sum(sign_a[ref] * np.sign(v_ref[ref]))))
+        if side == 0.0 or polarity == 0.0:
+            return none
+        return rev_e & (np.sign(vin_e) == side) & (sign_a * side == polarity)

@@ -104,11 +104,6 @@ def test_sound_and_vibrometer_match_modal_channels(record: Path) -> None:
     assert np.median(lag) == pytest.approx(delay_s, abs=2.5 / fs_hz)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="issue 24: with the omitted modes' element (contacts ~1.5 ms) the SDF-tuned detector "
-                          "finds 98 of 113 episodes (recall 0.867, precision 1.0; the missed ones mostly "
-                          "0.06-0.23 m/s; without the element: 53 of 53, precision 0.946): for the detect "
-                          "owners")
 def test_ingest_and_fit_detect_the_impacts(record: Path, tmp_path: Path) -> None:
     store = tmp_path / "store.h5"
     assert run_command("ingest", str(record), "-o", str(store), "--quiet").returncode == 0
@@ -127,8 +122,11 @@ def test_ingest_and_fit_detect_the_impacts(record: Path, tmp_path: Path) -> None
             tp += sum(bool(np.any(np.abs(det - ti) < 1e-3)) for ti in truth)
     precision, recall = tp / n_det, tp / n_true
     print(f"modal_lab: {n_true} true, {n_det} detected, precision {precision:.3f}, recall {recall:.3f}")
-    # not tuned: the SDF-tuned detector on a multi-mode record; report, and require most found
-    assert recall >= 0.9 and precision >= 0.8
+    # default settings on a multi-mode record whose contacts last 0.2-0.8 ms (4-15 samples):
+    # 111 of 113 found, none extra, on 2026-11-29.  Slow impacts are found only by their
+    # contact pulse's ends (issue 24); the two missed are contacts whose largest
+    # acceleration residual is not their own pulse
+    assert recall >= 0.95 and precision >= 0.95
 
 
 def test_default_scene_is_still_sdf() -> None:
