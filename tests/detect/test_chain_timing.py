@@ -108,6 +108,30 @@ def test_undeclared_delay_is_measured_and_e_holds(chain):
     assert vin == pytest.approx(1.0, abs=0.01)
 
 
+def test_plate_ringing_does_not_move_the_delay_by_the_wide_fits():
+    # An undeclared 3rd-order 7.7 kHz Butterworth (0.76 sample at 25.6 kHz) and the plate's
+    # higher modes ringing in the vibrometer (2 % damping: they never settle between
+    # impacts).  The step looks unsettled at the fits' near ends, so the detector tries fits
+    # moved out by the step's settling time; there the per-impact centroids scatter by tens
+    # of samples (the ringing differs at every impact, a decoder's step response does not),
+    # and that estimate must not be applied: it was (4.4 samples), and the velocities read
+    # there failed the reversal test for 72 of the 77 impacts.
+    chain = Chain(decoder="butterworth", decoder_order=3, decoder_cutoff_hz=7748.66,
+                  decoder_delay_s=0.04 / 25600.0, ring_in_velocity=True, declare_delay=False,
+                  declare_measurand=False)
+    plant, ch, imp = _run(chain, periods=80, seed=1)
+    fs = chain.fs_hz
+    log = detect_impacts(fs, velocity_m_s=ch["velocity"], accel_ms2=ch["plate"],
+                         excitation_freq_hz=99.0)
+    t_true = imp[0]
+    found = sum(bool(np.any(np.abs(log.t_s - t) < 0.5e-3)) for t in t_true)
+    assert found >= 0.98 * t_true.size and log.n_impacts <= t_true.size + 2
+    assert log.step_guard_s == 0.0 and log.velocity_delay_window_s == 0.0
+    # what is applied is the first estimate, which the ringing still biases (by 1.1 samples
+    # here: docs/explanation/chain_timing.md, known limitations)
+    assert log.velocity_delay_applied_s == pytest.approx(chain.velocity_delay_s, abs=1.5 / fs)
+
+
 def test_declared_delay_is_checked():
     chain = Chain(decoder="butterworth", decoder_order=4, decoder_cutoff_hz=10000.0,
                   decoder_delay_s=0.0, ring_in_velocity=False)
