@@ -53,6 +53,29 @@ from ._timing import (MAX_COARSE_LAG_S, MAX_EXTRA_GUARD_S, DelayEstimate, channe
                       coarse_lag, delay_significant, settled_span, shift_earlier, step_error)
 
 
+#: Least share of the triggers that reverse with the velocity read at the accelerometer's
+#: time that must still reverse with it read at a measured delay, for that delay to be
+#: applied (:func:`_delay_keeps_reversals`).
+DELAY_REVERSAL_SHARE = 0.9
+
+
+def _delay_keeps_reversals(jfits: list[_JumpFits], d_new: float, d_old: float,
+                           min_reversal: float) -> bool:
+    """Whether reading the velocity fits at the contact pulses plus ``d_new`` samples keeps
+    at least :data:`DELAY_REVERSAL_SHARE` as many reversing triggers (:func:`_reverses`) as
+    reading them at ``d_old``.  Without the pulses' times, or no trigger reversing at
+    ``d_old``: True."""
+    t_a = np.array([jf.t_a for jf in jfits], dtype=float)
+    ok = np.isfinite(t_a)
+    if min_reversal == 0.0 or not ok.any():
+        return True
+    counts = []
+    for d in (d_old, d_new):
+        vv = np.array([jf.at(t + d) for jf, t in zip(jfits, t_a) if np.isfinite(t)])
+        counts.append(int(_reverses(vv[:, 0], vv[:, 1], min_reversal).sum()))
+    return counts[0] == 0 or counts[1] >= DELAY_REVERSAL_SHARE * counts[0]
+
+
 @dataclass(frozen=True)
 class ImpactParams:
     """Parameters of :func:`detect_impacts` (seconds and SI units).
@@ -418,8 +441,11 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     # issue 28: the velocity steps' centroids against the contact pulses' measure what is
     # left of the vibrometer's delay after the declared one (the first moment of any
     # filter's impulse response is its low-frequency group delay): the fits are evaluated
-    # at the impact time plus it, the impact time stays the accelerometer's
-    delay = channel_delay([j.t_v for j in jfits], [j.t_a for j in jfits]) \
+    # at the impact time plus it, the impact time stays the accelerometer's.  The steps'
+    # centroids are taken between short flanks (:func:`_short_flank_centroid`): the long
+    # fits cannot follow the plate's higher modes ringing after an impact and put every
+    # step late alike (up to 7 samples, with a standard error of 0.01)
+    delay = channel_delay([j.t_s for j in jfits], [j.t_a for j in jfits]) \
         if v is not None and a is not None else DelayEstimate(float("nan"), float("nan"), 0)
     delay = replace(delay, value=delay.value + lag)
     delay_first = delay.value
@@ -434,6 +460,13 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     # :func:`rattle_lab.fit._chain.delay_systematic`)
     measured = bool(np.isfinite(delay.value)) and not velocity_delay_declared
     applied = measured and delay.resolved and delay_significant(delay)
+    if applied and not _delay_keeps_reversals(jfits, delay.value - lag, -float(lag),
+                                              params.min_reversal):
+        # an impact reverses the velocity whatever the chain: a delay under which fewer
+        # triggers do than without it is not the chain's (a slow decoder and the plate's
+        # ringing together bias the steps' centroids alike at every impact: 2-3.5 samples
+        # on the independent generator, and 44 of 77 impacts lost)
+        applied = False
     if applied:
         d_use = delay.value - lag
     def t_eval_of(jf: _JumpFits) -> float:
