@@ -11,6 +11,7 @@ the pulse's centroid then show a slow impact's velocity still approaching after 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.integrate import solve_ivp
 
 from rattle_lab.detect import detect_impacts
@@ -77,8 +78,13 @@ def _record(seed: int = 3):
     return v + 2e-4 * rng.standard_normal(v.size), a + 0.5 * rng.standard_normal(a.size), contacts
 
 
-def test_slow_impacts_of_a_long_contact_are_found():
+@pytest.mark.parametrize("accel_sign", [1.0, -1.0], ids=["accelerometer", "accelerometer_reversed"])
+@pytest.mark.parametrize("vel_sign", [1.0, -1.0], ids=["vibrometer", "vibrometer_reversed"])
+def test_slow_impacts_of_a_long_contact_are_found(vel_sign, accel_sign):
+    # the sensors' polarities are not known to the detector: the impacts' side and the
+    # contact pulses' sign relative to it come from the impacts that reverse at their centroid
     v, a, contacts = _record()
+    v, a = vel_sign * v, accel_sign * a
     touch, release, v_in = contacts[:, 0], contacts[:, 2], contacts[:, 1]
     lasts = release - touch
     # the premise: contacts of 3-11 samples, and impacts slower than the free flight's change
