@@ -112,13 +112,17 @@ def test_a_fit_says_when_it_compiles_the_detection(monkeypatch, capsys, cold: bo
     # after a plain pip install the first fit compiled the detection's kernels (about 15 s)
     # without a word; now it says so first.  (The compiling itself is what the install's
     # warm-up runs, python -m rattle_lab._warmup; here it is stood in for.)
+    # The compiling runs in spawned children, where these stand-ins do not reach: here the
+    # children are run in this process (the subprocess test below covers the real ones).
     import rattle_lab.detect as detect
+    import rattle_lab.model.sdf as sdf
     from rattle_lab.cli import _first_use
 
     calls = []
     monkeypatch.setattr(detect, "kernels_cold", lambda: cold)
     monkeypatch.setattr(detect, "warm_cache", lambda: calls.append("warm"))
-    monkeypatch.setattr(_first_use, "_compile_simulator", lambda: False)
+    monkeypatch.setattr(sdf, "cold_kernels", lambda: [])
+    monkeypatch.setattr(_first_use, "_run_children", lambda targets: any([t() for t in targets]))
     assert _first_use.compile_if_cold("fit") is cold
     err = capsys.readouterr().err.splitlines()
     if cold:
@@ -129,3 +133,27 @@ def test_a_fit_says_when_it_compiles_the_detection(monkeypatch, capsys, cold: bo
     calls.clear()
     assert _first_use.compile_if_cold("simulate") is False   # does not detect: not asked
     assert calls == []
+
+
+def _compiles() -> bool:
+    return True
+
+
+def _finds_nothing() -> bool:
+    return False
+
+
+def _child_pid_is_not_ours() -> bool:
+    # True only in another process than the test's (the parent's pid is in the environment)
+    return os.getpid() != int(os.environ["RATTLE_LAB_TEST_PARENT_PID"])
+
+
+def test_the_compiling_runs_in_child_processes(monkeypatch) -> None:
+    # compile_if_cold hands each cold part to a spawned child (its compiler's memory goes
+    # with it); the child's exit status says whether it compiled
+    from rattle_lab.cli._first_use import _run_children
+
+    monkeypatch.setenv("RATTLE_LAB_TEST_PARENT_PID", str(os.getpid()))
+    assert _run_children([_finds_nothing]) is False
+    assert _run_children([_compiles, _finds_nothing]) is True
+    assert _run_children([_child_pid_is_not_ours]) is True
