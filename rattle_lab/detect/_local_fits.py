@@ -68,14 +68,6 @@ class _LocalFit:
         return self._design(kk) @ self.coef
 
 
-def pulse_centroid(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: int, degree: int,
-                   omega_per_sample: float | None = None) -> float:
-    """Centroid (sample units) of the contact pulse of the plate acceleration near ``k_c``
-    (:func:`contact_pulse`'s first value)."""
-    return contact_pulse(a, k_c, n_half, lo_lim, n_fit=n_fit, degree=degree,
-                         omega_per_sample=omega_per_sample)[0]
-
-
 def contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: int, degree: int,
                   omega_per_sample: float | None = None) -> tuple[float, float, float, float]:
     """Centroid, first and last sample and sign of the contact pulse of the plate
@@ -156,7 +148,7 @@ def jump_velocities(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: in
     at the rigid impact time; ``v_in = p(t)``, ``v_out = q(t)``.  Evaluating the fits at
     the centroid matters: the relative velocity changes by up to ``omega_s**2 h`` per second
     (~470 m/s^2 on a 1.3 mm gap at 96 Hz), so a tenth of a sample at 20 kHz is 2 mm/s.
-    With ``accel`` the time is the contact pulse's centroid (:func:`pulse_centroid`), and
+    With ``accel`` the time is the contact pulse's centroid (:func:`contact_pulse`), and
     the velocities are evaluated there: right only where the two channels are on one time
     base (:func:`detect_impacts` measures and removes what remains between them).
 
