@@ -41,6 +41,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from typing import Any
+
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,6 +94,20 @@ def write_long_campaign(folder: Path, seconds: float, fs_hz: float) -> list[Path
     return files
 
 
+def write_long_run(folder: Path, seconds: float, fs_hz: float) -> Path:
+    """One file of one dwell run ``seconds`` long (the independent generator), ingested."""
+    plant = Plant()
+    path = folder / f"long_{seconds:g}.h5"
+    write_campaign(path, plant, Chain(fs_hz=fs_hz), [
+        {"run_id": "dwell_95", "protocol": "sine_dwell", "freq_hz": 95.0,
+         "levels": np.full(int(seconds * 95.0), 1.5 * grazing_ms2(plant, 95.0))}], seed=17)
+    from rattle_lab.store import ingest
+
+    store = folder / f"long_{seconds:g}_store.h5"
+    ingest([path], store, quiet=True)
+    return store
+
+
 def channel_samples(files: list[Path]) -> int:
     import h5py
 
@@ -116,17 +132,47 @@ def h5py_read(files: list[Path]) -> tuple[float, int]:
     return time.perf_counter() - t0, n
 
 
+def _peak_rss_watch(pid: int, out: list[int], done: Any) -> None:
+    """Poll ``/proc/PID/status`` for VmHWM (the peak RSS of the program the child runs, since
+    its exec) until ``done`` is set."""
+    path = f"/proc/{pid}/status"
+    while not done.is_set():
+        try:
+            with open(path) as fh:
+                for line in fh:
+                    if line.startswith("VmHWM:"):
+                        out[0] = max(out[0], int(line.split()[1]) * 1024)
+        except (OSError, ValueError):
+            pass
+        done.wait(0.02)
+
+
 def run_timed(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float, int, str, str]:
-    """Wall time, peak RSS (bytes, from wait4), stdout, stderr of a command."""
+    """Wall time, peak RSS (bytes), stdout, stderr of a command.
+
+    The peak RSS is the child program's own: its ``VmHWM`` polled every 20 ms.  (The
+    ``ru_maxrss`` of ``wait4`` or ``RUSAGE_CHILDREN`` also counts the moment between fork
+    and exec, when the child is a copy of this process, hundreds of MiB.)  Where ``/proc``
+    is absent, ``wait4``'s figure."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=env)
-    out, err = proc.communicate()
+    peak, done = [0], threading.Event()
+    watch = threading.Thread(target=_peak_rss_watch, args=(proc.pid, peak, done), daemon=True)
+    watch.start()
+    with ThreadPoolExecutor(2) as pool:   # drain both pipes while waiting for the child
+        f_out = pool.submit(proc.stdout.read)  # type: ignore[union-attr]
+        f_err = pool.submit(proc.stderr.read)  # type: ignore[union-attr]
+        out, err = f_out.result(), f_err.result()   # EOF: the child is exiting
+        done.set()
+        watch.join()
+        _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
     wall = time.perf_counter() - t0
-    # the child has been reaped by communicate(); its rusage is in RUSAGE_CHILDREN's maximum
-    import resource
-
-    rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
+    rss = peak[0] or usage.ru_maxrss * 1024
     if proc.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed ({proc.returncode}): {err[-2000:]}")
     return wall, rss, out, err
@@ -251,6 +297,9 @@ def main() -> None:
     ap.add_argument("--stream-hours", type=float, default=1.0,
                     help="hours of synthetic 4-channel 51.2 kHz data through the cluster path")
     ap.add_argument("--chunk-s", type=float, default=10.0, help="streaming chunk, s")
+    ap.add_argument("--long-seconds", type=float, nargs=2, default=(100.0, 400.0),
+                    help="lengths of the two single-run records whose peak RSS of `fit` is "
+                         "compared, s (default 100 400)")
     args = ap.parse_args()
 
     import logging
@@ -292,6 +341,22 @@ def main() -> None:
         rows.append(("rattle-lab fit, end to end (default settings)",
                      f"{n_samples / wall / 1e6:.2f} M samples/s",
                      f"{wall:.1f} s wall, {n_ok} runs fitted; peak RSS {rss / 2**20:.0f} MiB"))
+        print(rows[-1], flush=True)
+        # memory against a run's length: one run, then one four times longer
+        long_rows = []
+        for seconds in args.long_seconds:
+            long_store = write_long_run(folder, seconds, args.fs)
+            n_long = sum(channel_samples([p]) for p in folder.glob(f"long_{seconds:g}.h5"))
+            w_long, rss_long, out_long, _ = run_timed([entry_point(), "fit", str(long_store),
+                                                       "--json", "--quiet"])
+            e_long = (json.loads(out_long).get("fits", {}).get("restitution_ratio") or {}
+                      ).get("value")
+            long_rows.append(f"{seconds:g} s run ({n_long / 1e6:.0f} M samples): "
+                             f"{rss_long / 2**20:.0f} MiB, {w_long:.0f} s, e {e_long:.4f}")
+            long_store.unlink()
+        rows.append(("peak RSS of rattle-lab fit against the run's length",
+                     " / ".join(r.split(":")[1].split(",")[0].strip() for r in long_rows),
+                     "; ".join(long_rows) + " (truth e 0.55); goal <= 1 GiB whatever the length"))
         print(rows[-1], flush=True)
         t_read, n_read = h5py_read(files)
         rows.append(("plain h5py read of the same samples", f"{n_read / t_read / 1e6:.0f} M "

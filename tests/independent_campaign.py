@@ -153,7 +153,10 @@ def simulate(plant: Plant, W: float, levels: np.ndarray, fs_hz: float, y0=0.0, v
                         lo = mid
                 t_next = t0 + lo
                 impact = True
-            sel = (ts >= t0) & (ts < (t_next if impact or k + 1 < len(levels) else np.inf))
+            # the samples with t0 <= t < end (ts is sorted: an index range, not a mask over
+            # the whole record per flight)
+            sel = slice(int(np.searchsorted(ts, t0)), int(np.searchsorted(
+                ts, t_next if impact or k + 1 < len(levels) else np.inf)))
             yf, vf = _free(hy, hv, w, z, ts[sel] - t0)
             y[sel] = yf + yp(ts[sel])
             v[sel] = vf + vp(ts[sel])
@@ -176,7 +179,7 @@ def simulate(plant: Plant, W: float, levels: np.ndarray, fs_hz: float, y0=0.0, v
                 pull = -w * w * h - q * float(A) * np.sin(W * tt)
                 away = np.flatnonzero(pull < 0)
                 t_go = float(tt[away[0]]) if away.size else t_end
-                sel = (ts >= t0) & (ts < t_go)
+                sel = slice(int(np.searchsorted(ts, t0)), int(np.searchsorted(ts, t_go)))
                 y[sel] = h
                 v[sel] = 0.0
                 t0, ys, vs = t_go, h * (1 - 1e-12), 0.0

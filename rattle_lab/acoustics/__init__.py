@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from ._levels import (P_REF_PA, SoundLevels, energy_mean_db, fast_time_weighted, rattle_episodes,
                           sound_levels)
     from ._loudness import Loudness, loudness
-    from ._run import RunAcoustics, channel_calibration, run_acoustics
+    from ._run import RunAcoustics, channel_calibration, joined_acoustics, run_acoustics
 
 #: public name -> submodule that defines it; loaded on first use, so that a stage that needs
 #: one corner of the package (ingest reads microphone calibrations) does not import SciPy's
@@ -57,6 +57,7 @@ _LAZY: dict[str, str] = {
     "RunAcoustics": "_run",
     "channel_calibration": "_run",
     "run_acoustics": "_run",
+    "joined_acoustics": "_run",
 }
 
 __all__ = [
@@ -66,6 +67,7 @@ __all__ = [
     "weighting_db", "weighting_response", "energy_mean_db",
     "Ecma418", "Onsets", "adjustment_db", "campaign_background", "ecma418", "ecma418_available",
     "episode_psychoacoustics", "find_onsets", "laf_db", "prominence", "stationary_loudness",
+    "joined_acoustics",
 ]
 
 

@@ -21,7 +21,7 @@ a polyphase filter when it is at another rate.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any, Literal
 
@@ -48,12 +48,17 @@ class Loudness:
         DIN 45692 sharpness of the time-averaged specific loudness, acum.
     field_type : {"free", "diffuse"}
         Sound field assumed (free = frontal incidence).
+    curve : (ndarray, ndarray) or None
+        ``N(t)`` (sone, every 2 ms) and the time-averaged ``N'(z)`` (sone/Bark), where asked
+        (:func:`loudness`'s ``keep_curve``); not compared.
     """
 
     n5_sone: float
     nmax_sone: float
     sharpness_acum: float
     field_type: FieldType = "free"
+    curve: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False,
+                                                        repr=False)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict."""
@@ -82,7 +87,8 @@ def _din45692_sharpness(spec_mean: np.ndarray) -> float:
     return float(0.11 * np.sum(spec_mean * g * z * 0.1) / n_total)
 
 
-def loudness(pressure_pa: object, fs_hz: float, *, field_type: FieldType = "free") -> Loudness:
+def loudness(pressure_pa: object, fs_hz: float, *, field_type: FieldType = "free",
+             keep_curve: bool = False) -> Loudness:
     """ISO 532-1 time-varying loudness (N5, Nmax) and DIN 45692 sharpness of a pressure signal.
 
     Parameters
@@ -93,6 +99,9 @@ def loudness(pressure_pa: object, fs_hz: float, *, field_type: FieldType = "free
         Sampling rate, Hz.
     field_type : {"free", "diffuse"}
         Free field (frontal incidence, the default) or diffuse field.
+    keep_curve : bool
+        Keep ``N(t)`` and the time-averaged ``N'(z)`` on the result (``curve``), for
+        stretches joined later (:func:`joined_loudness`).
 
     Raises
     ------
@@ -105,8 +114,31 @@ def loudness(pressure_pa: object, fs_hz: float, *, field_type: FieldType = "free
     if p.ndim != 1 or p.size < 0.1 * fs_hz or not np.all(np.isfinite(p)):
         raise ParameterError("`pressure_pa` must be a finite 1-D signal of at least 0.1 s")
     n_t, spec_mean = time_varying_loudness(_at_48k(p, fs_hz), diffuse=field_type == "diffuse")
+    out = loudness_of_curve(n_t, spec_mean, field_type)
+    return out if keep_curve else replace(out, curve=None)
+
+
+def loudness_of_curve(n_t: np.ndarray, spec_mean: np.ndarray,
+                      field_type: FieldType = "free") -> Loudness:
+    """:class:`Loudness` of a time-varying loudness ``N(t)`` (sone) and its time-averaged
+    specific loudness (sone/Bark, 0.1 Bark grid), the curves kept (``curve``)."""
     return Loudness(float(np.percentile(n_t, 95.0)), float(np.max(n_t)),
-                    _din45692_sharpness(spec_mean), field_type)
+                    _din45692_sharpness(spec_mean), field_type,
+                    curve=(np.asarray(n_t, float), np.asarray(spec_mean, float)))
 
 
-__all__ = ["FieldType", "Loudness", "loudness"]
+def joined_loudness(parts: list[Loudness]) -> Loudness:
+    """The loudness of consecutive stretches joined: N5 and Nmax of their ``N(t)`` curves
+    end to end, sharpness of their specific loudness averaged over time (each weighted by
+    its length).  Every part must carry its curves (:func:`loudness_of_curve`)."""
+    curves = [ld.curve for ld in parts if ld.curve is not None]
+    if len(curves) != len(parts) or not curves:
+        raise ParameterError("joined_loudness needs each part's curves")
+    n_t = np.concatenate([c[0] for c in curves])
+    w = [float(c[0].size) for c in curves]
+    spec = np.sum([wi * c[1] for wi, c in zip(w, curves)], axis=0) / sum(w)
+    out = loudness_of_curve(n_t, spec, parts[0].field_type)
+    return replace(out, curve=None)
+
+
+__all__ = ["FieldType", "Loudness", "joined_loudness", "loudness", "loudness_of_curve"]

@@ -16,7 +16,7 @@ import numpy as np
 from rattle_lab.exceptions import RattleLabError
 from ._episodes import episode_psychoacoustics
 from ._levels import P_REF_PA, SoundLevels, rattle_episodes, sound_levels
-from ._loudness import FieldType, Loudness, loudness
+from ._loudness import FieldType, Loudness, joined_loudness, loudness
 
 #: Loudness needs ISO 532-1's 0.1 s at least; shorter stretches get none.
 _MIN_LOUDNESS_S = 0.1
@@ -118,7 +118,8 @@ def _pooled_bands(pieces: list[np.ndarray], fs_hz: float) -> dict[str, float]:
 def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
                   start_time_s: float = 0.0, channel: Any = None,
                   field_type: FieldType = "free", with_loudness: bool = True,
-                  episode_gap_s: float = 0.5, ecma418_s: float = 0.0) -> RunAcoustics:
+                  episode_gap_s: float = 0.5, ecma418_s: float = 0.0,
+                  keep_loudness_curve: bool = False) -> RunAcoustics:
     """Levels, loudness and band spectra of a run's sound pressure (Pa) and its episodes.
 
     Parameters
@@ -142,13 +143,15 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
     ecma418_s : float
         Seconds of rattle episodes to rate with ECMA-418-2 (0, the default: none; it
         costs about 7 s of CPU per second of sound, :mod:`._ecma418`).
+    keep_loudness_curve : bool
+        Keep the run's ``N(t)`` on its loudness, for :func:`joined_acoustics`.
     """
     p = np.asarray(pressure_pa, dtype=float)
     lv = sound_levels(p, fs_hz)
     ld = None
     if with_loudness and p.size >= _MIN_LOUDNESS_S * fs_hz:
         try:
-            ld = loudness(p, fs_hz, field_type=field_type)
+            ld = loudness(p, fs_hz, field_type=field_type, keep_curve=keep_loudness_curve)
         except RattleLabError:
             ld = None
     eps = rattle_episodes(impact_t_s, start_time_s=start_time_s, duration_s=p.size / fs_hz,
@@ -185,4 +188,101 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
                         _pooled_bands(background, fs_hz), calib, run)
 
 
-__all__ = ["RunAcoustics", "channel_calibration", "run_acoustics"]
+def _energy_mean(levels_db: list[float], weights: list[float]) -> float:
+    lv, w = np.asarray(levels_db, float), np.asarray(weights, float)
+    ok = ~np.isnan(lv) & (w > 0)
+    if not ok.any():
+        return float("nan")
+    ms = np.sum(w[ok] * 10.0 ** (lv[ok] / 10.0)) / np.sum(w[ok])
+    return float(10 * np.log10(ms)) if ms > 0 else float("-inf")
+
+
+def _joined_bands(bands: list[dict[str, float]], weights: list[float]) -> dict[str, float]:
+    keys = list(dict.fromkeys(k for b in bands for k in b))
+    return {k: _energy_mean([b.get(k, float("nan")) for b in bands], weights) for k in keys}
+
+
+def _max(values: list[Any]) -> float:
+    v = [float(x) for x in values if x is not None and not math.isnan(float(x))]
+    return max(v) if v else float("nan")
+
+
+def joined_acoustics(parts: list[RunAcoustics]) -> RunAcoustics:
+    """The acoustics of consecutive stretches of one run (its segments) joined.
+
+    Levels: LAeq and third-octave levels the duration-weighted energy mean, LAFmax and
+    LCpeak the largest.  Loudness: N5 and Nmax of the stretches' ``N(t)`` end to end
+    (:func:`~rattle_lab.acoustics._loudness.joined_loudness`; each stretch's loudness
+    starts from rest).  Episodes and background stretches: each stretch's, in order (an
+    episode that crosses from one stretch into the next is two).  Rattle and background
+    bands: energy means weighted by the episodes' and the rest's durations.  Run-level
+    psychoacoustics: impacts per second over the episodes together, the most prominent
+    onset of any stretch, the episodes' duration-weighted N5 and ECMA-418-2 values, the
+    flags once each.
+    """
+    dur = [a.levels.duration_s for a in parts]
+    lv = SoundLevels(_energy_mean([a.levels.laeq_db for a in parts], dur),
+                     _max([a.levels.lafmax_db for a in parts]),
+                     _max([a.levels.lcpeak_db for a in parts]),
+                     _joined_bands([dict(a.levels.third_octave_db) for a in parts], dur),
+                     float(sum(dur)))
+    louds = [a.loudness for a in parts]
+    ld = (joined_loudness([x for x in louds if x is not None])
+          if any(x is not None for x in louds) and all(x is None or x.curve is not None
+                                                        for x in louds) else None)
+    episodes = tuple(e for a in parts for e in a.episodes)
+    rattle_s = [sum(e["t_end_s"] - e["t_start_s"] for e in a.episodes) for a in parts]
+    psy = _joined_psychoacoustics([a.psychoacoustics for a in parts], episodes)
+    return RunAcoustics(lv, ld, episodes,
+                        _joined_bands([a.rattle_bands_db for a in parts], rattle_s),
+                        _joined_bands([a.background_bands_db for a in parts],
+                                      [d - r for d, r in zip(dur, rattle_s)]),
+                        parts[0].calibration, psy)
+
+
+def _joined_psychoacoustics(parts: list[dict[str, Any]],
+                            episodes: tuple[dict[str, Any], ...]) -> dict[str, Any]:
+    if not parts or not parts[0]:
+        return {}
+    out = dict(parts[0])
+    intervals, span = 0.0, 0.0
+    for e in episodes:
+        rate, n = e.get("impacts_per_s"), e.get("n_impacts", 0)
+        if rate:
+            intervals, span = intervals + (n - 1), span + (n - 1) / rate
+    out["impacts_per_s"] = intervals / span if span > 0 else None
+    prom = [float("nan") if p.get("impulse_prominence") is None
+            else float(p["impulse_prominence"]) for p in parts]
+    ok = [i for i, x in enumerate(prom) if math.isfinite(x)]
+    best = parts[max(ok, key=lambda i: prom[i])] if ok else parts[0]
+    for key in ("impulse_prominence", "impulse_penalty_db", "impulse_level_difference_db",
+                "impulse_onset_rate_db_s"):
+        if key in best:
+            out[key] = best[key]
+    if "impulse_onsets" in out:
+        out["impulse_onsets"] = int(sum(p.get("impulse_onsets", 0) for p in parts))
+    dur = [e["t_end_s"] - e["t_start_s"] for e in episodes]
+    if "rattle_loudness_n5_sone" in out:
+        out["rattle_loudness_n5_sone"] = _weighted_or_nan(
+            [e.get("loudness_n5_sone") for e in episodes], dur)
+    rated = [float(e.get("ecma418_s") or 0.0) for e in episodes]
+    for key in ("loudness_ecma_sone", "tonality_tu", "roughness_asper"):
+        if key in out:
+            out[key] = _weighted_or_nan([e.get(key) for e in episodes], rated) \
+                if sum(rated) else None
+    if "ecma418_s" in out:
+        out["ecma418_s"] = float(sum(rated))
+    out["psychoacoustic_flags"] = list(dict.fromkeys(
+        f for p in parts for f in p.get("psychoacoustic_flags", [])))
+    out["background_stretches"] = [b for p in parts for b in p.get("background_stretches", [])]
+    return out
+
+
+def _weighted_or_nan(values: list[Any], weights: list[float]) -> float:
+    v = np.array([float("nan") if x is None else float(x) for x in values], float)
+    w = np.asarray(weights, float)
+    ok = np.isfinite(v) & (w > 0)
+    return float(np.sum(v[ok] * w[ok]) / np.sum(w[ok])) if ok.any() else float("nan")
+
+
+__all__ = ["RunAcoustics", "channel_calibration", "joined_acoustics", "run_acoustics"]

@@ -16,7 +16,7 @@ if TYPE_CHECKING:
                          relative_to_striker, run_chain_flags, transient_shocks,
                          velocity_delay_flags)
     from ._common import n_samples_of, parabolic_peak, robust_sigma
-    from ._params import SOUND_KEYS, DetectParams
+    from ._params import SEGMENT_KEYS, SOUND_KEYS, DetectParams
     from ._run import RunResult, analyse_run
     from ._flights import RingingProblem, campaign_ring_modes
     from ._impacts import ImpactLog, ImpactParams, detect_impacts
@@ -41,6 +41,7 @@ _LAZY: dict[str, str] = {
                      "transient_shocks", "velocity_delay_flags"), "_chain"),
     "DetectParams": "_params",
     "SOUND_KEYS": "_params",
+    "SEGMENT_KEYS": "_params",
     "RunResult": "_run",
     "analyse_run": "_run",
     "n_samples_of": "_common",
@@ -84,7 +85,7 @@ __all__ = [
     "DelayEstimate", "delay_contradicted", "measurand_share",
     # issue 29: detection in one room (the [detect] parameters, the per-run analysis, the
     # measurement chain of a run, the campaign's ringing search)
-    "DetectParams", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
+    "DetectParams", "SEGMENT_KEYS", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
     "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
     "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
     "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",

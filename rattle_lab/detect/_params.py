@@ -26,6 +26,12 @@ from ._impacts import ImpactParams
 SOUND_KEYS: dict[str, Any] = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_s": 0.01,
                               "channel": None}
 
+#: The defaults of the keys that split a long run into segments analysed one at a time
+#: (:mod:`rattle_lab.detect._segments`): a run whose detection channel holds more than
+#: 1.5 ``segment_samples`` is cut into segments of about ``segment_samples`` (2**20: 41 s at
+#: 25.6 kHz, 20 s at 51.2 kHz), each read with ``segment_margin_s`` of the record either side.
+SEGMENT_KEYS: dict[str, Any] = {"segment_samples": 1 << 20, "segment_margin_s": 1.0}
+
 _IMPACT_FIELDS = tuple(f.name for f in dataclasses.fields(ImpactParams))
 
 
@@ -48,6 +54,12 @@ velocity_model, ring_modes, ring_modes_runs
     channel : str or None
         The channel to detect on in every run (None: the run's ``detect_channel``, else
         chosen by what each channel measures).
+    segment_samples : int
+        A run whose detection channel holds more than 1.5 times this many samples is
+        analysed in segments of about this many (bounded memory whatever the run's length;
+        :mod:`rattle_lab.detect._segments`).
+    segment_margin_s : float
+        Record read on either side of a segment, s (the detector's context at its edges).
     given : tuple of str
         The keys the mapping gave, in its order (:meth:`to_dict`).
 
@@ -75,6 +87,8 @@ velocity_model, ring_modes, ring_modes_runs
     first_fraction: float = SOUND_KEYS["first_fraction"]
     max_lag_s: float = SOUND_KEYS["max_lag_s"]
     channel: str | None = SOUND_KEYS["channel"]
+    segment_samples: int = SEGMENT_KEYS["segment_samples"]
+    segment_margin_s: float = SEGMENT_KEYS["segment_margin_s"]
     given: tuple[str, ...] = field(default=(), repr=False)
 
     def __post_init__(self) -> None:
@@ -86,6 +100,13 @@ velocity_model, ring_modes, ring_modes_runs
                 raise ParameterError(f"`{name}` must be a number > 0, was {value!r}")
         if self.first_fraction > 1:
             raise ParameterError(f"`first_fraction` must be in (0, 1], was {self.first_fraction}")
+        n = self.segment_samples
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1 << 14:
+            raise ParameterError(f"`segment_samples` must be an integer >= 16384, was {n!r}")
+        m = self.segment_margin_s
+        if isinstance(m, bool) or not isinstance(m, (int, float, np.number)) \
+                or not (np.isfinite(m) and m > 0):
+            raise ParameterError(f"`segment_margin_s` must be a number > 0, was {m!r}")
         if self.channel is not None and not isinstance(self.channel, str):
             raise ParameterError(f"`channel` must be a channel name, was {self.channel!r}")
         unknown = sorted(set(self.given) - set(keys()))
@@ -144,7 +165,7 @@ def _changed(value: Any, default: Any) -> bool:
 
 def keys() -> tuple[str, ...]:
     """Every key of ``[detect]``."""
-    return _IMPACT_FIELDS + tuple(SOUND_KEYS)
+    return _IMPACT_FIELDS + tuple(SOUND_KEYS) + tuple(SEGMENT_KEYS)
 
 
-__all__ = ["DetectParams", "SOUND_KEYS"]
+__all__ = ["DetectParams", "SEGMENT_KEYS", "SOUND_KEYS"]

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from rattle_lab.acoustics import run_acoustics  # [issue 17, 26]
+from rattle_lab.acoustics import joined_acoustics, run_acoustics  # [issue 17, 26, 29]
 from rattle_lab.records import FLAG_MEASURAND_UNDECLARED, declared_delay_s
 from ._chain import (SHOCK_QUANTITIES, _fs_of, _t0_of, infer_measurand, paired_plate_channels,
                      relative_to_striker, run_chain_flags, transient_shocks,
@@ -27,8 +27,9 @@ from ._chain import (SHOCK_QUANTITIES, _fs_of, _t0_of, infer_measurand, paired_p
 from ._impacts import ImpactLog, detect_impacts
 from ._params import DetectParams
 from ._patterns import impact_pattern
+from ._segments import Span, core_mask, merge_arrays, merge_logs, segment_spans, segment_view
 from ._sound import SoundPeaks, cross_correlation_delay, impulse_train, sound_peaks
-from ._spl import rms_spl_db
+from ._spl import a_weight, rms_spl_db, spl_db
 from .thresholds import Threshold, ramp_threshold
 
 
@@ -175,49 +176,27 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
         return RunResult(status="skipped", reason="no plate_velocity or plate_acceleration channel",
                          **base)
     used = [c for c in (vel, acc) if c is not None]
-    # issue 15: each channel's time base less its declared filter delay; two channels at
-    # different rates or offsets are brought onto the grid of the faster one before pairing
-    fs, t0, v_si, a_si = paired_plate_channels(run, vel, acc)
-    params = detect.impact_params()
     # a constant excitation frequency lets the velocity fits use the forced-mode basis
     f_end = getattr(run, "freq_end_hz", None)
-    f_fit = freq if (math.isfinite(freq) and 0 < freq < fs / 2
+    fs_plate = max(_fs_of(run, c) for c in used)   # the pair's grid (paired_plate_channels)
+    f_fit = freq if (math.isfinite(freq) and 0 < freq < fs_plate / 2
                      and (f_end is None or f_end == freq)) else None
     delay_declared = vel is not None and declared_delay_s(vel) is not None
-    log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=params,
-                         start_time_s=t0, excitation_freq_hz=f_fit,
-                         velocity_delay_declared=delay_declared)
-    # issue 28: the vibrometer's delay measured from the impacts; its measurand, when the
-    # record does not say, inferred from the data
-    base["chain_flags"] = base["chain_flags"] + velocity_delay_flags(log, delay_declared)
-    measurand = getattr(vel, "measurand", None) if vel is not None else None
-    if vel is not None and measurand is None and v_si is not None:
-        log, flags = infer_measurand(run, log, v_si, fs, t0, by_q.get("base_acceleration"),
-                                     f_fit)
-        base["chain_flags"] = tuple(f for f in base["chain_flags"]
-                                    if f != FLAG_MEASURAND_UNDECLARED) + flags
-    if vel is not None and measurand == "panel_absolute":
-        log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
-    if log.velocity_note:   # the flight model gave no ringing share, or used some impacts only
-        what = "ringing_velocities_missing" if log.ring_modes else "ringing_share_missing"
-        base["chain_flags"] = base["chain_flags"] + (f"{what}: {log.velocity_note}",)
-    if (reuse is not None and reuse.status == "ok" and reuse.impacts is not None
-            and (reuse.input_key, reuse.run_id) == (input_key, run.run_id)
-            and np.array_equal(reuse.impacts.t_s, log.t_s)):
+    spans = segment_spans(run, detect, used[0])
+    if spans is not None:
+        return _analyse_segments(input_key, run, spans, detect, fit, mic_distance_m, reuse,
+                                 base, (vel, acc), f_fit, delay_declared)
+    # issue 15: each channel's time base less its declared filter delay; two channels at
+    # different rates or offsets are brought onto the grid of the faster one before pairing
+    log, fs, t0, duration, flags = _impact_log(run, by_q, vel, acc, detect, f_fit,
+                                               delay_declared)
+    base["chain_flags"] = _with_log_flags(base["chain_flags"], log, delay_declared, flags)
+    if reuse is not None and _reusable(reuse, input_key, run.run_id, log):
         # the same impact times: the same sound, pattern and threshold (issue 29: the
         # ringing passes detect again for the velocities only)
         return replace(reuse, impacts=log, chain_flags=base["chain_flags"])
     names = tuple(c.name for c in used)
-    duration = (v_si if v_si is not None else a_si).size / fs  # type: ignore[union-attr]
-    pattern, pattern_n, counts = "", 0, np.zeros(0, dtype=int)
-    if math.isfinite(freq) and freq > 0 and duration * freq >= 1:
-        lo, hi = t0, t0 + duration
-        if run.protocol.startswith("amplitude_ramp") and log.n_impacts:
-            # a ramp: the pattern while impacting (from the first to the last impact's cycle)
-            lo = t0 + np.floor((log.t_s[0] - t0) * freq) / freq
-            hi = min(t0 + duration, t0 + (np.floor((log.t_s[-1] - t0) * freq) + 1) / freq)
-        pr = impact_pattern(log.t_s, freq, lo, hi)
-        pattern, pattern_n, counts = pr.pattern, pr.n, pr.counts
+    pattern, pattern_n, counts = _pattern(run, log, freq, t0, duration)
     peaks, delay, expected, spl, spl_a = None, np.nan, np.nan, np.nan, np.nan
     acoustic = None  # [issue 17]
     mic = by_q.get("sound_pressure")
@@ -226,13 +205,7 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
         p = mic.read()
         t0_mic = _t0_of(run, mic)
         names = names + (mic.name,)
-        # issue 15: each sound paired with its impact through the declared propagation delay
-        d_prop = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0)) \
-            if mic_distance_m else 0.0
-        peaks = sound_peaks(p, fs_mic, log.t_s, window_s=detect.window_s, delay_s=d_prop,
-                            first_fraction=detect.first_fraction, start_time_s=t0_mic,
-                            excitation_freq_hz=f_fit if f_fit is not None and f_fit < fs_mic / 2
-                            else None)
+        peaks = _peaks(p, fs_mic, t0_mic, log.t_s, detect, fit, mic_distance_m, f_fit)
         spl = rms_spl_db(p)
         spl_a = rms_spl_db(p, fs_mic, a_weighted=True)
         if log.n_impacts:
@@ -241,11 +214,7 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
         if mic_distance_m:
             expected = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0))
         # [issue 17 acoustics hook] levels, bands, loudness, calibration of the microphone
-        acoustic = run_acoustics(p, fs_mic, log.t_s, start_time_s=t0_mic, channel=mic,
-                                 field_type=run.extra.get("x_sound_field",
-                                                          fit.get("sound_field", "free")),
-                                 with_loudness=bool(fit.get("loudness", True)),
-                                 ecma418_s=float(fit.get("ecma418_s", 0.0)))  # [issue 26]
+        acoustic = _acoustics(run, mic, p, fs_mic, log.t_s, t0_mic, fit)
     threshold = None
     if run.protocol in ("amplitude_ramp_up", "amplitude_ramp_down") and math.isfinite(freq):
         b = by_q.get("base_acceleration")
@@ -259,6 +228,162 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
                      pattern_n=pattern_n, cycle_counts=counts, acoustic_delay_s=delay,
                      expected_delay_s=expected, spl_rms_db=spl, spl_rms_a_db=spl_a,
                      threshold=threshold, acoustics=acoustic, **base)
+
+
+def _impact_log(run: Any, by_q: Mapping[str, Any], vel: Any, acc: Any, detect: DetectParams,
+                f_fit: float | None, delay_declared: bool
+                ) -> tuple[ImpactLog, float, float, float, tuple[str, ...] | None]:
+    """The impacts of a run (or a segment's view of it): ``(log, fs, t0, duration, flags)``,
+    the log relative to the striker where the vibrometer is absolute (declared or inferred),
+    ``flags`` those of an inferred measurand (None where it was not inferred)."""
+    fs, t0, v_si, a_si = paired_plate_channels(run, vel, acc)
+    log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=detect.impact_params(),
+                         start_time_s=t0, excitation_freq_hz=f_fit,
+                         velocity_delay_declared=delay_declared)
+    flags: tuple[str, ...] | None = None
+    # issue 28: the vibrometer's measurand, when the record does not say, inferred from
+    # the data
+    measurand = getattr(vel, "measurand", None) if vel is not None else None
+    if vel is not None and measurand is None and v_si is not None:
+        log, flags = infer_measurand(run, log, v_si, fs, t0, by_q.get("base_acceleration"),
+                                     f_fit)
+    if vel is not None and measurand == "panel_absolute":
+        log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
+    duration = (v_si if v_si is not None else a_si).size / fs  # type: ignore[union-attr]
+    return log, fs, t0, duration, flags
+
+
+def _with_log_flags(flags: tuple[str, ...], log: ImpactLog, delay_declared: bool,
+                    measurand_flags: tuple[str, ...] | None) -> tuple[str, ...]:
+    """The run's chain flags with those of its impact log: the vibrometer's delay
+    measured from the impacts (issue 28), an inferred measurand, the flight model's note."""
+    flags = flags + velocity_delay_flags(log, delay_declared)
+    if measurand_flags is not None:
+        flags = tuple(f for f in flags if f != FLAG_MEASURAND_UNDECLARED) + measurand_flags
+    if log.velocity_note:   # the flight model gave no ringing share, or used some impacts only
+        what = "ringing_velocities_missing" if log.ring_modes else "ringing_share_missing"
+        flags = flags + (f"{what}: {log.velocity_note}",)
+    return flags
+
+
+def _reusable(reuse: RunResult, input_key: str, run_id: str, log: ImpactLog) -> bool:
+    return (reuse.status == "ok" and reuse.impacts is not None
+            and (reuse.input_key, reuse.run_id) == (input_key, run_id)
+            and np.array_equal(reuse.impacts.t_s, log.t_s))
+
+
+def _pattern(run: Any, log: ImpactLog, freq: float, t0: float, duration: float
+             ) -> tuple[str, int, np.ndarray]:
+    if not (math.isfinite(freq) and freq > 0 and duration * freq >= 1):
+        return "", 0, np.zeros(0, dtype=int)
+    lo, hi = t0, t0 + duration
+    if run.protocol.startswith("amplitude_ramp") and log.n_impacts:
+        # a ramp: the pattern while impacting (from the first to the last impact's cycle)
+        lo = t0 + np.floor((log.t_s[0] - t0) * freq) / freq
+        hi = min(t0 + duration, t0 + (np.floor((log.t_s[-1] - t0) * freq) + 1) / freq)
+    pr = impact_pattern(log.t_s, freq, lo, hi)
+    return pr.pattern, pr.n, pr.counts
+
+
+def _peaks(p: np.ndarray, fs_mic: float, t0_mic: float, t_s: np.ndarray, detect: DetectParams,
+           fit: Mapping[str, Any], mic_distance_m: float | None, f_fit: float | None
+           ) -> SoundPeaks:
+    # issue 15: each sound paired with its impact through the declared propagation delay
+    d_prop = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0)) \
+        if mic_distance_m else 0.0
+    return sound_peaks(p, fs_mic, t_s, window_s=detect.window_s, delay_s=d_prop,
+                       first_fraction=detect.first_fraction, start_time_s=t0_mic,
+                       excitation_freq_hz=f_fit if f_fit is not None and f_fit < fs_mic / 2
+                       else None)
+
+
+def _acoustics(run: Any, mic: Any, p: np.ndarray, fs_mic: float, t_s: np.ndarray, t0: float,
+               fit: Mapping[str, Any], *, ecma418_s: float | None = None,
+               keep_curve: bool = False) -> Any:
+    return run_acoustics(p, fs_mic, t_s, start_time_s=t0, channel=mic,
+                         field_type=run.extra.get("x_sound_field",
+                                                  fit.get("sound_field", "free")),
+                         with_loudness=bool(fit.get("loudness", True)),
+                         ecma418_s=float(fit.get("ecma418_s", 0.0)) if ecma418_s is None
+                         else ecma418_s,  # [issue 26]
+                         keep_loudness_curve=keep_curve)
+
+
+def _analyse_segments(input_key: str, run: Any, spans: list[Span], detect: DetectParams,
+                      fit: Mapping[str, Any], mic_distance_m: float | None,
+                      reuse: RunResult | None, base: dict[str, Any],
+                      plate: tuple[Any, Any], f_fit: float | None, delay_declared: bool
+                      ) -> RunResult:
+    """:func:`analyse_run` of a long run, one segment at a time (:mod:`._segments`): at
+    most one segment's samples and its margins are in memory at once."""
+    parts: list[tuple[Span, ImpactLog]] = []
+    measurand_flags: dict[str, str] = {}
+    inferred = False
+    names = tuple(c.name for c in plate if c is not None)
+    for span in spans:
+        view = segment_view(run, span)
+        v_by_q: dict[str, Any] = {}
+        for ch in view.channels:
+            v_by_q.setdefault(ch.quantity, ch)
+        vel, acc = (view.channel(c.name) if c is not None else None for c in plate)
+        log, _, _, _, flags = _impact_log(view, v_by_q, vel, acc, detect, f_fit,
+                                          delay_declared)
+        inferred = inferred or flags is not None
+        for f in flags or ():   # each flag once, as the first segment that raised it put it
+            measurand_flags.setdefault(f.split(":")[0], f)
+        if log.ringing_problem is not None and any(x.ringing_problem is not None
+                                                   for _, x in parts):
+            # the run's part of the campaign's ringing search is its first segment's that
+            # has one (merge_logs); the others' samples are not kept
+            log = replace(log, ringing_problem=None)
+        parts.append((span, log))
+    log, _ = merge_logs(parts, float(detect.min_separation_s))
+    base["chain_flags"] = _with_log_flags(base["chain_flags"], log, delay_declared,
+                                          tuple(measurand_flags.values()) if inferred else None)
+    if reuse is not None and _reusable(reuse, input_key, run.run_id, log):
+        return replace(reuse, impacts=log, chain_flags=base["chain_flags"])
+    t0, t1 = spans[0].core_lo_s, spans[-1].core_hi_s
+    pattern, pattern_n, counts = _pattern(run, log, base["freq_hz"], t0, t1 - t0)
+    peaks, delay, expected, spl, spl_a, acoustic = None, np.nan, np.nan, np.nan, np.nan, None
+    mic = next((c for c in run.channels if c.quantity == "sound_pressure"), None)
+    if mic is not None:
+        names = names + (mic.name,)
+        peak_parts, delays, ms, ms_a, n_core, sounds = [], [], 0.0, 0.0, 0, []
+        budget = float(fit.get("ecma418_s", 0.0))
+        for span in spans:
+            view_mic = segment_view(run, span).channel(mic.name)
+            fs_mic, t0_view = _fs_of(run, view_mic), _t0_of(run, view_mic)
+            p = view_mic.read()
+            t_core = log.t_s[core_mask(log.t_s, span)]
+            peak_parts.append(_peaks(p, fs_mic, t0_view, t_core, detect, fit, mic_distance_m,
+                                     f_fit))
+            if t_core.size:
+                delays.append(cross_correlation_delay(
+                    impulse_train(t_core, p.size, fs_mic, t0_view), p, fs_mic,
+                    max_lag_s=detect.max_lag_s))
+            start = float(view_mic.start_time_s or 0.0)
+            i0 = max(0, math.ceil((span.core_lo_s - start) * fs_mic - 1e-9))
+            i1 = min(p.size, math.ceil((span.core_hi_s - start) * fs_mic - 1e-9))
+            core = p[i0:i1]
+            ms += float(np.sum(np.square(core, dtype=float)))
+            ms_a += float(np.sum(np.square(a_weight(p, fs_mic)[i0:i1])))
+            n_core += core.size
+            # [issue 26] the ECMA-418-2 budget is the run's, spent in time order
+            part = _acoustics(run, mic, core, fs_mic, t_core, t0_view + i0 / fs_mic, fit,
+                              ecma418_s=budget, keep_curve=True)
+            budget = max(0.0, budget - float(part.psychoacoustics.get("ecma418_s") or 0.0))
+            sounds.append(part)
+        peaks = merge_arrays(peak_parts)
+        spl = float(spl_db(np.sqrt(ms / n_core))) if n_core else np.nan
+        spl_a = float(spl_db(np.sqrt(ms_a / n_core))) if n_core else np.nan
+        delay = float(np.median(delays)) if delays else np.nan
+        if mic_distance_m:
+            expected = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0))
+        acoustic = joined_acoustics(sounds)
+    return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
+                     pattern_n=pattern_n, cycle_counts=counts, acoustic_delay_s=delay,
+                     expected_delay_s=expected, spl_rms_db=spl, spl_rms_a_db=spl_a,
+                     acoustics=acoustic, **base)
 
 
 __all__ = ["RunResult", "analyse_run"]

@@ -61,6 +61,8 @@ PACKAGES: dict[str, list[str]] = {
         "episode_psychoacoustics", "find_onsets", "laf_db", "prominence",
         # issue 26 item 5: ISO 532-1 stationary loudness from third-octave levels (annex B.2)
         "stationary_loudness",
+        # issue 29: a long run's acoustics joined from its segments'
+        "joined_acoustics",
     ],
     "rattle_lab.exchange": ["UFF_TYPE_OF_QUANTITY", "export_uff", "uff_sets"],
     "rattle_lab.model.analysis": [
@@ -89,7 +91,7 @@ PACKAGES: dict[str, list[str]] = {
         # issue 28: the channel timing the fit checks
         "DelayEstimate", "delay_contradicted", "measurand_share",
         # issue 29: detection in one room
-        "DetectParams", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
+        "DetectParams", "SEGMENT_KEYS", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
         "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
         "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
         "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",
