@@ -17,7 +17,8 @@ if TYPE_CHECKING:
                          velocity_delay_flags)
     from ._common import n_samples_of, parabolic_peak, robust_sigma
     from ._params import SEGMENT_KEYS, SOUND_KEYS, DetectParams
-    from ._run import RunResult, analyse_run
+    from ._run import (RunResult, SegmentImpacts, SegmentSound, analyse_run, assemble_segments,
+                       merge_segment_impacts, run_segments, segment_impacts, segment_sound)
     from ._flights import RingingProblem, campaign_ring_modes
     from ._impacts import ImpactLog, ImpactParams, detect_impacts
     from ._ringing import RINGING_RESIDUAL_RATIO
@@ -44,6 +45,9 @@ _LAZY: dict[str, str] = {
     "SEGMENT_KEYS": "_params",
     "RunResult": "_run",
     "analyse_run": "_run",
+    **dict.fromkeys(("SegmentImpacts", "SegmentSound", "assemble_segments",
+                     "merge_segment_impacts", "run_segments", "segment_impacts",
+                     "segment_sound"), "_run"),
     "n_samples_of": "_common",
     "parabolic_peak": "_common",
     "robust_sigma": "_common",
@@ -92,6 +96,9 @@ __all__ = [
     "run_chain_flags", "transient_shocks", "velocity_delay_flags",
     # the kernels compiled after installing (rattle_lab._warmup) or at a first fit
     "kernels_cold", "warm_cache",
+    # issue 29: a long run in segments, each segment's impacts and sound a task of its own
+    "SegmentImpacts", "SegmentSound", "assemble_segments", "merge_segment_impacts",
+    "run_segments", "segment_impacts", "segment_sound",
 ]
 
 

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from rattle_lab.acoustics import joined_acoustics, run_acoustics  # [issue 17, 26, 29]
+from rattle_lab.exceptions import ParameterError
 from rattle_lab.records import FLAG_MEASURAND_UNDECLARED, declared_delay_s
 from ._chain import (SHOCK_QUANTITIES, _fs_of, _t0_of, infer_measurand, paired_plate_channels,
                      relative_to_striker, run_chain_flags, transient_shocks,
@@ -120,6 +121,60 @@ def _analyse_transient(run: Any, detect: DetectParams, base: dict[str, Any]) -> 
                      shocks=tuple(rows), **base)
 
 
+@dataclass(frozen=True)
+class _Plan:
+    """What :func:`analyse_run` decides before reading samples: the run's identity and chain
+    flags (``base``), the plate channels, the forced-mode frequency of the velocity fits,
+    whether the vibrometer's delay is declared, and the segments (None: whole)."""
+
+    base: dict[str, Any]
+    vel: str | None
+    acc: str | None
+    f_fit: float | None
+    delay_declared: bool
+    spans: list[Span] | None
+
+    def plate(self, run: Any) -> tuple[Any, Any]:
+        return tuple(run.channel(n) if n is not None else None  # type: ignore[return-value]
+                     for n in (self.vel, self.acc))
+
+
+def _plan(input_key: str, run: Any, detect: DetectParams) -> _Plan | RunResult:
+    by_q: dict[str, Any] = {}
+    for ch in run.channels:
+        by_q.setdefault(ch.quantity, ch)
+    freq = float(run.excitation_freq_hz) if run.excitation_freq_hz else float("nan")
+    vel, acc = by_q.get("plate_velocity"), by_q.get("plate_acceleration")
+    base = dict(input_key=input_key, run_id=run.run_id, protocol=run.protocol, freq_hz=freq,
+                chain_flags=tuple(run_chain_flags(run)))
+    if run.protocol == "transient":
+        return _analyse_transient(run, detect, base)
+    wanted = detect.channel or getattr(run, "detect_channel", None)
+    if wanted is not None:
+        named = next((c for c in run.channels if c.name == wanted), None)
+        if named is None:
+            return RunResult(status="skipped", reason=f"no channel {wanted!r} to detect on",
+                             **base)
+        if named.quantity not in ("plate_velocity", "plate_acceleration"):
+            return RunResult(status="skipped", reason=f"channel {wanted!r} measures "
+                             f"{named.quantity}: impacts are detected on a plate_velocity or "
+                             "plate_acceleration", **base)
+        vel, acc = (named, None) if named.quantity == "plate_velocity" else (None, named)
+    if vel is None and acc is None:
+        return RunResult(status="skipped", reason="no plate_velocity or plate_acceleration channel",
+                         **base)
+    used = [c for c in (vel, acc) if c is not None]
+    # a constant excitation frequency lets the velocity fits use the forced-mode basis
+    f_end = getattr(run, "freq_end_hz", None)
+    fs_plate = max(_fs_of(run, c) for c in used)   # the pair's grid (paired_plate_channels)
+    f_fit = freq if (math.isfinite(freq) and 0 < freq < fs_plate / 2
+                     and (f_end is None or f_end == freq)) else None
+    delay_declared = vel is not None and declared_delay_s(vel) is not None
+    return _Plan(base, vel.name if vel is not None else None,
+                 acc.name if acc is not None else None, f_fit, delay_declared,
+                 segment_spans(run, detect, used[0]))
+
+
 def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str, Any] | None,
                 fit: Mapping[str, Any], mic_distance_m: float | None = None,
                 reuse: RunResult | None = None) -> RunResult:
@@ -152,40 +207,18 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
         For an unknown ``[detect]`` key or a value out of range.
     """
     detect = DetectParams.from_mapping(detect)
+    plan = _plan(input_key, run, detect)
+    if isinstance(plan, RunResult):
+        return plan
+    if plan.spans is not None:
+        return _analyse_segments(input_key, run, plan, detect, fit, mic_distance_m, reuse)
     by_q: dict[str, Any] = {}
     for ch in run.channels:
         by_q.setdefault(ch.quantity, ch)
-    freq = float(run.excitation_freq_hz) if run.excitation_freq_hz else float("nan")
-    vel, acc = by_q.get("plate_velocity"), by_q.get("plate_acceleration")
-    base = dict(input_key=input_key, run_id=run.run_id, protocol=run.protocol, freq_hz=freq,
-                chain_flags=tuple(run_chain_flags(run)))
-    if run.protocol == "transient":
-        return _analyse_transient(run, detect, base)
-    wanted = detect.channel or getattr(run, "detect_channel", None)
-    if wanted is not None:
-        named = next((c for c in run.channels if c.name == wanted), None)
-        if named is None:
-            return RunResult(status="skipped", reason=f"no channel {wanted!r} to detect on",
-                             **base)
-        if named.quantity not in ("plate_velocity", "plate_acceleration"):
-            return RunResult(status="skipped", reason=f"channel {wanted!r} measures "
-                             f"{named.quantity}: impacts are detected on a plate_velocity or "
-                             "plate_acceleration", **base)
-        vel, acc = (named, None) if named.quantity == "plate_velocity" else (None, named)
-    if vel is None and acc is None:
-        return RunResult(status="skipped", reason="no plate_velocity or plate_acceleration channel",
-                         **base)
+    freq, base = plan.base["freq_hz"], dict(plan.base)
+    vel, acc = plan.plate(run)
     used = [c for c in (vel, acc) if c is not None]
-    # a constant excitation frequency lets the velocity fits use the forced-mode basis
-    f_end = getattr(run, "freq_end_hz", None)
-    fs_plate = max(_fs_of(run, c) for c in used)   # the pair's grid (paired_plate_channels)
-    f_fit = freq if (math.isfinite(freq) and 0 < freq < fs_plate / 2
-                     and (f_end is None or f_end == freq)) else None
-    delay_declared = vel is not None and declared_delay_s(vel) is not None
-    spans = segment_spans(run, detect, used[0])
-    if spans is not None:
-        return _analyse_segments(input_key, run, spans, detect, fit, mic_distance_m, reuse,
-                                 base, (vel, acc), f_fit, delay_declared)
+    f_fit, delay_declared = plan.f_fit, plan.delay_declared
     # issue 15: each channel's time base less its declared filter delay; two channels at
     # different rates or offsets are brought onto the grid of the faster one before pairing
     log, fs, t0, duration, flags = _impact_log(run, by_q, vel, acc, detect, f_fit,
@@ -309,81 +342,180 @@ def _acoustics(run: Any, mic: Any, p: np.ndarray, fs_mic: float, t_s: np.ndarray
                          keep_loudness_curve=keep_curve)
 
 
-def _analyse_segments(input_key: str, run: Any, spans: list[Span], detect: DetectParams,
-                      fit: Mapping[str, Any], mic_distance_m: float | None,
-                      reuse: RunResult | None, base: dict[str, Any],
-                      plate: tuple[Any, Any], f_fit: float | None, delay_declared: bool
+#: A long run's part of the campaign's ringing search (``ImpactLog.ringing_problem``) is
+#: taken from its first segments only (the first of these that has one): the samples of one
+#: segment describe a steady run's ringing, and keeping every segment's would grow with the
+#: run's length.
+PROBLEM_SEGMENTS = 4
+
+
+@dataclass(frozen=True)
+class SegmentImpacts:
+    """One segment's impacts (:func:`segment_impacts`): its span, its log, and the flags of
+    an inferred measurand (None where it was not inferred)."""
+
+    span: Span
+    log: ImpactLog
+    measurand_flags: tuple[str, ...] | None
+
+
+@dataclass(frozen=True)
+class SegmentSound:
+    """One segment's sound (:func:`segment_sound`): the peaks of its impacts, its acoustic
+    delay (NaN without impacts), the sums of squares of its core's pressure, plain and
+    A-weighted, and their sample count, and its acoustics (loudness curve kept)."""
+
+    peaks: SoundPeaks
+    delay_s: float
+    sum_sq: float
+    sum_sq_a: float
+    n_core: int
+    acoustics: Any
+
+
+def run_segments(input_key: str, run: Any,
+                 detect: DetectParams | Mapping[str, Any] | None) -> list[Span] | None:
+    """The segments :func:`analyse_run` cuts ``run`` into (None: analysed whole)."""
+    plan = _plan(input_key, run, DetectParams.from_mapping(detect))
+    return None if isinstance(plan, RunResult) else plan.spans
+
+
+def _segment_plan(input_key: str, run: Any, detect: DetectParams) -> _Plan:
+    plan = _plan(input_key, run, detect)
+    if isinstance(plan, RunResult) or plan.spans is None:
+        raise ParameterError(f"run {run.run_id!r} is not analysed in segments")
+    return plan
+
+
+def segment_impacts(input_key: str, run: Any, index: int,
+                    detect: DetectParams | Mapping[str, Any] | None) -> SegmentImpacts:
+    """The impacts of segment ``index`` of a long run (:func:`run_segments`): the first half
+    of its analysis, a task of its own on a cluster."""
+    detect = DetectParams.from_mapping(detect)
+    plan = _segment_plan(input_key, run, detect)
+    span = plan.spans[index]  # type: ignore[index]
+    view = segment_view(run, span)
+    v_by_q: dict[str, Any] = {}
+    for ch in view.channels:
+        v_by_q.setdefault(ch.quantity, ch)
+    vel, acc = plan.plate(view)
+    log, _, _, _, flags = _impact_log(view, v_by_q, vel, acc, detect, plan.f_fit,
+                                      plan.delay_declared)
+    if index >= PROBLEM_SEGMENTS:
+        # the run's part of the campaign's ringing search comes from its first segments
+        # (merge_logs keeps the first): the others' samples are not kept
+        log = replace(log, ringing_problem=None)
+    return SegmentImpacts(span, log, flags)
+
+
+def merge_segment_impacts(input_key: str, run: Any, parts: list[SegmentImpacts],
+                          detect: DetectParams | Mapping[str, Any] | None
+                          ) -> tuple[ImpactLog, tuple[str, ...]]:
+    """The run's impact log and chain flags from its segments' (:func:`segment_impacts`, in
+    order): every impact once (:func:`~rattle_lab.detect._segments.merge_logs`), each
+    flag once."""
+    detect = DetectParams.from_mapping(detect)
+    plan = _segment_plan(input_key, run, detect)
+    measurand: dict[str, str] = {}
+    for part in parts:   # each flag once, as the first segment that raised it put it
+        for f in part.measurand_flags or ():
+            measurand.setdefault(f.split(":")[0], f)
+    inferred = any(p.measurand_flags is not None for p in parts)
+    log, _ = merge_logs([(p.span, p.log) for p in parts], float(detect.min_separation_s))
+    flags = _with_log_flags(plan.base["chain_flags"], log, plan.delay_declared,
+                            tuple(measurand.values()) if inferred else None)
+    return log, flags
+
+
+def _ecma_budget(fit: Mapping[str, Any], spans: list[Span], index: int) -> float:
+    """Segment ``index``'s share of the run's ECMA-418-2 seconds: the run's budget spent in
+    time order, each segment at most its own duration (a share fixed before any segment is
+    analysed, so that segments can run side by side)."""
+    used = sum(s.core_hi_s - s.core_lo_s for s in spans[:index])
+    own = spans[index].core_hi_s - spans[index].core_lo_s
+    return min(own, max(0.0, float(fit.get("ecma418_s", 0.0)) - used))
+
+
+def segment_sound(input_key: str, run: Any, index: int, t_s: np.ndarray,
+                  detect: DetectParams | Mapping[str, Any] | None, fit: Mapping[str, Any],
+                  mic_distance_m: float | None = None) -> SegmentSound:
+    """The sound of segment ``index`` of a long run with a microphone, given the run's
+    impact times ``t_s`` (:func:`merge_segment_impacts`): the second half of its analysis."""
+    detect = DetectParams.from_mapping(detect)
+    plan = _segment_plan(input_key, run, detect)
+    spans = plan.spans
+    span = spans[index]  # type: ignore[index]
+    mic = next(c for c in run.channels if c.quantity == "sound_pressure")
+    view_mic = segment_view(run, span).channel(mic.name)
+    fs_mic, t0_view = _fs_of(run, view_mic), _t0_of(run, view_mic)
+    p = view_mic.read()
+    t_s = np.asarray(t_s, dtype=float)
+    t_core = t_s[core_mask(t_s, span)]
+    peaks = _peaks(p, fs_mic, t0_view, t_core, detect, fit, mic_distance_m, plan.f_fit)
+    delay = (cross_correlation_delay(impulse_train(t_core, p.size, fs_mic, t0_view), p, fs_mic,
+                                     max_lag_s=detect.max_lag_s) if t_core.size else np.nan)
+    start = float(view_mic.start_time_s or 0.0)
+    i0 = max(0, math.ceil((span.core_lo_s - start) * fs_mic - 1e-9))
+    i1 = min(p.size, math.ceil((span.core_hi_s - start) * fs_mic - 1e-9))
+    core = p[i0:i1]
+    part = _acoustics(run, mic, core, fs_mic, t_core, t0_view + i0 / fs_mic, fit,
+                      ecma418_s=_ecma_budget(fit, spans, index),  # type: ignore[arg-type]
+                      keep_curve=True)
+    return SegmentSound(peaks, float(delay), float(np.sum(np.square(core, dtype=float))),
+                        float(np.sum(np.square(a_weight(p, fs_mic)[i0:i1]))), int(core.size),
+                        part)
+
+
+def assemble_segments(input_key: str, run: Any, log: ImpactLog, chain_flags: tuple[str, ...],
+                      sounds: list[SegmentSound] | None,
+                      detect: DetectParams | Mapping[str, Any] | None,
+                      fit: Mapping[str, Any], mic_distance_m: float | None = None
                       ) -> RunResult:
-    """:func:`analyse_run` of a long run, one segment at a time (:mod:`._segments`): at
-    most one segment's samples and its margins are in memory at once."""
-    parts: list[tuple[Span, ImpactLog]] = []
-    measurand_flags: dict[str, str] = {}
-    inferred = False
-    names = tuple(c.name for c in plate if c is not None)
-    for span in spans:
-        view = segment_view(run, span)
-        v_by_q: dict[str, Any] = {}
-        for ch in view.channels:
-            v_by_q.setdefault(ch.quantity, ch)
-        vel, acc = (view.channel(c.name) if c is not None else None for c in plate)
-        log, _, _, _, flags = _impact_log(view, v_by_q, vel, acc, detect, f_fit,
-                                          delay_declared)
-        inferred = inferred or flags is not None
-        for f in flags or ():   # each flag once, as the first segment that raised it put it
-            measurand_flags.setdefault(f.split(":")[0], f)
-        if log.ringing_problem is not None and any(x.ringing_problem is not None
-                                                   for _, x in parts):
-            # the run's part of the campaign's ringing search is its first segment's that
-            # has one (merge_logs); the others' samples are not kept
-            log = replace(log, ringing_problem=None)
-        parts.append((span, log))
-    log, _ = merge_logs(parts, float(detect.min_separation_s))
-    base["chain_flags"] = _with_log_flags(base["chain_flags"], log, delay_declared,
-                                          tuple(measurand_flags.values()) if inferred else None)
-    if reuse is not None and _reusable(reuse, input_key, run.run_id, log):
-        return replace(reuse, impacts=log, chain_flags=base["chain_flags"])
-    t0, t1 = spans[0].core_lo_s, spans[-1].core_hi_s
+    """A long run's :class:`RunResult` from its merged impacts and its segments' sound (None
+    without a microphone)."""
+    detect = DetectParams.from_mapping(detect)
+    plan = _segment_plan(input_key, run, detect)
+    spans = plan.spans
+    base = {**plan.base, "chain_flags": chain_flags}
+    names = tuple(n for n in (plan.vel, plan.acc) if n is not None)
+    t0, t1 = spans[0].core_lo_s, spans[-1].core_hi_s  # type: ignore[index]
     pattern, pattern_n, counts = _pattern(run, log, base["freq_hz"], t0, t1 - t0)
     peaks, delay, expected, spl, spl_a, acoustic = None, np.nan, np.nan, np.nan, np.nan, None
-    mic = next((c for c in run.channels if c.quantity == "sound_pressure"), None)
-    if mic is not None:
+    if sounds:
+        mic = next(c for c in run.channels if c.quantity == "sound_pressure")
         names = names + (mic.name,)
-        peak_parts, delays, ms, ms_a, n_core, sounds = [], [], 0.0, 0.0, 0, []
-        budget = float(fit.get("ecma418_s", 0.0))
-        for span in spans:
-            view_mic = segment_view(run, span).channel(mic.name)
-            fs_mic, t0_view = _fs_of(run, view_mic), _t0_of(run, view_mic)
-            p = view_mic.read()
-            t_core = log.t_s[core_mask(log.t_s, span)]
-            peak_parts.append(_peaks(p, fs_mic, t0_view, t_core, detect, fit, mic_distance_m,
-                                     f_fit))
-            if t_core.size:
-                delays.append(cross_correlation_delay(
-                    impulse_train(t_core, p.size, fs_mic, t0_view), p, fs_mic,
-                    max_lag_s=detect.max_lag_s))
-            start = float(view_mic.start_time_s or 0.0)
-            i0 = max(0, math.ceil((span.core_lo_s - start) * fs_mic - 1e-9))
-            i1 = min(p.size, math.ceil((span.core_hi_s - start) * fs_mic - 1e-9))
-            core = p[i0:i1]
-            ms += float(np.sum(np.square(core, dtype=float)))
-            ms_a += float(np.sum(np.square(a_weight(p, fs_mic)[i0:i1])))
-            n_core += core.size
-            # [issue 26] the ECMA-418-2 budget is the run's, spent in time order
-            part = _acoustics(run, mic, core, fs_mic, t_core, t0_view + i0 / fs_mic, fit,
-                              ecma418_s=budget, keep_curve=True)
-            budget = max(0.0, budget - float(part.psychoacoustics.get("ecma418_s") or 0.0))
-            sounds.append(part)
-        peaks = merge_arrays(peak_parts)
-        spl = float(spl_db(np.sqrt(ms / n_core))) if n_core else np.nan
-        spl_a = float(spl_db(np.sqrt(ms_a / n_core))) if n_core else np.nan
+        peaks = merge_arrays([x.peaks for x in sounds])
+        n_core = sum(x.n_core for x in sounds)
+        if n_core:
+            spl = float(spl_db(np.sqrt(sum(x.sum_sq for x in sounds) / n_core)))
+            spl_a = float(spl_db(np.sqrt(sum(x.sum_sq_a for x in sounds) / n_core)))
+        delays = [x.delay_s for x in sounds if math.isfinite(x.delay_s)]
         delay = float(np.median(delays)) if delays else np.nan
         if mic_distance_m:
             expected = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0))
-        acoustic = joined_acoustics(sounds)
+        acoustic = joined_acoustics([x.acoustics for x in sounds])
     return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
                      pattern_n=pattern_n, cycle_counts=counts, acoustic_delay_s=delay,
                      expected_delay_s=expected, spl_rms_db=spl, spl_rms_a_db=spl_a,
                      acoustics=acoustic, **base)
 
 
-__all__ = ["RunResult", "analyse_run"]
+def _analyse_segments(input_key: str, run: Any, plan: _Plan, detect: DetectParams,
+                      fit: Mapping[str, Any], mic_distance_m: float | None,
+                      reuse: RunResult | None) -> RunResult:
+    """:func:`analyse_run` of a long run, one segment at a time (:mod:`._segments`): at
+    most one segment's samples and its margins are in memory at once.  The same steps as
+    the pipeline's segment tasks (:func:`rattle_lab.workflow.detect_runs`)."""
+    parts = [segment_impacts(input_key, run, index, detect)
+             for index in range(len(plan.spans or ()))]
+    log, flags = merge_segment_impacts(input_key, run, parts, detect)
+    if reuse is not None and _reusable(reuse, input_key, run.run_id, log):
+        return replace(reuse, impacts=log, chain_flags=flags)
+    has_mic = any(c.quantity == "sound_pressure" for c in run.channels)
+    sounds = ([segment_sound(input_key, run, i, log.t_s, detect, fit, mic_distance_m)
+               for i in range(len(plan.spans or ()))] if has_mic else None)
+    return assemble_segments(input_key, run, log, flags, sounds, detect, fit, mic_distance_m)
+
+
+__all__ = ["RunResult", "SegmentImpacts", "SegmentSound", "analyse_run", "assemble_segments",
+           "merge_segment_impacts", "run_segments", "segment_impacts", "segment_sound"]

@@ -226,11 +226,7 @@ def detect_run(store: str, input_key: str, run_id: str,
     from rattle_lab.detect import analyse_run
     from rattle_lab.store import open_stored_record
 
-    if code is not None and code != code_fingerprint():
-        raise ParameterError(f"`scheduler`: a worker runs other rattle_lab code ({code_fingerprint()}) "
-                             f"than the caller ({code}); install the same rattle_lab on the "
-                             "workers (or restart them after editing the sources)")
-
+    _same_code(code)
     from threadpoolctl import threadpool_limits
 
     # one BLAS thread, as on a Dask worker (which runs with one): the flight model's
@@ -247,6 +243,48 @@ def redetect_run(store: str, input_key: str, run_id: str, reuse: Any,
                  code: str | None = None) -> Any:
     """:func:`detect_run` with ``reuse`` given per run: the campaign's ringing passes."""
     return detect_run(store, input_key, run_id, detect, fit, code, reuse)
+
+
+def _same_code(code: str | None) -> None:
+    if code is not None and code != code_fingerprint():
+        raise ParameterError(f"`scheduler`: a worker runs other rattle_lab code ({code_fingerprint()}) "
+                             f"than the caller ({code}); install the same rattle_lab on the "
+                             "workers (or restart them after editing the sources)")
+
+
+def detect_task(store: str, input_key: str, run_id: str, index: int, reuse: Any,
+                detect: DetectParams | Mapping[str, Any], fit: Mapping[str, Any],
+                code: str | None = None) -> Any:
+    """One task of the detect stage: a whole run (``index < 0``, :func:`detect_run`) or the
+    impacts of segment ``index`` of a long run (:func:`rattle_lab.detect.segment_impacts`)."""
+    if index < 0:
+        return detect_run(store, input_key, run_id, detect, fit, code, reuse)
+    from threadpoolctl import threadpool_limits
+
+    from rattle_lab.detect import segment_impacts
+    from rattle_lab.store import open_stored_record
+
+    _same_code(code)
+    with open_stored_record(store, input_key) as record, \
+            threadpool_limits(limits=1, user_api="blas"):
+        return segment_impacts(input_key, record.run(run_id), index, detect)
+
+
+def sound_task(store: str, input_key: str, run_id: str, index: int, t_s: Any,
+               detect: DetectParams | Mapping[str, Any], fit: Mapping[str, Any],
+               code: str | None = None) -> Any:
+    """The sound of segment ``index`` of a long run, given the run's impact times
+    (:func:`rattle_lab.detect.segment_sound`): the detect stage's second round of tasks."""
+    from threadpoolctl import threadpool_limits
+
+    from rattle_lab.detect import segment_sound
+    from rattle_lab.store import open_stored_record
+
+    _same_code(code)
+    with open_stored_record(store, input_key) as record, \
+            threadpool_limits(limits=1, user_api="blas"):
+        return segment_sound(input_key, record.run(run_id), index, t_s, detect, fit,
+                             record.rig.mic_distance_m)
 
 
 def _refused_at_once(address: str) -> None:
@@ -445,21 +483,98 @@ def map_tasks(func: Callable[..., Any], tasks: Sequence[tuple[Any, ...]], *,
                 client.close()
 
 
+def _segment_counts(jobs: list[tuple[str, str, str]], detect: DetectParams) -> list[int]:
+    """How many segments each run is analysed in (0: whole), from the records' metadata."""
+    from rattle_lab.detect import run_segments
+    from rattle_lab.store import open_stored_record
+
+    counts: list[int] = []
+    opened: dict[tuple[str, str], Any] = {}
+    try:
+        for store, key, run_id in jobs:
+            if (store, key) not in opened:
+                opened[(store, key)] = open_stored_record(store, key)
+            spans = run_segments(key, opened[(store, key)].run(run_id), detect)
+            counts.append(len(spans) if spans else 0)
+    finally:
+        for record in opened.values():
+            record.close()
+    return counts
+
+
 def _map_runs(jobs: list[tuple[str, str, str]], detect: DetectParams,
               fit: Mapping[str, Any], *, scheduler: Any, quiet: bool, desc: str,
               weights: Sequence[int] | None = None, reuse: Sequence[Any] | None = None
               ) -> list[Any]:
-    """:func:`detect_run` of every job, in order: serially or on a Dask cluster (with
-    ``reuse``, one earlier result per job: :func:`redetect_run`)."""
-    func: Callable[..., Any] = detect_run
-    tasks: list[tuple[Any, ...]] = list(jobs)
-    if reuse is not None:
-        func, tasks = redetect_run, [(*job, r) for job, r in zip(jobs, reuse, strict=True)]
-    if scheduler is None:
-        return map_tasks(func, tasks, quiet=quiet, desc=desc, weights=weights,
-                         detect=detect, fit=fit)
-    return map_tasks(func, tasks, scheduler=scheduler, quiet=quiet, desc=desc,
-                     weights=weights, detect=detect, fit=dict(fit), code=code_fingerprint())
+    """Every job's :class:`~rattle_lab.detect.RunResult`, in order: serially or on a Dask
+    cluster (with ``reuse``, one earlier result per job).
+
+    A run analysed whole is one task (:func:`detect_task`).  A long run
+    (:func:`rattle_lab.detect.run_segments`) is a task per segment for its impacts; its
+    segments' impacts are merged here, then (unless ``reuse`` recognises them) a second
+    round of tasks finds each segment's sound (:func:`sound_task`), and the run is
+    assembled here: the same steps, and the same numbers, as
+    :func:`rattle_lab.detect.analyse_run` takes in one process."""
+    import numpy as np
+
+    from rattle_lab.detect import assemble_segments, merge_segment_impacts
+    from rattle_lab.store import open_stored_record
+
+    counts = _segment_counts(jobs, detect)
+    w = list(weights) if weights is not None else [1] * len(jobs)
+    tasks: list[tuple[Any, ...]] = []
+    owner: list[tuple[int, int]] = []
+    task_w: list[int] = []
+    for i, (job, n) in enumerate(zip(jobs, counts, strict=True)):
+        for j in (range(n) if n else (-1,)):
+            tasks.append((*job, j, reuse[i] if reuse is not None and j < 0 else None))
+            owner.append((i, j))
+            task_w.append(max(1, w[i] // max(n, 1)))
+    extra: dict[str, Any] = {"detect": detect, "fit": fit}
+    if scheduler is not None:
+        extra = {"detect": detect, "fit": dict(fit), "code": code_fingerprint()}
+    out = map_tasks(detect_task, tasks, scheduler=scheduler, quiet=quiet, desc=desc,
+                    weights=task_w if weights is not None else None, **extra)
+    results: list[Any] = [None] * len(jobs)
+    parts: dict[int, list[Any]] = {}
+    for (i, j), res in zip(owner, out):
+        if j < 0:
+            results[i] = res
+        else:
+            parts.setdefault(i, []).append(res)
+    merged: dict[int, tuple[Any, tuple[str, ...]]] = {}
+    sound_jobs: list[tuple[Any, ...]] = []
+    sound_owner: list[int] = []
+    for i, segs in parts.items():
+        store, key, run_id = jobs[i]
+        with open_stored_record(store, key) as record:
+            run = record.run(run_id)
+            log, flags = merge_segment_impacts(key, run, segs, detect)
+            has_mic = any(c.quantity == "sound_pressure" for c in run.channels)
+        merged[i] = (log, flags)
+        old = reuse[i] if reuse is not None else None
+        if (old is not None and old.status == "ok" and old.impacts is not None
+                and (old.input_key, old.run_id) == (key, run_id)
+                and np.array_equal(old.impacts.t_s, log.t_s)):
+            results[i] = replace(old, impacts=log, chain_flags=flags)
+        elif has_mic:
+            for j in range(len(segs)):
+                sound_jobs.append((store, key, run_id, j, log.t_s))
+                sound_owner.append(i)
+    sounds: dict[int, list[Any]] = {}
+    if sound_jobs:
+        done = map_tasks(sound_task, sound_jobs, scheduler=scheduler, quiet=quiet,
+                         desc=f"{desc}: sound", **extra)
+        for i, res in zip(sound_owner, done):
+            sounds.setdefault(i, []).append(res)
+    for i, (log, flags) in merged.items():
+        if results[i] is None:
+            store, key, run_id = jobs[i]
+            with open_stored_record(store, key) as record:
+                results[i] = assemble_segments(key, record.run(run_id), log, flags,
+                                               sounds.get(i), detect, fit,
+                                               record.rig.mic_distance_m)
+    return results
 
 
 def _fit_and_write(store: Path, runs: Sequence[Any], curve: Any, pipeline: Pipeline) -> None:
@@ -698,4 +813,4 @@ def run_pipeline(pipeline: Pipeline, inputs: Sequence[str | os.PathLike[str]], *
 
 __all__ = ["Pipeline", "PipelineRun", "STAGES", "DEPENDS", "OUTPUTS", "load_pipeline_file",
            "parse_pipeline", "run_pipeline", "needed_stages", "read_detections", "detect_run",
-           "detect_runs", "map_tasks", "code_fingerprint"]
+           "detect_runs", "map_tasks", "code_fingerprint", "detect_task", "sound_task"]

@@ -98,6 +98,9 @@ PACKAGES: dict[str, list[str]] = {
         "run_chain_flags", "transient_shocks", "velocity_delay_flags",
         # the kernels compiled after installing (rattle_lab._warmup) or at a first fit
         "kernels_cold", "warm_cache",
+        # issue 29: a long run in segments
+        "SegmentImpacts", "SegmentSound", "assemble_segments", "merge_segment_impacts",
+        "run_segments", "segment_impacts", "segment_sound",
     ],
     "rattle_lab.explorer": [
         "Explorer", "Histories", "compute_histories", "save_histories", "impacts_path",
