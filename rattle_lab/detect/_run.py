@@ -248,19 +248,27 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
             expected = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0))
         # [issue 17 acoustics hook] levels, bands, loudness, calibration of the microphone
         acoustic = _acoustics(run, mic, p, fs_mic, log.t_s, t0_mic, fit)
-    threshold = None
-    if run.protocol in ("amplitude_ramp_up", "amplitude_ramp_down") and math.isfinite(freq):
-        b = by_q.get("base_acceleration")
-        if b is not None:
-            threshold = ramp_threshold(run.run_id, b.read(), _fs_of(run, b), freq, log.t_s,
-                                       "up" if run.protocol.endswith("up") else "down",
-                                       start_time_s=_t0_of(run, b),
-                                       n_confirm=int(fit.get("n_confirm", 3)))
-            names = names + (b.name,)
+    threshold, names = _threshold(run, log, freq, fit, names)
     return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
                      pattern_n=pattern_n, cycle_counts=counts, acoustic_delay_s=delay,
                      expected_delay_s=expected, spl_rms_db=spl, spl_rms_a_db=spl_a,
                      threshold=threshold, acoustics=acoustic, **base)
+
+
+def _threshold(run: Any, log: ImpactLog, freq: float, fit: Mapping[str, Any],
+               names: tuple[str, ...]) -> tuple[Threshold | None, tuple[str, ...]]:
+    """The ramp threshold of an ``amplitude_ramp_up/down`` run with a base accelerometer
+    (read whole: one channel), and the channels used with it."""
+    if run.protocol not in ("amplitude_ramp_up", "amplitude_ramp_down") \
+            or not math.isfinite(freq):
+        return None, names
+    b = next((c for c in run.channels if c.quantity == "base_acceleration"), None)
+    if b is None:
+        return None, names
+    return (ramp_threshold(run.run_id, b.read(), _fs_of(run, b), freq, log.t_s,
+                           "up" if run.protocol.endswith("up") else "down",
+                           start_time_s=_t0_of(run, b), n_confirm=int(fit.get("n_confirm", 3))),
+            names + (b.name,))
 
 
 def _impact_log(run: Any, by_q: Mapping[str, Any], vel: Any, acc: Any, detect: DetectParams,
@@ -494,10 +502,11 @@ def assemble_segments(input_key: str, run: Any, log: ImpactLog, chain_flags: tup
         if mic_distance_m:
             expected = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0))
         acoustic = joined_acoustics([x.acoustics for x in sounds])
+    threshold, names = _threshold(run, log, base["freq_hz"], fit, names)
     return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
                      pattern_n=pattern_n, cycle_counts=counts, acoustic_delay_s=delay,
                      expected_delay_s=expected, spl_rms_db=spl, spl_rms_a_db=spl_a,
-                     acoustics=acoustic, **base)
+                     threshold=threshold, acoustics=acoustic, **base)
 
 
 def _analyse_segments(input_key: str, run: Any, plan: _Plan, detect: DetectParams,

@@ -27,8 +27,9 @@ import numpy as np
 
 from rattle_lab.records import Run
 
-#: Protocols never cut: a ramp's threshold and a transient's shock need the whole run.
-UNSEGMENTED_PROTOCOLS = ("amplitude_ramp_up", "amplitude_ramp_down", "transient")
+#: Protocols never cut: a transient's one shock is found in the whole run.  (A ramp is cut
+#: like any run; its threshold reads the base accelerometer whole, one channel.)
+UNSEGMENTED_PROTOCOLS = ("transient",)
 
 
 @dataclass(frozen=True)
@@ -78,7 +79,7 @@ def segment_spans(run: Run, detect: Any, channel: Any) -> list[Span] | None:
     channel : Channel
         The channel the impacts are detected on (its length decides).
 
-    A run is analysed whole where it is short enough, where it is a ramp or a transient
+    A run is analysed whole where it is short enough, where it is a transient
     (:data:`UNSEGMENTED_PROTOCOLS`), or where a channel has no regular sampling.
     """
     if run.protocol in UNSEGMENTED_PROTOCOLS or channel is None:
