@@ -287,6 +287,110 @@ def synthetic_chunk(seed: int, index: int, n: int, fs_hz: float) -> dict[str, fl
             "peak": float(np.max(np.abs(x))), "n5": ld.n5_sone, "nmax": ld.nmax_sone}
 
 
+#: The detection stream's record: the independent generator's plant and chain at 25.6 kHz,
+#: a 95 Hz dwell at 1.5 times grazing, made in blocks of 10 s (950 forcing periods, so the
+#: forcing's phase runs on from block to block), each from rest 2 s (190 periods) earlier.
+STREAM_FS_HZ, STREAM_F_HZ, STREAM_BLOCK_S, STREAM_WARM_PERIODS = 25600.0, 95.0, 10.0, 190
+
+
+def synthetic_run(tests_dir: str, seed: int, seconds: float) -> Any:
+    """A ``seconds``-long 4-channel run whose samples are made on demand, block by block, by
+    the independent generator (``tests/independent_campaign.py``): a lazy
+    :class:`~rattle_lab.records.Run` (``GeneratedData`` channels), nothing on disk.  Each
+    block is a pure function of ``(seed, block)``; a process keeps its last 8 blocks."""
+    import functools
+
+    if tests_dir not in sys.path:
+        sys.path.insert(0, tests_dir)
+    from independent_campaign import Chain, Plant, measure
+
+    from rattle_lab.records import Channel, GeneratedData, Run
+
+    plant, chain = Plant(), Chain(fs_hz=STREAM_FS_HZ)
+    fs, f = STREAM_FS_HZ, STREAM_F_HZ
+    block = int(round(STREAM_BLOCK_S * fs))
+    warm = int(round(STREAM_WARM_PERIODS * fs / f))
+    n = int(round(seconds / STREAM_BLOCK_S)) * block
+    level = 1.5 * grazing_ms2(plant, f)
+
+    @functools.lru_cache(maxsize=8)   # a segment and its margins: up to 6 blocks
+    def made(j: int) -> dict[str, np.ndarray]:
+        levels = np.full(STREAM_WARM_PERIODS + int(round(STREAM_BLOCK_S * f)), level)
+        chans, _ = measure(plant, chain, 2 * math.pi * f, levels, np.random.default_rng((seed, j)))
+        return {k: v[warm:warm + block] for k, v in chans.items()}
+
+    def reader(name: str) -> Any:
+        def read(start: int, stop: int) -> np.ndarray:
+            if stop <= start:
+                return np.zeros(0)
+            parts = [made(j)[name] for j in range(start // block, (stop - 1) // block + 1)]
+            lo = start - (start // block) * block
+            return np.concatenate(parts)[lo:lo + stop - start]
+        return read
+
+    common = {"sample_rate_hz": fs, "start_time_s": 0.0}
+    channels = [Channel("velocity", "plate_velocity", "m/s", GeneratedData(n, float, reader("velocity")),
+                        measurand=chain.measurand, group_delay_s=chain.velocity_delay_s,
+                        **common)]  # type: ignore[arg-type]
+    for name, qty, units in (("plate", "plate_acceleration", "m/s^2"),
+                             ("base", "base_acceleration", "m/s^2"), ("mic", "sound_pressure", "Pa")):
+        channels.append(Channel(name, qty, units, GeneratedData(n, float, reader(name)),
+                                **common))  # type: ignore[arg-type]
+    return Run("stream", "sine_dwell", tuple(channels), excitation_freq_hz=f)
+
+
+def stream_impacts(tests_dir: str, seed: int, seconds: float, index: int) -> Any:
+    """Segment ``index`` of :func:`synthetic_run`'s record, made and detected on the worker."""
+    from rattle_lab.detect import segment_impacts
+
+    return segment_impacts("stream", synthetic_run(tests_dir, seed, seconds), index, {})
+
+
+def stream_sound(tests_dir: str, seed: int, seconds: float, index: int, t_s: Any) -> Any:
+    """The sound of segment ``index`` (sound peaks, levels, loudness), made on the worker."""
+    from rattle_lab.detect import segment_sound
+
+    from independent_campaign import Chain
+
+    return segment_sound("stream", synthetic_run(tests_dir, seed, seconds), index, t_s, {}, {},
+                         Chain().mic_m)
+
+
+def stream_detection(client: Any, minutes: float, workers: int) -> tuple[str, str, str]:
+    """``minutes`` of :func:`synthetic_run` through the cluster path of a long run: a task
+    per segment for the impacts, merged here, a task per segment for the sound, assembled
+    here (what ``fit`` does with a long stored run)."""
+    from rattle_lab.detect import assemble_segments, merge_segment_impacts, run_segments
+    from rattle_lab.workflow.pipeline import map_tasks
+
+    tests_dir = str(Path(__file__).resolve().parents[1] / "tests")
+    seconds = minutes * 60.0
+    run = synthetic_run(tests_dir, 31, seconds)
+    spans = run_segments("stream", run, {}) or []
+    n = sum(c.n_samples for c in run.channels)
+    t0 = time.perf_counter()
+    run.channel("velocity").read(0, 1)   # one block of every channel, made here
+    t_block = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    parts = map_tasks(stream_impacts, [(tests_dir, 31, seconds, j) for j in range(len(spans))],
+                      scheduler=client, quiet=True)
+    log, flags = merge_segment_impacts("stream", run, parts, {})
+    sounds = map_tasks(stream_sound, [(tests_dir, 31, seconds, j, log.t_s)
+                                      for j in range(len(spans))], scheduler=client, quiet=True)
+    from independent_campaign import Chain
+
+    res = assemble_segments("stream", run, log, flags, sounds, {}, {}, Chain().mic_m)
+    wall = time.perf_counter() - t0
+    lv = res.acoustics.levels
+    return (f"stream with detection: {minutes:g} min of 4-ch 25.6 kHz made on {workers} "
+            "workers", f"{n / wall / 1e6:.2f} M samples/s",
+            f"{n / 1e6:.0f} M samples in {wall:.0f} s, {len(spans)} segments made by the "
+            f"independent generator on the workers (one {STREAM_BLOCK_S:g} s block of 4 "
+            f"channels takes {t_block:.1f} s to make here, in both rounds); {log.n_impacts} "
+            f"impacts ({log.n_impacts / seconds:.1f}/s), pattern {res.pattern!r}, LAeq "
+            f"{lv.laeq_db:.1f} dB, N5 {res.acoustics.loudness.n5_sone:.1f} sone")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=50.0,
@@ -297,6 +401,9 @@ def main() -> None:
     ap.add_argument("--stream-hours", type=float, default=1.0,
                     help="hours of synthetic 4-channel 51.2 kHz data through the cluster path")
     ap.add_argument("--chunk-s", type=float, default=10.0, help="streaming chunk, s")
+    ap.add_argument("--stream-detect-minutes", type=float, default=5.0,
+                    help="minutes of the independent generator's record made on the workers "
+                         "and detected there, segment by segment (default 5; 0: none)")
     ap.add_argument("--long-seconds", type=float, nargs=2, default=(100.0, 400.0),
                     help="lengths of the two single-run records whose peak RSS of `fit` is "
                          "compared, s (default 100 400)")
@@ -431,6 +538,10 @@ def main() -> None:
                          f"needs {need_s} workers; max N {max(p['nmax'] for p in parts):.1f} "
                          f"sone, Leq {leq:.1f} dB"))
             print(rows[-1], flush=True)
+
+            if args.stream_detect_minutes > 0:
+                rows.append(stream_detection(client, args.stream_detect_minutes, args.workers))
+                print(rows[-1], flush=True)
 
     width = max(len(r[0]) for r in rows)
     print()

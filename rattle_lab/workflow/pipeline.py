@@ -545,12 +545,14 @@ def _map_runs(jobs: list[tuple[str, str, str]], detect: DetectParams,
     merged: dict[int, tuple[Any, tuple[str, ...]]] = {}
     sound_jobs: list[tuple[Any, ...]] = []
     sound_owner: list[int] = []
+    sound_w: list[int] = []
     for i, segs in parts.items():
         store, key, run_id = jobs[i]
         with open_stored_record(store, key) as record:
             run = record.run(run_id)
             log, flags = merge_segment_impacts(key, run, segs, detect)
-            has_mic = any(c.quantity == "sound_pressure" for c in run.channels)
+            mic_n = sum(c.n_samples for c in run.channels if c.quantity == "sound_pressure")
+            has_mic = mic_n > 0
         merged[i] = (log, flags)
         old = reuse[i] if reuse is not None else None
         if (old is not None and old.status == "ok" and old.impacts is not None
@@ -561,10 +563,11 @@ def _map_runs(jobs: list[tuple[str, str, str]], detect: DetectParams,
             for j in range(len(segs)):
                 sound_jobs.append((store, key, run_id, j, log.t_s))
                 sound_owner.append(i)
+                sound_w.append(max(1, mic_n // len(segs)))
     sounds: dict[int, list[Any]] = {}
     if sound_jobs:
         done = map_tasks(sound_task, sound_jobs, scheduler=scheduler, quiet=quiet,
-                         desc=f"{desc}: sound", **extra)
+                         desc=f"{desc}: sound", weights=sound_w, **extra)
         for i, res in zip(sound_owner, done):
             sounds.setdefault(i, []).append(res)
     for i, (log, flags) in merged.items():
