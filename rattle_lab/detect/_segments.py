@@ -213,7 +213,7 @@ def merge_logs(parts: list[tuple[Span, Any]], sep_s: float) -> tuple[Any, list[n
     Returns
     -------
     log : ImpactLog
-        The impacts every segment kept, in time order.  Per-run estimates: the offset, the
+        The impacts every segment kept, sorted by time.  Per-run estimates: the offset, the
         delay actually applied, the measurand's difference -- impact-weighted means; the
         ringing share and ratio, ``d e / d delay`` -- medians over the segments; the
         vibrometer's delay -- the inverse-variance mean of the segments' with the scatter's
@@ -230,6 +230,10 @@ def merge_logs(parts: list[tuple[Span, Any]], sep_s: float) -> tuple[Any, list[n
                                       for log, k in zip(logs, keep)])
               for f in dataclasses.fields(first)
               if isinstance(getattr(first, f.name), np.ndarray)}
+    # in time order: an impact only the later segment found, just before the edge, can
+    # precede one the earlier segment kept just after it
+    order = np.argsort(arrays["t_s"], kind="stable")
+    arrays = {k: v[order] for k, v in arrays.items()}
     n = [int(k.sum()) for k in keep]
     delay, delay_se, delay_n = _delay(logs)
     alt = np.array([x.e_measurand_alt_se for x in logs], float)

@@ -158,9 +158,12 @@ def test_merge_keeps_each_impact_once_at_the_edges():
     # further back is the earlier segment's to find (it read that stretch in the middle)
     merged, _ = merge_logs([(a, _log([0.5, 0.99])), (b, _log([0.99, 0.9985, 1.5]))], 2e-3)
     np.testing.assert_allclose(merged.t_s, [0.5, 0.99, 0.9985, 1.5])
+    # both kept, either side of the edge, more than min_separation_s apart: in time order
+    merged, _ = merge_logs([(a, _log([0.5, 1.0015])), (b, _log([0.9985, 1.5]))], 2e-3)
+    np.testing.assert_allclose(merged.t_s, [0.5, 0.9985, 1.0015, 1.5])
     assert merged.velocity_delay_s == pytest.approx(1e-5)
     assert merged.velocity_delay_stderr_s == pytest.approx(1e-6 / math.sqrt(2))
-    assert merged.velocity_delay_n == 5
+    assert merged.velocity_delay_n == 4
 
 
 def test_a_segment_with_bad_samples_fails_the_run_as_the_whole_run_does(long_run):
@@ -243,3 +246,23 @@ def test_a_long_ramp_in_segments_has_the_whole_ramps_threshold(tmp_path):
         assert np.all(d < 1e-3)                                  # precision 1
         assert log.n_impacts >= 0.99 * t_true.size               # recall >= 0.99
     assert abs(cut.impacts.n_impacts - whole.impacts.n_impacts) <= 1
+
+
+def test_a_long_quiet_run_in_segments_is_a_valid_result_without_impacts(tmp_path):
+    """Below grazing (0.5 times): no impact in any segment; the run is still analysed, its
+    sound levels and loudness joined, no pattern of impacts."""
+    plant = Plant()
+    path = tmp_path / "quiet.h5"
+    write_campaign(path, plant, Chain(fs_hz=12800.0), [
+        {"run_id": "quiet", "protocol": "sine_dwell", "freq_hz": 95.0,
+         "levels": np.full(12 * 95, 0.5 * _grazing_ms2(plant, 95.0))}], seed=4)
+    with read(path) as record:
+        run = record.run("quiet")
+        res = analyse_run("k", run, detect={"segment_samples": 1 << 15}, fit={},
+                          mic_distance_m=record.rig.mic_distance_m)
+        whole = analyse_run("k", run, detect={}, fit={}, mic_distance_m=record.rig.mic_distance_m)
+    assert res.status == "ok" and res.impacts.n_impacts == 0 == whole.impacts.n_impacts
+    assert res.pattern == whole.pattern == "no impact"
+    assert res.peaks.p_first_pa.size == 0
+    assert res.acoustics.episodes == ()
+    assert res.acoustics.levels.laeq_db == pytest.approx(whole.acoustics.levels.laeq_db, abs=0.01)
