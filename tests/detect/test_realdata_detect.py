@@ -84,3 +84,25 @@ def test_clap_one_sound_event_first_and_max_peaks():
     assert log.onset_s[0] < pk.t_first_s[0] <= pk.t_max_s[0] < 0.005
     # the parabolic peak height of a sharp click may exceed the largest sample by a few %
     assert np.max(np.abs(p)) <= pk.p_max_pa[0] <= 1.03 * np.max(np.abs(p))
+
+
+def test_droptable_in_segments_finds_what_the_whole_record_finds():
+    """Downey et al. 2022, Test_001.lvm read as a steady run (not a transient) and cut into
+    three segments of 16384 samples (issue 29): the same events at the same times as the
+    whole record (within 0.01 sample), with the default trigger and with the shock trigger."""
+    from dataclasses import replace
+
+    from rattle_lab.detect import analyse_run, run_segments
+
+    rec = _read("droptable/Test_001.lvm", "droptable_lvm.toml")
+    run = replace(rec.runs[0], protocol="unspecified")
+    cut = {"segment_samples": 16384}
+    assert len(run_segments("k", run, cut) or ()) == 3
+    fs = run.channel("board").sample_rate_hz
+    for trigger in ({}, {"on": 100.0, "off": 10.0, "min_separation_s": 0.5}):
+        whole = analyse_run("k", run, detect=trigger, fit={})
+        parts = analyse_run("k", run, detect={**trigger, **cut}, fit={})
+        assert whole.impacts.n_impacts >= 1
+        assert parts.impacts.n_impacts == whole.impacts.n_impacts, trigger
+        np.testing.assert_allclose(parts.impacts.t_s, whole.impacts.t_s, rtol=0, atol=0.01 / fs)
+        assert parts.impacts.t_s[0] == pytest.approx(0.093, abs=0.002)
