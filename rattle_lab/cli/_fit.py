@@ -41,7 +41,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                              "cause is its force, else its base)")
     parser.add_argument("--scheduler", metavar="ADDRESS", default=None,
                         help="dask.distributed scheduler address (tcp://host:8786): detect the "
-                             "runs on that cluster's workers (default: serial, in this process)")
+                             "runs on that cluster's workers; 'local' or 'local:N': on a cluster "
+                             "of a worker process per core (or N) started on this machine "
+                             "(default: serial, in this process)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_run)

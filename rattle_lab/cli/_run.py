@@ -25,8 +25,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     parser.add_argument("--out", default=".", metavar="DIR",
                         help="directory for simulated records and the report (default: .)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="dask.distributed scheduler address for per-run detection "
-                             "(default: serial, in this process)")
+                        help="dask.distributed scheduler address for per-run detection; "
+                             "'local' or 'local:N': a cluster of a worker process per core (or "
+                             "N) started on this machine (default: serial, in this process)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress lines or bars on stderr")
     parser.set_defaults(func=_run)

@@ -329,9 +329,50 @@ def _connect(scheduler: Any) -> tuple[Any, bool]:
                              f"({' '.join(str(exc).split()) or type(exc).__name__})") from None
 
 
+def _local_workers(scheduler: Any) -> int | None:
+    """The worker count of ``scheduler = "local"`` or ``"local:N"`` (None for anything else).
+
+    Raises
+    ------
+    ParameterError
+        For ``"local:"`` followed by anything but a whole number >= 1.
+    """
+    if not isinstance(scheduler, str) or not scheduler.strip().startswith("local"):
+        return None
+    text = scheduler.strip()
+    if text == "local":
+        return max(1, os.cpu_count() or 1)
+    count = text.removeprefix("local:")
+    if text.startswith("local:") and count.isdigit() and int(count) >= 1:
+        return int(count)
+    raise ParameterError(f"`scheduler` {scheduler!r}: use 'local' (a worker per core), "
+                         "'local:N' (N worker processes) or an address like 'tcp://host:8786'")
+
+
 def detect_runs(store: str | os.PathLike[str], detect: DetectParams | Mapping[str, Any],
                 fit: Mapping[str, Any], *, scheduler: Any = None, quiet: bool = True
                 ) -> list[Any]:
+    """Every stored run's detections; see :func:`_detect_runs`.
+
+    ``scheduler = "local"`` or ``"local:N"`` starts a ``dask.distributed`` ``LocalCluster`` of
+    one worker process per core (or ``N``), one thread each, on this machine for the call and
+    closes it after: the cluster path without a cluster to set up."""
+    workers = _local_workers(scheduler)
+    if workers is None:
+        return _detect_runs(store, detect, fit, scheduler=scheduler, quiet=quiet)
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=workers, processes=True, threads_per_worker=1,
+                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+            Client(cluster) as client:
+        return _detect_runs(store, detect, fit, scheduler=client, quiet=quiet)
+
+
+def _detect_runs(store: str | os.PathLike[str], detect: DetectParams | Mapping[str, Any],
+                 fit: Mapping[str, Any], *, scheduler: Any = None, quiet: bool = True
+                 ) -> list[Any]:
     """Every stored run's detections (:func:`detect_run`), serially or on a Dask cluster.
 
     Then the campaign's ringing search (:func:`rattle_lab.detect.campaign_ringing`), which

@@ -273,6 +273,28 @@ def test_cli_fit_and_run_accept_a_scheduler(cluster, tmp_path) -> None:  # type:
     assert on_cluster == serial
 
 
+def test_cli_fit_on_a_local_cluster_it_starts_itself(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """``--scheduler local:2``: a LocalCluster of 2 worker processes started for the command
+    and closed after; the output equals the serial one.  ``local:x`` is one line, exit 2."""
+    import json
+
+    from record_factory import run_cli
+
+    store = _small_campaign(tmp_path, n_runs=2)
+    proc = run_cli("fit", str(store), "--json", "--quiet", "--scheduler", "local:2")
+    assert proc.returncode == 0, proc.stderr
+    local = json.loads(proc.stdout)
+    proc = run_cli("fit", str(store), "--json", "--quiet")
+    serial = json.loads(proc.stdout)
+    for d in (local, serial):
+        d.pop("provenance", None)
+    assert local == serial
+    proc = run_cli("fit", str(store), "--quiet", "--scheduler", "local:x")
+    assert proc.returncode == 2
+    assert proc.stderr.strip().count("\n") == 0 and "local:N" in proc.stderr, proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
 def test_progress_shows_samples_per_second_and_time_left(monkeypatch, capsys) -> None:
     # Long work (the detect stage) counts channel samples: the bar shows the rate in
     # samples/s and the time left.
