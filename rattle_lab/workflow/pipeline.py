@@ -365,7 +365,7 @@ def detect_runs(store: str | os.PathLike[str], detect: DetectParams | Mapping[st
     from distributed import Client, LocalCluster
 
     with LocalCluster(n_workers=workers, processes=True, threads_per_worker=1,
-                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+                      dashboard_address=None, silence_logs=logging.CRITICAL) as cluster, \
             Client(cluster) as client:
         return _detect_runs(store, detect, fit, scheduler=client, quiet=quiet)
 
