@@ -12,6 +12,7 @@ with its reason; a run without impacts is a valid result.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -371,7 +372,8 @@ class SegmentImpacts:
 class SegmentSound:
     """One segment's sound (:func:`segment_sound`): the peaks of its impacts, its acoustic
     delay (NaN without impacts), the sums of squares of its core's pressure, plain and
-    A-weighted, and their sample count, and its acoustics (loudness curve kept)."""
+    A-weighted, and their sample count, and its acoustics (loudness curve kept; None where the
+    microphone does not reach the segment's core)."""
 
     peaks: SoundPeaks
     delay_s: float
@@ -459,6 +461,12 @@ def segment_sound(input_key: str, run: Any, index: int, t_s: np.ndarray,
     p = view_mic.read()
     t_s = np.asarray(t_s, dtype=float)
     t_core = t_s[core_mask(t_s, span)]
+    if p.size == 0:
+        # the microphone does not reach this segment (shorter than the plate's channels, or
+        # starting later): its impacts get no sound, as those of a whole run beyond its end
+        nan = np.full(t_core.size, np.nan)
+        return SegmentSound(SoundPeaks(*(nan.copy() for _ in dataclasses.fields(SoundPeaks))),
+                            float("nan"), 0.0, 0.0, 0, None)
     peaks = _peaks(p, fs_mic, t0_view, t_core, detect, fit, mic_distance_m, plan.f_fit)
     delay = (cross_correlation_delay(impulse_train(t_core, p.size, fs_mic, t0_view), p, fs_mic,
                                      max_lag_s=detect.max_lag_s) if t_core.size else np.nan)
@@ -466,9 +474,9 @@ def segment_sound(input_key: str, run: Any, index: int, t_s: np.ndarray,
     i0 = max(0, math.ceil((span.core_lo_s - start) * fs_mic - 1e-9))
     i1 = min(p.size, math.ceil((span.core_hi_s - start) * fs_mic - 1e-9))
     core = p[i0:i1]
-    part = _acoustics(run, mic, core, fs_mic, t_core, t0_view + i0 / fs_mic, fit,
-                      ecma418_s=_ecma_budget(fit, spans, index),  # type: ignore[arg-type]
-                      keep_curve=True)
+    part = (_acoustics(run, mic, core, fs_mic, t_core, t0_view + i0 / fs_mic, fit,
+                       ecma418_s=_ecma_budget(fit, spans, index),  # type: ignore[arg-type]
+                       keep_curve=True) if core.size >= 2 else None)
     return SegmentSound(peaks, float(delay), float(np.sum(np.square(core, dtype=float))),
                         float(np.sum(np.square(a_weight(p, fs_mic)[i0:i1]))), int(core.size),
                         part)
@@ -501,7 +509,8 @@ def assemble_segments(input_key: str, run: Any, log: ImpactLog, chain_flags: tup
         delay = float(np.median(delays)) if delays else np.nan
         if mic_distance_m:
             expected = mic_distance_m / float(fit.get("speed_of_sound_m_s", 343.0))
-        acoustic = joined_acoustics([x.acoustics for x in sounds])
+        heard = [x.acoustics for x in sounds if x.acoustics is not None]
+        acoustic = joined_acoustics(heard) if heard else None
     threshold, names = _threshold(run, log, base["freq_hz"], fit, names)
     return RunResult(status="ok", channels_used=names, impacts=log, peaks=peaks, pattern=pattern,
                      pattern_n=pattern_n, cycle_counts=counts, acoustic_delay_s=delay,

@@ -102,11 +102,12 @@ def segment_spans(run: Run, detect: Any, channel: Any) -> list[Span] | None:
 
 
 def segment_view(run: Run, span: Span) -> Run:
-    """``run`` with every channel cut to ``span``'s read range (a lazy view)."""
+    """``run`` with every channel cut to ``span``'s read range (a lazy view; empty for a
+    channel that does not reach it)."""
     channels = []
     for ch in run.channels:
         start, fs, _ = _extent(ch)
-        i0 = max(0, math.floor((span.read_lo_s - start) * fs))
+        i0 = min(ch.n_samples, max(0, math.floor((span.read_lo_s - start) * fs)))
         i1 = min(ch.n_samples, max(i0, math.ceil((span.read_hi_s - start) * fs)))
         channels.append(replace(ch, data=_Slice(ch.data, i0, i1), start_time_s=start + i0 / fs))
     return replace(run, channels=tuple(channels))

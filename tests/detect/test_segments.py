@@ -266,3 +266,30 @@ def test_a_long_quiet_run_in_segments_is_a_valid_result_without_impacts(tmp_path
     assert res.peaks.p_first_pa.size == 0
     assert res.acoustics.episodes == ()
     assert res.acoustics.levels.laeq_db == pytest.approx(whole.acoustics.levels.laeq_db, abs=0.01)
+
+
+@pytest.mark.parametrize("cut", ["shorter", "later"])
+def test_a_microphone_that_does_not_cover_the_run_in_segments(long_run, cut):
+    """A microphone that stops at 40 % of the run, or starts at half of it: the segments it
+    does not reach give their impacts no sound, as the whole run does beyond the microphone;
+    the sound found and the levels equal the whole run's."""
+    from rattle_lab.records import ArrayData
+
+    run, mic_m = long_run
+    mic = run.channel("mic")
+    raw = mic.read(si=False)
+    if cut == "shorter":
+        new = replace(mic, data=ArrayData(raw[: int(0.4 * raw.size)]))
+    else:
+        half = raw.size // 2
+        new = replace(mic, data=ArrayData(raw[half:]),
+                      start_time_s=(mic.start_time_s or 0.0) + half / mic.sample_rate_hz)
+    run = replace(run, channels=tuple(new if c.name == "mic" else c for c in run.channels))
+    whole, parts = _both(run, mic_m)
+    assert parts.impacts.n_impacts == whole.impacts.n_impacts
+    heard = np.isfinite(whole.peaks.p_first_pa)
+    assert 0 < heard.sum() < heard.size
+    np.testing.assert_array_equal(np.isfinite(parts.peaks.p_first_pa), heard)
+    assert parts.spl_rms_db == pytest.approx(whole.spl_rms_db, abs=0.01)
+    assert parts.acoustics.levels.laeq_db == pytest.approx(whole.acoustics.levels.laeq_db,
+                                                           abs=0.01)
