@@ -173,7 +173,7 @@ def _plan(input_key: str, run: Any, detect: DetectParams) -> _Plan | RunResult:
     delay_declared = vel is not None and declared_delay_s(vel) is not None
     return _Plan(base, vel.name if vel is not None else None,
                  acc.name if acc is not None else None, f_fit, delay_declared,
-                 segment_spans(run, detect, used[0]))
+                 segment_spans(run, detect, *used))
 
 
 def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str, Any] | None,
@@ -491,10 +491,13 @@ def assemble_segments(input_key: str, run: Any, log: ImpactLog, chain_flags: tup
     without a microphone)."""
     detect = DetectParams.from_mapping(detect)
     plan = _segment_plan(input_key, run, detect)
-    spans = plan.spans
     base = {**plan.base, "chain_flags": chain_flags}
     names = tuple(n for n in (plan.vel, plan.acc) if n is not None)
-    t0, t1 = spans[0].core_lo_s, spans[-1].core_hi_s  # type: ignore[index]
+    # the pattern over the stretch the detection channels share (as paired_plate_channels
+    # cuts a whole run)
+    plate = [c for c in plan.plate(run) if c is not None]
+    t0 = max(_t0_of(run, c) for c in plate)
+    t1 = min(_t0_of(run, c) + c.n_samples / _fs_of(run, c) for c in plate)
     pattern, pattern_n, counts = _pattern(run, log, base["freq_hz"], t0, t1 - t0)
     peaks, delay, expected, spl, spl_a, acoustic = None, np.nan, np.nan, np.nan, np.nan, None
     if sounds:

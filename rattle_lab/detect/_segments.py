@@ -68,7 +68,7 @@ def _extent(ch: Any) -> tuple[float, float, float]:
     return start, fs, ch.n_samples / fs
 
 
-def segment_spans(run: Run, detect: Any, channel: Any) -> list[Span] | None:
+def segment_spans(run: Run, detect: Any, *channels: Any) -> list[Span] | None:
     """The segments of ``run`` (None where it is analysed whole).
 
     Parameters
@@ -76,21 +76,27 @@ def segment_spans(run: Run, detect: Any, channel: Any) -> list[Span] | None:
     run : Run
     detect : DetectParams
         ``segment_samples`` and ``segment_margin_s``.
-    channel : Channel
-        The channel the impacts are detected on (its length decides).
+    *channels : Channel
+        The channels the impacts are detected on (one, or the velocity and the
+        acceleration): the stretch they share, in samples of the fastest, decides.
 
     A run is analysed whole where it is short enough, where it is a transient
-    (:data:`UNSEGMENTED_PROTOCOLS`), or where a channel has no regular sampling.
+    (:data:`UNSEGMENTED_PROTOCOLS`), or where a channel has no regular sampling.  The
+    segments divide the stretch the detection channels share; the first and the last reach
+    out to the run's ends.
     """
-    if run.protocol in UNSEGMENTED_PROTOCOLS or channel is None:
+    used = [c for c in channels if c is not None]
+    if run.protocol in UNSEGMENTED_PROTOCOLS or not used:
         return None
     if any(ch.sample_rate_hz is None or ch.timestamps is not None for ch in run.channels):
         return None
-    n = channel.n_samples
-    if n <= 1.5 * detect.segment_samples:
+    extents = [_extent(ch) for ch in used]
+    start = max(e[0] for e in extents)
+    duration = min(e[0] + e[2] for e in extents) - start
+    n = duration * max(e[1] for e in extents)
+    if duration <= 0 or n <= 1.5 * detect.segment_samples:
         return None
     count = int(round(n / detect.segment_samples))
-    start, _, duration = _extent(channel)
     lo_run = min(_extent(ch)[0] for ch in run.channels)
     hi_run = max(sum(_extent(ch)[::2]) for ch in run.channels)
     edges = start + duration * np.arange(count + 1) / count

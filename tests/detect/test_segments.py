@@ -57,6 +57,9 @@ def test_segments_cover_the_run_once_and_short_runs_stay_whole(long_run):
     ch = next(c for c in run.channels if c.quantity == "plate_velocity")
     params = DetectParams(segment_samples=SEG)
     spans = segment_spans(run, params, ch)
+    # with both plate channels: the stretch they share decides (here the same)
+    acc = next(c for c in run.channels if c.quantity == "plate_acceleration")
+    assert segment_spans(run, params, ch, acc) == spans
     assert spans is not None and len(spans) == round(ch.n_samples / SEG) == 4
     t0, t1 = ch.start_time_s or 0.0, (ch.start_time_s or 0.0) + ch.n_samples / ch.sample_rate_hz
     assert spans[0].core_lo_s <= t0 and spans[-1].core_hi_s >= t1
@@ -293,3 +296,22 @@ def test_a_microphone_that_does_not_cover_the_run_in_segments(long_run, cut):
     assert parts.spl_rms_db == pytest.approx(whole.spl_rms_db, abs=0.01)
     assert parts.acoustics.levels.laeq_db == pytest.approx(whole.acoustics.levels.laeq_db,
                                                            abs=0.01)
+
+
+@pytest.mark.parametrize("name", ["plate", "velocity"])
+def test_a_plate_channel_shorter_than_the_other_in_segments(long_run, name):
+    """The accelerometer (or the vibrometer) stops at 60 % of the run: the impacts come from
+    the stretch both share, whole or in segments -- the same impacts, pattern and e."""
+    from rattle_lab.records import ArrayData
+
+    run, mic_m = long_run
+    ch = run.channel(name)
+    short = replace(ch, data=ArrayData(ch.read(si=False)[: int(0.6 * ch.n_samples)]))
+    run = replace(run, channels=tuple(short if c.name == name else c for c in run.channels))
+    whole, parts = _both(run, mic_m)
+    assert parts.impacts.n_impacts == whole.impacts.n_impacts > 0
+    np.testing.assert_allclose(parts.impacts.t_s, whole.impacts.t_s, rtol=0,
+                               atol=0.01 / ch.sample_rate_hz)
+    assert parts.pattern == whole.pattern
+    assert abs(np.nanmedian(parts.impacts.e) - np.nanmedian(whole.impacts.e)) \
+        <= _se_median(whole.impacts.e)
