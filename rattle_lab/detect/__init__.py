@@ -18,7 +18,8 @@ if TYPE_CHECKING:
     from ._common import n_samples_of, parabolic_peak, robust_sigma
     from ._params import SEGMENT_KEYS, SOUND_KEYS, DetectParams
     from ._run import (RunResult, SegmentImpacts, SegmentSound, analyse_run, assemble_segments,
-                       merge_segment_impacts, run_segments, segment_impacts, segment_sound)
+                       merge_segment_impacts, reused_result, run_segments, segment_impacts,
+                       segment_sound)
     from ._flights import RingingProblem, campaign_ring_modes
     from ._impacts import ImpactLog, ImpactParams, detect_impacts
     from ._ringing import RINGING_RESIDUAL_RATIO
@@ -46,7 +47,7 @@ _LAZY: dict[str, str] = {
     "RunResult": "_run",
     "analyse_run": "_run",
     **dict.fromkeys(("SegmentImpacts", "SegmentSound", "assemble_segments",
-                     "merge_segment_impacts", "run_segments", "segment_impacts",
+                     "merge_segment_impacts", "reused_result", "run_segments", "segment_impacts",
                      "segment_sound"), "_run"),
     "n_samples_of": "_common",
     "parabolic_peak": "_common",
@@ -98,7 +99,7 @@ __all__ = [
     "kernels_cold", "warm_cache",
     # issue 29: a long run in segments, each segment's impacts and sound a task of its own
     "SegmentImpacts", "SegmentSound", "assemble_segments", "merge_segment_impacts",
-    "run_segments", "segment_impacts", "segment_sound",
+    "reused_result", "run_segments", "segment_impacts", "segment_sound",
 ]
 
 

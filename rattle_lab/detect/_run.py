@@ -122,6 +122,14 @@ def _analyse_transient(run: Any, detect: DetectParams, base: dict[str, Any]) -> 
                      shocks=tuple(rows), **base)
 
 
+def _by_quantity(run: Any) -> dict[str, Any]:
+    """The run's first channel of each quantity."""
+    by_q: dict[str, Any] = {}
+    for ch in run.channels:
+        by_q.setdefault(ch.quantity, ch)
+    return by_q
+
+
 @dataclass(frozen=True)
 class _Plan:
     """What :func:`analyse_run` decides before reading samples: the run's identity and chain
@@ -141,9 +149,7 @@ class _Plan:
 
 
 def _plan(input_key: str, run: Any, detect: DetectParams) -> _Plan | RunResult:
-    by_q: dict[str, Any] = {}
-    for ch in run.channels:
-        by_q.setdefault(ch.quantity, ch)
+    by_q = _by_quantity(run)
     freq = float(run.excitation_freq_hz) if run.excitation_freq_hz else float("nan")
     vel, acc = by_q.get("plate_velocity"), by_q.get("plate_acceleration")
     base = dict(input_key=input_key, run_id=run.run_id, protocol=run.protocol, freq_hz=freq,
@@ -213,9 +219,7 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
         return plan
     if plan.spans is not None:
         return _analyse_segments(input_key, run, plan, detect, fit, mic_distance_m, reuse)
-    by_q: dict[str, Any] = {}
-    for ch in run.channels:
-        by_q.setdefault(ch.quantity, ch)
+    by_q = _by_quantity(run)
     freq, base = plan.base["freq_hz"], dict(plan.base)
     vel, acc = plan.plate(run)
     used = [c for c in (vel, acc) if c is not None]
@@ -225,10 +229,11 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
     log, fs, t0, duration, flags = _impact_log(run, by_q, vel, acc, detect, f_fit,
                                                delay_declared)
     base["chain_flags"] = _with_log_flags(base["chain_flags"], log, delay_declared, flags)
-    if reuse is not None and _reusable(reuse, input_key, run.run_id, log):
+    reused = reused_result(reuse, input_key, run.run_id, log, base["chain_flags"])
+    if reused is not None:
         # the same impact times: the same sound, pattern and threshold (issue 29: the
         # ringing passes detect again for the velocities only)
-        return replace(reuse, impacts=log, chain_flags=base["chain_flags"])
+        return reused
     names = tuple(c.name for c in used)
     pattern, pattern_n, counts = _pattern(run, log, freq, t0, duration)
     peaks, delay, expected, spl, spl_a = None, np.nan, np.nan, np.nan, np.nan
@@ -308,10 +313,16 @@ def _with_log_flags(flags: tuple[str, ...], log: ImpactLog, delay_declared: bool
     return flags
 
 
-def _reusable(reuse: RunResult, input_key: str, run_id: str, log: ImpactLog) -> bool:
-    return (reuse.status == "ok" and reuse.impacts is not None
+def reused_result(reuse: RunResult | None, input_key: str, run_id: str, log: ImpactLog,
+                  chain_flags: tuple[str, ...]) -> RunResult | None:
+    """``reuse`` with ``log`` and ``chain_flags`` where it is this run's result with the same
+    impact times, bit for bit (what follows from the times alone is then the same); None
+    otherwise (:func:`analyse_run`'s ``reuse``)."""
+    if (reuse is not None and reuse.status == "ok" and reuse.impacts is not None
             and (reuse.input_key, reuse.run_id) == (input_key, run_id)
-            and np.array_equal(reuse.impacts.t_s, log.t_s))
+            and np.array_equal(reuse.impacts.t_s, log.t_s)):
+        return replace(reuse, impacts=log, chain_flags=chain_flags)
+    return None
 
 
 def _pattern(run: Any, log: ImpactLog, freq: float, t0: float, duration: float
@@ -405,9 +416,7 @@ def segment_impacts(input_key: str, run: Any, index: int,
     plan = _segment_plan(input_key, run, detect)
     span = plan.spans[index]  # type: ignore[index]
     view = segment_view(run, span)
-    v_by_q: dict[str, Any] = {}
-    for ch in view.channels:
-        v_by_q.setdefault(ch.quantity, ch)
+    v_by_q = _by_quantity(view)
     vel, acc = plan.plate(view)
     log, _, _, _, flags = _impact_log(view, v_by_q, vel, acc, detect, plan.f_fit,
                                       plan.delay_declared)
@@ -530,8 +539,9 @@ def _analyse_segments(input_key: str, run: Any, plan: _Plan, detect: DetectParam
     parts = [segment_impacts(input_key, run, index, detect)
              for index in range(len(plan.spans or ()))]
     log, flags = merge_segment_impacts(input_key, run, parts, detect)
-    if reuse is not None and _reusable(reuse, input_key, run.run_id, log):
-        return replace(reuse, impacts=log, chain_flags=flags)
+    reused = reused_result(reuse, input_key, run.run_id, log, flags)
+    if reused is not None:
+        return reused
     has_mic = any(c.quantity == "sound_pressure" for c in run.channels)
     sounds = ([segment_sound(input_key, run, i, log.t_s, detect, fit, mic_distance_m)
                for i in range(len(plan.spans or ()))] if has_mic else None)
@@ -539,4 +549,5 @@ def _analyse_segments(input_key: str, run: Any, plan: _Plan, detect: DetectParam
 
 
 __all__ = ["RunResult", "SegmentImpacts", "SegmentSound", "analyse_run", "assemble_segments",
-           "merge_segment_impacts", "run_segments", "segment_impacts", "segment_sound"]
+           "merge_segment_impacts", "reused_result", "run_segments", "segment_impacts",
+           "segment_sound"]

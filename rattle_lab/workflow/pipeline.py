@@ -556,9 +556,7 @@ def _map_runs(jobs: list[tuple[str, str, str]], detect: DetectParams,
     round of tasks finds each segment's sound (:func:`sound_task`), and the run is
     assembled here: the same steps, and the same numbers, as
     :func:`rattle_lab.detect.analyse_run` takes in one process."""
-    import numpy as np
-
-    from rattle_lab.detect import assemble_segments, merge_segment_impacts
+    from rattle_lab.detect import assemble_segments, merge_segment_impacts, reused_result
     from rattle_lab.store import open_stored_record
 
     counts = _segment_counts(jobs, detect)
@@ -595,12 +593,9 @@ def _map_runs(jobs: list[tuple[str, str, str]], detect: DetectParams,
             mic_n = sum(c.n_samples for c in run.channels if c.quantity == "sound_pressure")
             has_mic = mic_n > 0
         merged[i] = (log, flags)
-        old = reuse[i] if reuse is not None else None
-        if (old is not None and old.status == "ok" and old.impacts is not None
-                and (old.input_key, old.run_id) == (key, run_id)
-                and np.array_equal(old.impacts.t_s, log.t_s)):
-            results[i] = replace(old, impacts=log, chain_flags=flags)
-        elif has_mic:
+        results[i] = reused_result(reuse[i] if reuse is not None else None, key, run_id, log,
+                                   flags)
+        if results[i] is None and has_mic:
             for j in range(len(segs)):
                 sound_jobs.append((store, key, run_id, j, log.t_s))
                 sound_owner.append(i)

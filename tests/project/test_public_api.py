@@ -100,7 +100,7 @@ PACKAGES: dict[str, list[str]] = {
         "kernels_cold", "warm_cache",
         # issue 29: a long run in segments
         "SegmentImpacts", "SegmentSound", "assemble_segments", "merge_segment_impacts",
-        "run_segments", "segment_impacts", "segment_sound",
+        "reused_result", "run_segments", "segment_impacts", "segment_sound",
     ],
     "rattle_lab.explorer": [
         "Explorer", "Histories", "compute_histories", "save_histories", "impacts_path",
