@@ -37,6 +37,8 @@ COMPILED: dict[str, tuple[str, ...]] = {
                                           "added_sums", "eliminate_free", "sparse_cross",
                                           "tail_columns", "sparse_gram", "local_design",
                                           "local_lstsq", "local_eval"),
+    "rattle_lab.detect._jump_kernels": ("_fit", "fit_value", "fits_at", "_half_region",
+                                        "_step_centroid", "_contact_pulse", "jump_fits_batch"),
     "rattle_lab.records._scan": ("_n_equal", "flat_runs"),
     "rattle_lab.acoustics._iso532": ("_slopes", "_decay_frame", "_weight_frame", "_run",
                                      "_core_loudness"),

@@ -46,7 +46,7 @@ import numpy as np
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, n_samples_of
 from ._flights import RingingProblem, flight_velocities, ringing_problem
-from ._local_fits import _fit_windows, _jump_fits, _JumpFits
+from ._local_fits import _fit_rows, _fit_windows, _fits_at, _jump_fits_all, _JumpFits
 from ._offset import _reversed_at_ends, _reverses, velocity_offset
 from ._ringing import MIN_SHARE_IMPACTS, RINGING_RESIDUAL_RATIO, _ringing_residual_ratio
 from ._trigger import _centroid, _half_region, characteristic, trigger_onsets
@@ -71,8 +71,9 @@ def _delay_keeps_reversals(jfits: list[_JumpFits], d_new: float, d_old: float,
     if min_reversal == 0.0 or not ok.any():
         return True
     counts = []
+    rows = _fit_rows(jfits)
     for d in (d_old, d_new):
-        vv = np.array([jf.at(t + d) for jf, t in zip(jfits, t_a) if np.isfinite(t)])
+        vv = _fits_at(rows, t_a + d)[ok]
         counts.append(int(_reverses(vv[:, 0], vv[:, 1], min_reversal).sum()))
     return counts[0] == 0 or counts[1] >= DELAY_REVERSAL_SHARE * counts[0]
 
@@ -437,8 +438,9 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         lo_lim = trig[j - 1][2] + 1 if j > 0 else 0
         hi_lim = trig[j + 1][0] - 1 if j + 1 < len(trig) else v.size - 1
         spans.append((j_lo, j_hi, lo_lim, hi_lim))
-        jfits.append(_jump_fits(v, j_lo, j_hi, lo_lim, hi_lim, n_fit=n_fit, n_guard=n_guard,
-                                degree=degree, omega_per_sample=omega, accel=a))
+    if v is not None:
+        jfits = _jump_fits_all(v, spans, n_fit=n_fit, n_guard=n_guard, degree=degree,
+                               omega_per_sample=omega, accel=a)
     # issue 28: the velocity steps' centroids against the contact pulses' measure what is
     # left of the vibrometer's delay after the declared one (the first moment of any
     # filter's impulse response is its low-frequency group delay): the fits are evaluated
@@ -514,11 +516,11 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             extra = 0
         first_fits = jfits
         if extra > 0:
-            wide = [replace(_jump_fits(v, j_lo, j_hi, lo_l, hi_l, n_fit=n_fit,
-                                       n_guard=n_guard + extra, degree=degree,
-                                       omega_per_sample=omega, accel=None),
-                            t_a=jf.t_a, a_lo=jf.a_lo, a_hi=jf.a_hi, a_sign=jf.a_sign)
-                    for jf, (j_lo, j_hi, lo_l, hi_l) in zip(jfits, spans)]
+            wide = [replace(w, t_a=jf.t_a, a_lo=jf.a_lo, a_hi=jf.a_hi, a_sign=jf.a_sign)
+                    for w, jf in zip(_jump_fits_all(v, spans, n_fit=n_fit,
+                                                    n_guard=n_guard + extra, degree=degree,
+                                                    omega_per_sample=omega, accel=None),
+                                     jfits)]
             # the step's centroid over the wider span holds more of a ringing decoder's tail.
             # A decoder's step response is the same at every impact, so its centroids agree
             # there; where they scatter by a sample or more (unresolved) what kept the step
@@ -534,42 +536,35 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                 delay = replace(est, value=est.value + lag)
                 d_use = est.value
                 method_err = 0.0   # its change from the first is the window term
+        rows = _fit_rows(jfits)
+        t_ev = np.array([t_eval_of(jf) for jf in jfits])
         if measured:
             # how much e moves per sample of delay: the fits read a quarter sample either
             # side of the instant used (the median over the impacts)
-            slopes = []
-            for jf in jfits:
-                te = t_eval_of(jf)
-                if np.isfinite(te):
-                    (pi1, qo1), (pi0, qo0) = jf.at(te + 0.25), jf.at(te - 0.25)
-                    with np.errstate(divide="ignore", invalid="ignore"):
-                        slopes.append((-qo1 / pi1 + qo0 / pi0) / 0.5)
-            sl = np.asarray(slopes, dtype=float)
+            v1, v0 = _fits_at(rows, t_ev + 0.25), _fits_at(rows, t_ev - 0.25)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                sl = (-v1[:, 1] / v1[:, 0] + v0[:, 1] / v0[:, 0]) / 0.5
             sl = sl[np.isfinite(sl)]
             e_slope = float(np.median(sl)) * fs_hz if sl.size else float("nan")
         if first_fits is not jfits:
             # what moving the fits out of the unsettled step changed in e: the part of the
             # chain's step response the first fits read (a systematic error of their own)
-            moved = []
-            for jf0, jf in zip(first_fits, jfits):
-                te = t_eval_of(jf)
-                if np.isfinite(te):
-                    (pi0, qo0), (pi1, qo1) = jf0.at(te), jf.at(te)
-                    with np.errstate(divide="ignore", invalid="ignore"):
-                        moved.append(-qo1 / pi1 + qo0 / pi0)
-            mv = np.asarray(moved, dtype=float)
+            v0, v1 = _fits_at(_fit_rows(first_fits), t_ev), _fits_at(rows, t_ev)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                mv = -v1[:, 1] / v1[:, 0] + v0[:, 1] / v0[:, 0]
             mv = mv[np.isfinite(mv)]
             e_window = abs(float(np.median(mv))) if mv.size else float("nan")
+        t_at = np.empty(len(jfits))
         for i, jf in enumerate(jfits):
             if np.isfinite(jf.t_a):
-                t_idx[i], t_eval = jf.t_a, jf.t_a + d_use
+                t_idx[i], t_at[i] = jf.t_a, jf.t_a + d_use
             elif np.isfinite(jf.t_v):
-                t_idx[i], t_eval = jf.t_v - d_use, jf.t_v
+                t_idx[i], t_at[i] = jf.t_v - d_use, jf.t_v
             else:
-                t_eval = jf.t_half
-            vi, vo = jf.at(t_eval)
-            v_in.append(vi)
-            v_out.append(vo)
+                t_at[i] = jf.t_half
+        vv = _fits_at(rows, t_at)
+        v_in.extend(vv[:, 0].tolist())
+        v_out.extend(vv[:, 1].tolist())
     vin = np.asarray(v_in, dtype=float)
     vout = np.asarray(v_out, dtype=float)
     keep = _reverses(vin, vout, params.min_reversal) if v is not None else np.ones(vin.size, bool)
@@ -579,8 +574,9 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         # it lasts; read at the centroid, a slow one's fits then show no reversal.  Those are
         # judged again by the fits at the contact pulse's ends, first touch and separation.
         # Their velocities stay the centroid's (the rigid impact's that the SDF model has)
-        vin_e = np.array([jf.at(jf.a_lo + d_use)[0] for jf in jfits])
-        vout_e = np.array([jf.at(jf.a_hi + d_use)[1] for jf in jfits])
+        rows = _fit_rows(jfits)
+        vin_e = _fits_at(rows, np.array([jf.a_lo for jf in jfits]) + d_use)[:, 0]
+        vout_e = _fits_at(rows, np.array([jf.a_hi for jf in jfits]) + d_use)[:, 1]
         sign_a = np.array([jf.a_sign for jf in jfits])
         keep = keep | _reversed_at_ends(vin, vout, keep, vin_e, vout_e, sign_a,
                                         params.min_reversal)

@@ -44,6 +44,22 @@ class _LocalFit:
                                     self.w is not None)
         else:
             self.coef = np.linalg.lstsq(self._design(k), v, rcond=None)[0]
+        self.row = np.r_[self.k0, self.scale, self.degree, float(self.w is not None),
+                         0.0 if self.w is None else float(self.w), self.coef]
+
+    @classmethod
+    def of_row(cls, row: np.ndarray) -> _LocalFit:
+        """The fit a compiled row holds (see :mod:`rattle_lab.detect._jump_kernels`)."""
+        from ._jump_kernels import FIT_HEAD
+
+        fit = cls.__new__(cls)
+        fit.k0, fit.scale, fit.degree = float(row[0]), float(row[1]), int(row[2])
+        fit.w = float(row[4]) if row[3] else None
+        n_coef = 3 + 2 * fit.degree if fit.w is not None else fit.degree + 1
+        fit.compiled = True
+        fit.coef = np.array(row[FIT_HEAD:FIT_HEAD + n_coef])
+        fit.row = np.array(row[:FIT_HEAD + n_coef])
+        return fit
 
     def _design(self, k: np.ndarray) -> np.ndarray:
         tau = np.asarray(k, dtype=float) - self.k0
@@ -58,6 +74,10 @@ class _LocalFit:
         return np.column_stack(cols)
 
     def __call__(self, k: np.ndarray | float) -> np.ndarray:
+        if isinstance(k, float) and self.compiled:
+            from ._jump_kernels import fit_value
+
+            return np.array([fit_value(self.row, k)])
         kk = np.atleast_1d(np.asarray(k, dtype=float))
         if self.compiled:
             from ._flight_kernels import local_eval
@@ -178,8 +198,67 @@ class _JumpFits:
 
     def at(self, t: float) -> tuple[float, float]:
         nan = float("nan")
+        t = float(t)
         return (float(self.p(t)[0]) if self.p is not None else nan,
                 float(self.q(t)[0]) if self.q is not None else nan)
+
+
+def _fit_rows(jfits: list[_JumpFits]) -> np.ndarray:
+    """The fits before and after every impact as rows (n, 2, width) for :func:`_fits_at`
+    (NaN rows where a side has no fit)."""
+    width = max([f.row.size for jf in jfits for f in (jf.p, jf.q) if f is not None],
+                default=1)
+    rows = np.full((len(jfits), 2, width), np.nan)
+    for i, jf in enumerate(jfits):
+        for side, f in enumerate((jf.p, jf.q)):
+            if f is not None:
+                rows[i, side, :f.row.size] = f.row
+    return rows
+
+
+def _fits_at(rows: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``(n, 2)``: each impact's fits before and after at ``t[i]`` (NaN where ``t[i]`` is
+    not finite or a side has no fit)."""
+    from ._jump_kernels import fits_at
+
+    return fits_at(np.ascontiguousarray(rows), np.ascontiguousarray(t, dtype=float))
+
+
+def _jump_fits_all(v: np.ndarray, spans: list[tuple[int, int, int, int]], *, n_fit: int,
+                   n_guard: int, degree: int, omega_per_sample: float | None = None,
+                   accel: np.ndarray | None = None) -> list[_JumpFits]:
+    """:func:`_jump_fits` of every span ``(j_lo, j_hi, lo_lim, hi_lim)`` in one compiled
+    pass (:func:`rattle_lab.detect._jump_kernels.jump_fits_batch`); an impact whose windows
+    hold a non-finite sample goes through :func:`_jump_fits` itself."""
+    from ._jump_kernels import jump_fits_batch
+
+    if not spans:
+        return []
+
+    def frozen(x: np.ndarray) -> np.ndarray:
+        # one compiled variant: read-only, contiguous
+        out = np.ascontiguousarray(x, dtype=float).view()
+        out.flags.writeable = False
+        return out
+
+    scal, fits = jump_fits_batch(
+        frozen(v), frozen(accel if accel is not None else np.zeros(0)), accel is not None,
+        np.asarray(spans, dtype=np.int64).reshape(-1, 4), int(n_fit), int(n_guard),
+        int(degree), 0.0 if omega_per_sample is None else float(omega_per_sample),
+        omega_per_sample is not None, SHORT_FLANK_MIN, SHORT_FLANK_WIDTHS,
+        float(SHORT_FLANK_PADS), SHORT_FLANK_DEGREE)
+    out = []
+    for i, (j_lo, j_hi, lo_lim, hi_lim) in enumerate(spans):
+        t_v, t_a, t_half, t_s, a_lo, a_hi, a_sign, status = scal[i].tolist()
+        if status:
+            out.append(_jump_fits(v, j_lo, j_hi, lo_lim, hi_lim, n_fit=n_fit, n_guard=n_guard,
+                                  degree=degree, omega_per_sample=omega_per_sample,
+                                  accel=accel))
+            continue
+        p = None if np.isnan(fits[i, 0, 0]) else _LocalFit.of_row(fits[i, 0])
+        q = None if np.isnan(fits[i, 1, 0]) else _LocalFit.of_row(fits[i, 1])
+        out.append(_JumpFits(t_v, t_a, t_half, p, q, t_s, a_lo, a_hi, a_sign))
+    return out
 
 
 def _jump_fits(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: int, *,

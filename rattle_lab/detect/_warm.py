@@ -28,18 +28,19 @@ def _bouncing(fs_hz: float, f_hz: float, seconds: float
 
 
 #: The compiled functions :func:`kernels_cold` looks for in numba's cache (one of each kind).
-_PROBES = ("local_lstsq", "free_sums", "added_sums", "tail_columns")
+_PROBES = ("local_lstsq", "free_sums", "added_sums", "tail_columns", "jump_fits_batch")
 
 
 def kernels_cold() -> bool:
     """Whether numba's on-disk cache lacks some of the detection's compiled functions (a
     detection would compile them first, about 15 s).  False where it cannot tell (a numba
     without this cache layout): no notice is better than a wrong one."""
-    from . import _flight_kernels
+    from . import _flight_kernels, _jump_kernels
 
     for name in _PROBES:
         try:
-            index = getattr(_flight_kernels, name)._cache._cache_file._load_index()
+            module = _jump_kernels if hasattr(_jump_kernels, name) else _flight_kernels
+            index = getattr(module, name)._cache._cache_file._load_index()
         except Exception:  # noqa: BLE001 - numba internals: unknown means "do not say"
             return False
         if not index:

@@ -1,0 +1,253 @@
+"""The local fits either side of every impact of a run in one compiled pass
+(:func:`jump_fits_batch`), the same arithmetic as :func:`rattle_lab.detect._local_fits._jump_fits`
+called impact by impact, and the fits' values at given instants (:func:`fits_at`).
+
+A fit is stored as one row: ``[k0, scale, degree, periodic, w, coef...]`` (``k0`` NaN: no
+fit, a side without samples); the coefficients are :func:`~rattle_lab.detect._flight_kernels.local_lstsq`'s.
+Sums run in index order, where numpy's pairwise sums of the Python path may differ in the
+last bits.  A window holding a non-finite sample is left to the Python path (status 1).
+numba compiles these on first use and caches them on disk.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ._flight_kernels import local_lstsq
+
+#: Columns of a fit row before its coefficients.
+FIT_HEAD = 5
+#: Columns of :func:`jump_fits_batch`'s scalars: t_v, t_a, t_half, t_s, a_lo, a_hi, a_sign,
+#: status (0: done here; 1: a window holds a non-finite sample, the Python path decides).
+N_SCALARS = 8
+
+
+@numba.njit(cache=True, nogil=True)
+def _fit(x: np.ndarray, lo: int, hi: int, degree: int, w: float, periodic: bool,
+         row: np.ndarray) -> bool:  # pragma: no cover - compiled
+    """:class:`~rattle_lab.detect._local_fits._LocalFit` of ``x[lo:hi + 1]`` into ``row``.
+    False where the window holds a non-finite sample."""
+    n = hi - lo + 1
+    y = np.empty(n)
+    k = np.empty(n)
+    for i in range(n):
+        y[i] = x[lo + i]
+        if not math.isfinite(y[i]):
+            return False
+        k[i] = lo + i
+    k0 = 0.5 * (lo + hi)           # the mean of consecutive integers, exactly
+    scale = max(1.0, 0.5 * (hi - lo))
+    n_par = 3 + 2 * degree if periodic else degree + 1
+    if n < n_par:
+        periodic = False
+        degree = max(0, min(degree, n - 1))
+    coef = local_lstsq(k, y, k0, scale, degree, w, periodic)
+    row[:] = np.nan
+    row[0], row[1], row[2] = k0, scale, degree
+    row[3] = 1.0 if periodic else 0.0
+    row[4] = w
+    row[FIT_HEAD:FIT_HEAD + coef.size] = coef
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def fit_value(row: np.ndarray, t: float) -> float:  # pragma: no cover - compiled
+    """A fit row's value at the fractional sample ``t`` (NaN: no fit)."""
+    k0 = row[0]
+    if math.isnan(k0):
+        return np.nan
+    scale, degree, w = row[1], int(row[2]), row[4]
+    tau = t - k0
+    u = tau / scale
+    if row[3] == 0.0:              # polynomial, highest power first
+        acc = 0.0
+        x = 1.0
+        for j in range(degree, -1, -1):
+            acc += row[FIT_HEAD + j] * x
+            x *= u
+        return acc
+    c, s_ = math.cos(w * tau), math.sin(w * tau)
+    acc = row[FIT_HEAD]
+    x = 1.0
+    for j in range(degree + 1):
+        acc += row[FIT_HEAD + 1 + 2 * j] * (x * c) + row[FIT_HEAD + 2 + 2 * j] * (x * s_)
+        x *= u
+    return acc
+
+
+@numba.njit(cache=True, nogil=True)
+def fits_at(fits: np.ndarray, t: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """``out[i, s]``: fit ``s`` (0 before, 1 after) of impact ``i`` at ``t[i]`` (NaN where
+    ``t[i]`` is NaN or the fit is missing)."""
+    n = t.size
+    out = np.full((n, 2), np.nan)
+    for i in range(n):
+        if math.isfinite(t[i]):
+            out[i, 0] = fit_value(fits[i, 0], t[i])
+            out[i, 1] = fit_value(fits[i, 1], t[i])
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _half_region(r: np.ndarray, peak: int) -> tuple[int, int]:  # pragma: no cover - compiled
+    half = 0.5 * r[peak]
+    lo = peak
+    while lo > 0 and r[lo - 1] > half:
+        lo -= 1
+    hi = peak
+    while hi + 1 < r.size and r[hi + 1] > half:
+        hi += 1
+    return lo, hi
+
+
+@numba.njit(cache=True, nogil=True)
+def _step_centroid(v: np.ndarray, p: np.ndarray, q: np.ndarray, pre_hi: int, post_lo: int
+                   ) -> float:  # pragma: no cover - compiled
+    """Centroid of the normalised step between fits ``p`` and ``q`` (NaN if not finite)."""
+    total = 0.0
+    first = last = 0.0
+    for kk in range(pre_hi, post_lo + 1):
+        pk, qk = fit_value(p, float(kk)), fit_value(q, float(kk))
+        s = (v[kk] - pk) / (qk - pk)
+        if not math.isfinite(s):
+            return np.nan
+        if kk == pre_hi:
+            first = s
+        last = s
+        total += s
+    t = post_lo - (total - 0.5 * (first + last))
+    return min(max(t, float(pre_hi)), float(post_lo))
+
+
+@numba.njit(cache=True, nogil=True)
+def _contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, n_fit: int, degree: int,
+                   w: float, periodic: bool, row: np.ndarray
+                   ) -> tuple[float, float, float, float, bool]:  # pragma: no cover - compiled
+    """:func:`~rattle_lab.detect._local_fits.contact_pulse`; the last value False where a
+    window holds a non-finite sample."""
+    nan = np.nan
+    lo, hi = k_c - n_half, k_c + n_half
+    f_hi = lo - 1
+    f_lo = max(lo_lim, f_hi - n_fit + 1)
+    if lo < 0 or hi >= a.size or f_hi - f_lo + 1 < 3:
+        return nan, nan, nan, 0.0, True
+    if not _fit(a, f_lo, f_hi, degree, w, periodic, row):
+        return nan, nan, nan, 0.0, False
+    m = hi - lo + 1
+    r = np.empty(m)
+    for i in range(m):
+        r[i] = a[lo + i] - fit_value(row, float(lo + i))
+        if not math.isfinite(r[i]):
+            return nan, nan, nan, 0.0, False
+    pk = 0
+    for i in range(1, m):
+        if abs(r[i]) > abs(r[pk]):
+            pk = i
+    sign = 1.0 if r[pk] > 0 else (-1.0 if r[pk] < 0 else 0.0)
+    for i in range(m):
+        r[i] *= sign
+    r_lo, r_hi = _half_region(r, pk)
+    widen = int(math.ceil(0.25 * (r_hi - r_lo + 1)))
+    r_lo, r_hi = max(0, r_lo - widen), min(m - 1, r_hi + widen)
+    sw = swk = 0.0
+    for i in range(r_lo, r_hi + 1):
+        sw += r[i]
+        swk += (lo + i) * r[i]
+    if not sw > 0:
+        return nan, nan, nan, 0.0, True
+    t1 = swk / sw
+    # the higher modes' ringing just after the pulse, a x + b x**2 (see contact_pulse)
+    width = r_hi - r_lo + 1
+    a_end = min(m, r_hi + 1 + 2 * width)
+    n_after = a_end - (r_hi + 1)
+    if n_after >= 3:
+        x = np.empty((n_after, 2))
+        y = np.empty(n_after)
+        for j in range(n_after):
+            xj = (lo + r_hi + 1 + j) - t1
+            x[j, 0], x[j, 1] = xj, xj * xj
+            y[j] = r[r_hi + 1 + j]
+        rcond = np.finfo(np.float64).eps * max(n_after, 2)
+        coef = np.linalg.lstsq(x, y, rcond)[0]
+        sw = swk = 0.0
+        for i in range(r_lo, r_hi + 1):
+            xc = max((lo + i) - t1, 0.0)
+            wi = r[i] - (coef[0] * xc + coef[1] * xc * xc)
+            sw += wi
+            swk += (lo + i) * wi
+        if sw > 0:
+            t1 = swk / sw
+    return t1, (lo + r_lo) - 0.5, (lo + r_hi) + 0.5, sign, True
+
+
+@numba.njit(cache=True, nogil=True)
+def jump_fits_batch(v: np.ndarray, a: np.ndarray, has_a: bool, spans: np.ndarray, n_fit: int,
+                    n_guard: int, degree: int, w: float, periodic: bool, n_short_min: int,
+                    short_widths: int, short_pads: float, short_degree: int
+                    ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """Every impact's :func:`~rattle_lab.detect._local_fits._jump_fits` at once.
+
+    ``spans[i] = (j_lo, j_hi, lo_lim, hi_lim)``.  Returns ``scalars`` (n, :data:`N_SCALARS`)
+    and ``fits`` (n, 2, :data:`FIT_HEAD` + coefficients): the fits before and after.
+    """
+    n = spans.shape[0]
+    n_coef = max(3 + 2 * degree, degree + 1, short_degree + 1)
+    scal = np.full((n, N_SCALARS), np.nan)
+    fits = np.full((n, 2, FIT_HEAD + n_coef), np.nan)
+    work = np.empty(FIT_HEAD + n_coef)
+    ps = np.empty(FIT_HEAD + n_coef)
+    qs = np.empty(FIT_HEAD + n_coef)
+    for i in range(n):
+        j_lo, j_hi, lo_lim, hi_lim = spans[i, 0], spans[i, 1], spans[i, 2], spans[i, 3]
+        n_pad = (j_hi - j_lo + 1) + n_guard
+        pre_hi = j_lo - 1 - n_pad
+        post_lo = j_hi + n_pad
+        pre_lo, post_hi = max(lo_lim, pre_hi - n_fit + 1), min(hi_lim, post_lo + n_fit - 1)
+        scal[i, 2] = 0.5 * (j_lo + j_hi) - 0.5
+        scal[i, 6] = 0.0
+        scal[i, 7] = 0.0
+        ok = True
+        for side in range(2):
+            lo, hi = (pre_lo, pre_hi) if side == 0 else (post_lo, post_hi)
+            if hi < lo:
+                continue
+            deg = degree if (hi - lo + 1 >= n_fit or not periodic) else 0
+            if not _fit(v, lo, hi, deg, w, periodic, fits[i, side]):
+                ok = False
+        if not ok:
+            scal[i, 7] = 1.0
+            continue
+        if math.isnan(fits[i, 0, 0]) or math.isnan(fits[i, 1, 0]):
+            continue
+        t = _step_centroid(v, fits[i, 0], fits[i, 1], pre_hi, post_lo)
+        if math.isnan(t):
+            scal[i, 7] = 1.0   # a fit that is not finite: numpy decides
+            continue
+        scal[i, 0] = t
+        # the short flanks' centroid (_short_flank_centroid)
+        t_s = t
+        n_s = max(n_short_min, short_widths * (j_hi - j_lo + 1),
+                  int(short_pads * (post_lo - j_hi)))
+        s_lo, s_hi = max(lo_lim, pre_hi - n_s + 1), min(hi_lim, post_lo + n_s - 1)
+        if pre_hi - s_lo + 1 >= 3 and s_hi - post_lo + 1 >= 3:
+            if not (_fit(v, s_lo, pre_hi, short_degree, 0.0, False, ps)
+                    and _fit(v, post_lo, s_hi, short_degree, 0.0, False, qs)):
+                scal[i, 7] = 1.0
+                continue
+            ts = _step_centroid(v, ps, qs, pre_hi, post_lo)
+            if not math.isnan(ts):
+                t_s = ts
+        scal[i, 3] = t_s
+        if has_a:
+            t_a, a_lo, a_hi, a_sign, fine = _contact_pulse(
+                a, int(np.rint(t)), (post_lo - j_hi) + (j_hi - j_lo + 1) // 2, lo_lim, n_fit,
+                degree, w, periodic, work)
+            if not fine:
+                scal[i, 7] = 1.0
+                continue
+            if math.isfinite(t_a) and pre_hi <= t_a <= post_lo:
+                scal[i, 1], scal[i, 4], scal[i, 5], scal[i, 6] = t_a, a_lo, a_hi, a_sign
+    return scal, fits

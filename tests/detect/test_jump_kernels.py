@@ -1,0 +1,127 @@
+"""The compiled local fits of every impact (``_jump_fits_all``) against the same fits made
+impact by impact in Python (``_jump_fits``), on a record made here with plain numpy.
+
+The two compute the same least squares (one LAPACK ``gelsd`` on the same design) and differ
+only in the order of their sums (pairwise in numpy, in index order in the kernel) and in the
+fits' evaluation (BLAS ``gemv`` against a loop).  Each centroid sums about 20-60 normalised
+step values of order one, each from fits whose terms are at most ``A / jump`` ~ 10 times the
+step: the rounding difference is ~ 60 * 10 * 2.2e-16 * (index ~ 1e4) ~ 1e-10 sample at
+most, so 1e-8 sample is a bound with a margin of 100; a wrong window or an off-by-one moves a
+centroid by 1e-3 sample or more.  Velocities are compared at 1e-10 relative (the same
+argument, without the index).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rattle_lab.detect._local_fits import (_fit_rows, _fits_at, _jump_fits, _jump_fits_all,
+                                           _JumpFits)
+from rattle_lab.detect._trigger import _half_region, characteristic, trigger_onsets
+
+FS, F_HZ = 25600.0, 95.0
+
+
+def bouncing_record(seed: int, seconds: float = 0.5, contact_samples: float = 3.0
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """A forced plate velocity with one impact a period (a half-sine contact, a
+    velocity reversal with e ~ 0.6), a 900 Hz mode ringing after each, and noise; and its
+    acceleration (the analytic derivative plus noise)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * FS)) / FS
+    w = 2 * np.pi * F_HZ
+    v = 0.4 * np.cos(w * t + 0.3)
+    acc = -0.4 * w * np.sin(w * t + 0.3)
+    t_imp = (np.arange(1, int(seconds * F_HZ)) + 0.31 + 0.05 * rng.standard_normal()) / F_HZ
+    dur = contact_samples / FS
+    for ti in t_imp:
+        jump = 0.16 * (1 + 0.1 * rng.standard_normal())
+        x = np.clip((t - ti) / dur + 0.5, 0.0, 1.0)
+        v += jump * 0.5 * (1 - np.cos(np.pi * x))
+        pulse = (x > 0) & (x < 1)
+        acc[pulse] += jump * 0.5 * np.pi / dur * np.sin(np.pi * x[pulse])
+        after = t > ti
+        ring = 0.004 * np.exp(-(t[after] - ti) / 4e-3)
+        v[after] += ring * np.sin(2 * np.pi * 900 * (t[after] - ti))
+        acc[after] += ring * 2 * np.pi * 900 * np.cos(2 * np.pi * 900 * (t[after] - ti))
+    return v + 2e-4 * rng.standard_normal(t.size), acc + 2.0 * rng.standard_normal(t.size)
+
+
+def spans_of(v: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """The triggers' half-height regions and their neighbours' limits, as the detector
+    forms them."""
+    cf = characteristic(v, 0.0, 64, jump=True)
+    trig = trigger_onsets(cf, 8.0, 3.0, int(2e-3 * FS))
+    out = []
+    for j, (start, _, end) in enumerate(trig):
+        pk = start + int(np.argmax(cf[start:end + 1]))
+        j_lo, j_hi = _half_region(cf, pk)
+        lo_lim = trig[j - 1][2] + 1 if j > 0 else 0
+        hi_lim = trig[j + 1][0] - 1 if j + 1 < len(trig) else v.size - 1
+        out.append((j_lo, j_hi, lo_lim, hi_lim))
+    return out
+
+
+def assert_same(a: _JumpFits, b: _JumpFits) -> None:
+    for name in ("t_v", "t_a", "t_half", "t_s", "a_lo", "a_hi", "a_sign"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert np.isnan(x) == np.isnan(y), name
+        if np.isfinite(x):
+            assert abs(x - y) <= 1e-8, (name, x, y)
+    for t in (a.t_half - 3.0, a.t_half, a.t_half + 3.5):
+        np.testing.assert_allclose(a.at(t), b.at(t), rtol=1e-10, atol=0.0)
+
+
+@pytest.mark.parametrize("omega, degree, with_accel, contact", [
+    (2 * np.pi * F_HZ / FS, 2, True, 3.0),    # the forced-mode basis, as dwells use it
+    (2 * np.pi * F_HZ / FS, 2, True, 7.5),    # a long contact (a wider pulse and jump)
+    (2 * np.pi * F_HZ / FS, 2, False, 3.0),
+    (None, 2, True, 3.0),                     # polynomials
+])
+def test_the_compiled_fits_are_the_python_fits(omega, degree, with_accel, contact):
+    v, a = bouncing_record(3, contact_samples=contact)
+    spans = spans_of(v)
+    assert len(spans) >= 40          # every impact triggers
+    kw = dict(n_fit=51, n_guard=2, degree=degree, omega_per_sample=omega,
+              accel=a if with_accel else None)
+    batch = _jump_fits_all(v, spans, **kw)
+    one_by_one = [_jump_fits(v, *s, **kw) for s in spans]
+    for x, y in zip(batch, one_by_one):
+        assert_same(x, y)
+    if with_accel:
+        # the pulses were found (the comparison is not of NaNs)
+        assert np.isfinite([b.t_a for b in batch]).mean() > 0.9
+    t = np.array([b.t_half + 0.25 for b in batch])
+    got = _fits_at(_fit_rows(batch), t)
+    want = np.array([b.at(tt) for b, tt in zip(one_by_one, t)])
+    np.testing.assert_allclose(got, want, rtol=1e-10, atol=0.0)
+
+
+def test_a_non_finite_sample_goes_the_python_way_and_the_rest_stay_compiled():
+    # detect_impacts refuses non-finite samples; the batch still leaves such a window to
+    # the Python path rather than decide it differently
+    v, a = bouncing_record(5)
+    spans = spans_of(v)
+    kw = dict(n_fit=51, n_guard=2, degree=2, omega_per_sample=2 * np.pi * F_HZ / FS, accel=a)
+    t10 = _jump_fits(v, *spans[10], **kw).t_a
+    a = a.copy()
+    a[int(round(t10))] = np.nan        # in impact 10's contact pulse
+    kw["accel"] = a
+    batch = _jump_fits_all(v, spans, **kw)
+    assert np.isnan(batch[10].t_a)     # numpy's arithmetic gives no pulse there
+    for x, s in zip(batch, spans):
+        assert_same(x, _jump_fits(v, *s, **kw))
+
+
+def test_edges_and_no_impacts():
+    v, a = bouncing_record(7, seconds=0.1)
+    spans = spans_of(v)
+    # the first impact's window cut by the record's start; a side with no samples at all
+    spans = [(spans[0][0], spans[0][1], spans[0][0] - 1, spans[0][3])] + spans
+    kw = dict(n_fit=51, n_guard=2, degree=2, omega_per_sample=2 * np.pi * F_HZ / FS, accel=a)
+    batch = _jump_fits_all(v, spans, **kw)
+    assert batch[0].p is None and np.isnan(batch[0].t_v)
+    for x, s in zip(batch, spans):
+        assert_same(x, _jump_fits(v, *s, **kw))
+    assert _jump_fits_all(v, [], **kw) == []
