@@ -494,7 +494,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         t_ev = np.array([t_eval_of(jf) for jf in jfits])
         n_pad0 = max(hi - lo + 1 for lo, hi, _, _ in spans) + n_guard
         n_extra_max = int(round(MAX_EXTRA_GUARD_S * fs_hz))
-        taus, med, noise = step_error(v, t_ev, [(jf.p, jf.q) for jf in jfits],
+        taus, med, noise = step_error(v, t_ev, _fit_rows(jfits),
                                       [(lo_l, hi_l) for _, _, lo_l, hi_l in spans],
                                       n_pad0 + n_extra_max)
         first, last = settled_span(taus, med, noise)

@@ -1,12 +1,14 @@
-"""The local fits either side of every impact of a run in one compiled pass
+"""Compiled loops over a run's impacts: the local fits either side of every impact in one pass
 (:func:`jump_fits_batch`), the same arithmetic as :func:`rattle_lab.detect._local_fits._jump_fits`
-called impact by impact, and the fits' values at given instants (:func:`fits_at`).
+called impact by impact, the fits' values at given instants (:func:`fits_at`), and the
+sound peaks after each impact (:func:`sound_windows`, for :func:`~rattle_lab.detect.sound_peaks`).
 
 A fit is stored as one row: ``[k0, scale, degree, periodic, w, coef...]`` (``k0`` NaN: no
 fit, a side without samples); the coefficients are :func:`~rattle_lab.detect._flight_kernels.local_lstsq`'s.
 Sums run in index order, where numpy's pairwise sums of the Python path may differ in the
 last bits.  A window holding a non-finite sample is left to the Python path (status 1).
-numba compiles these on first use and caches them on disk.
+Division follows numpy (a zero divisor gives inf or NaN, as in the Python path, not an
+exception).  numba compiles these on first use and caches them on disk.
 """
 
 from __future__ import annotations
@@ -18,6 +20,14 @@ import numpy as np
 
 from ._flight_kernels import local_lstsq
 
+def readonly(x: np.ndarray) -> np.ndarray:
+    """``x`` as a contiguous float64 read-only view (one compiled variant for samples read
+    from a file, which come read-only, and for samples computed here)."""
+    out = np.ascontiguousarray(x, dtype=np.float64).view()
+    out.flags.writeable = False
+    return out
+
+
 #: Columns of a fit row before its coefficients.
 FIT_HEAD = 5
 #: Columns of :func:`jump_fits_batch`'s scalars: t_v, t_a, t_half, t_s, a_lo, a_hi, a_sign,
@@ -25,7 +35,7 @@ FIT_HEAD = 5
 N_SCALARS = 8
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _fit(x: np.ndarray, lo: int, hi: int, degree: int, w: float, periodic: bool,
          row: np.ndarray) -> bool:  # pragma: no cover - compiled
     """:class:`~rattle_lab.detect._local_fits._LocalFit` of ``x[lo:hi + 1]`` into ``row``.
@@ -53,7 +63,7 @@ def _fit(x: np.ndarray, lo: int, hi: int, degree: int, w: float, periodic: bool,
     return True
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def fit_value(row: np.ndarray, t: float) -> float:  # pragma: no cover - compiled
     """A fit row's value at the fractional sample ``t`` (NaN: no fit)."""
     k0 = row[0]
@@ -78,7 +88,7 @@ def fit_value(row: np.ndarray, t: float) -> float:  # pragma: no cover - compile
     return acc
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def fits_at(fits: np.ndarray, t: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
     """``out[i, s]``: fit ``s`` (0 before, 1 after) of impact ``i`` at ``t[i]`` (NaN where
     ``t[i]`` is NaN or the fit is missing)."""
@@ -91,7 +101,7 @@ def fits_at(fits: np.ndarray, t: np.ndarray) -> np.ndarray:  # pragma: no cover 
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _half_region(r: np.ndarray, peak: int) -> tuple[int, int]:  # pragma: no cover - compiled
     half = 0.5 * r[peak]
     lo = peak
@@ -103,7 +113,7 @@ def _half_region(r: np.ndarray, peak: int) -> tuple[int, int]:  # pragma: no cov
     return lo, hi
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _step_centroid(v: np.ndarray, p: np.ndarray, q: np.ndarray, pre_hi: int, post_lo: int
                    ) -> float:  # pragma: no cover - compiled
     """Centroid of the normalised step between fits ``p`` and ``q`` (NaN if not finite)."""
@@ -122,7 +132,7 @@ def _step_centroid(v: np.ndarray, p: np.ndarray, q: np.ndarray, pre_hi: int, pos
     return min(max(t, float(pre_hi)), float(post_lo))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, n_fit: int, degree: int,
                    w: float, periodic: bool, row: np.ndarray
                    ) -> tuple[float, float, float, float, bool]:  # pragma: no cover - compiled
@@ -183,7 +193,7 @@ def _contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, n_fit: int
     return t1, (lo + r_lo) - 0.5, (lo + r_hi) + 0.5, sign, True
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def jump_fits_batch(v: np.ndarray, a: np.ndarray, has_a: bool, spans: np.ndarray, n_fit: int,
                     n_guard: int, degree: int, w: float, periodic: bool, n_short_min: int,
                     short_widths: int, short_pads: float, short_degree: int
@@ -251,3 +261,93 @@ def jump_fits_batch(v: np.ndarray, a: np.ndarray, has_a: bool, spans: np.ndarray
             if math.isfinite(t_a) and pre_hi <= t_a <= post_lo:
                 scal[i, 1], scal[i, 4], scal[i, 5], scal[i, 6] = t_a, a_lo, a_hi, a_sign
     return scal, fits
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _refined(y: np.ndarray, k: int) -> tuple[float, float]:  # pragma: no cover - compiled
+    """:func:`rattle_lab.detect._sound._refined`: the 3-point parabola's peak at ``k``,
+    unless ``k`` is an onset or an edge or not a strict maximum."""
+    if 0 < k and y[k - 1] < 0.5 * y[k]:
+        return float(k), y[k]
+    if k <= 0 or k >= y.size - 1:
+        return float(k), y[k]
+    a, b, c = y[k - 1], y[k], y[k + 1]
+    den = a - 2.0 * b + c
+    if den >= 0.0:
+        return float(k), b
+    delta = 0.5 * (a - c) / den
+    return k + delta, b - 0.25 * (a - c) * delta
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def sound_windows(p: np.ndarray, t_imp: np.ndarray, start_time_s: float, fs_hz: float,
+                  delay_s: float, n_win: int, n_base: int, w: float, periodic: bool,
+                  first_fraction: float) -> np.ndarray:  # pragma: no cover - compiled
+    """:func:`~rattle_lab.detect.sound_peaks`' loop over the impacts of finite samples ``p``:
+    ``out[i] = (t_first, t_max, p_first, p_max, rms)`` (NaN where the window is empty)."""
+    n = t_imp.size
+    out = np.full((n, 5), np.nan)
+    row = np.empty(FIT_HEAD + 3)
+    prev_hi = 0
+    for i in range(n):
+        lo = int(math.ceil((t_imp[i] + delay_s - start_time_s) * fs_hz - 1e-9))
+        hi = lo + n_win
+        if i + 1 < n:
+            hi = min(hi, int(math.ceil((t_imp[i + 1] + delay_s - start_time_s) * fs_hz - 1e-9)))
+        lo, hi = max(lo, 0), min(hi, p.size)
+        if hi - lo < 1:
+            continue
+        seg = np.empty(hi - lo)
+        fitted = False
+        if periodic:
+            b_lo = max(0, lo - n_base, prev_hi)
+            if lo - b_lo >= 9:
+                fitted = _fit(p, b_lo, lo - 1, 0, w, True, row)
+        for k in range(hi - lo):
+            seg[k] = abs(p[lo + k] - fit_value(row, float(lo + k))) if fitted else abs(p[lo + k])
+        prev_hi = hi
+        ss = 0.0
+        k_max = 0
+        for k in range(seg.size):
+            ss += seg[k] * seg[k]
+            if seg[k] > seg[k_max]:
+                k_max = k
+        out[i, 4] = math.sqrt(ss / seg.size)
+        if seg[k_max] == 0.0:
+            continue
+        level = first_fraction * seg[k_max]
+        k_first = k_max
+        for k in range(seg.size):   # the first local maximum reaching `level`
+            if seg[k] >= level and (k + 1 == seg.size or seg[k] >= seg[k + 1]):
+                k_first = k
+                break
+        loc, height = _refined(seg, k_first)
+        out[i, 0], out[i, 2] = start_time_s + (lo + loc) / fs_hz, height
+        loc, height = _refined(seg, k_max)
+        out[i, 1], out[i, 3] = start_time_s + (lo + loc) / fs_hz, height
+    return out
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def step_rows(v: np.ndarray, t_eval: np.ndarray, fits: np.ndarray, limits: np.ndarray,
+              span: int) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """The rows of :func:`~rattle_lab.detect._timing.step_error`: per impact the normalised
+    step less the ideal one at ``tau = k - t_eval`` (``-span..span``), and whether the
+    impact has a row (finite ``t_eval``, both fits, a sample within its limits)."""
+    n = t_eval.size
+    out = np.full((n, 2 * span + 1), np.nan)
+    has = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        te = t_eval[i]
+        if not math.isfinite(te) or math.isnan(fits[i, 0, 0]) or math.isnan(fits[i, 1, 0]):
+            continue
+        k_lo = max(limits[i, 0], int(math.ceil(te - span)))
+        k_hi = min(limits[i, 1], int(math.floor(te + span)))
+        if k_hi < k_lo:
+            continue
+        has[i] = True
+        for kk in range(k_lo, k_hi + 1):
+            pk, qk = fit_value(fits[i, 0], float(kk)), fit_value(fits[i, 1], float(kk))
+            r = ((v[kk] - pk) if kk < te else (v[kk] - qk)) / (qk - pk)
+            out[i, int(np.rint(kk - te)) + span] = r
+    return out, has

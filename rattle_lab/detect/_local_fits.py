@@ -230,19 +230,12 @@ def _jump_fits_all(v: np.ndarray, spans: list[tuple[int, int, int, int]], *, n_f
     """:func:`_jump_fits` of every span ``(j_lo, j_hi, lo_lim, hi_lim)`` in one compiled
     pass (:func:`rattle_lab.detect._jump_kernels.jump_fits_batch`); an impact whose windows
     hold a non-finite sample goes through :func:`_jump_fits` itself."""
-    from ._jump_kernels import jump_fits_batch
+    from ._jump_kernels import jump_fits_batch, readonly
 
     if not spans:
         return []
-
-    def frozen(x: np.ndarray) -> np.ndarray:
-        # one compiled variant: read-only, contiguous
-        out = np.ascontiguousarray(x, dtype=float).view()
-        out.flags.writeable = False
-        return out
-
     scal, fits = jump_fits_batch(
-        frozen(v), frozen(accel if accel is not None else np.zeros(0)), accel is not None,
+        readonly(v), readonly(accel if accel is not None else np.zeros(0)), accel is not None,
         np.asarray(spans, dtype=np.int64).reshape(-1, 4), int(n_fit), int(n_guard),
         int(degree), 0.0 if omega_per_sample is None else float(omega_per_sample),
         omega_per_sample is not None, SHORT_FLANK_MIN, SHORT_FLANK_WIDTHS,

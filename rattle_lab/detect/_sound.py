@@ -19,7 +19,6 @@ import numpy as np
 
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, n_samples_of, parabolic_peak
-from ._local_fits import _LocalFit
 from ._spl import spl_db
 
 
@@ -52,13 +51,6 @@ class SoundPeaks:
     p_rms_pa: np.ndarray
 
 
-def _refined(y: np.ndarray, k: int) -> tuple[float, float]:
-    """Parabolic peak of ``y`` at ``k``, unless ``k`` is an onset (``y[k-1] < y[k] / 2``)."""
-    if 0 < k and y[k - 1] < 0.5 * y[k]:
-        return float(k), float(y[k])
-    return parabolic_peak(y, k)
-
-
 def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window_s: float = 5e-3,
                 first_fraction: float = 0.5, start_time_s: float = 0.0,
                 excitation_freq_hz: float | None = None, baseline_s: float = 3e-3,
@@ -86,7 +78,6 @@ def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window
     (0.6, 1.0, 0.01)
     """
     p_signed = as_signal(pressure_pa, "pressure_pa")
-    p = np.abs(p_signed)
     omega = None
     if excitation_freq_hz is not None:
         if not (np.isfinite(excitation_freq_hz) and 0 < excitation_freq_hz < fs_hz / 2):
@@ -94,7 +85,6 @@ def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window
                                  f"was {excitation_freq_hz}")
         omega = 2.0 * np.pi * excitation_freq_hz / fs_hz
     n_base = n_samples_of(baseline_s, fs_hz, name="baseline_s")
-    prev_hi = 0
     t_imp = np.atleast_1d(np.asarray(impact_t_s, dtype=float))
     if not 0 < first_fraction <= 1:
         raise ParameterError(f"`first_fraction` must be in (0, 1], was {first_fraction}")
@@ -102,36 +92,14 @@ def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window
     out = {k: np.full(t_imp.size, np.nan) for k in ("tf", "tm", "pf", "pm", "rms")}
     if not (np.isfinite(delay_s) and delay_s >= 0):
         raise ParameterError(f"`delay_s` must be >= 0, was {delay_s}")
-    for i, t in enumerate(t_imp):
-        lo = int(np.ceil((t + delay_s - start_time_s) * fs_hz - 1e-9))
-        hi = lo + n_win
-        if i + 1 < t_imp.size:
-            hi = min(hi, int(np.ceil((t_imp[i + 1] + delay_s - start_time_s) * fs_hz - 1e-9)))
-        lo, hi = max(lo, 0), min(hi, p.size)
-        if hi - lo < 1:
-            continue
-        seg = p[lo:hi]
-        if omega is not None:
-            b_lo = max(0, lo - n_base, prev_hi)
-            if lo - b_lo >= 9:
-                k_b = np.arange(b_lo, lo, dtype=float)
-                fit = _LocalFit(k_b, p_signed[b_lo:lo], 0, omega)
-                seg = np.abs(p_signed[lo:hi] - fit(np.arange(lo, hi, dtype=float)))
-        prev_hi = hi
-        out["rms"][i] = float(np.sqrt(np.mean(seg**2)))
-        k_max = int(np.argmax(seg))
-        if seg[k_max] == 0.0:
-            continue
-        level = first_fraction * seg[k_max]
-        k_first = k_max
-        for k in range(seg.size):  # first local maximum reaching `level`
-            if seg[k] >= level and (k + 1 == seg.size or seg[k] >= seg[k + 1]):
-                k_first = k
-                break
-        for key_t, key_p, k in (("tf", "pf", k_first), ("tm", "pm", k_max)):
-            loc, height = _refined(seg, k)
-            out[key_t][i] = start_time_s + (lo + loc) / fs_hz
-            out[key_p][i] = height
+    from ._jump_kernels import readonly, sound_windows
+
+    res = sound_windows(readonly(p_signed), np.ascontiguousarray(t_imp, dtype=float), float(start_time_s),
+                        float(fs_hz), float(delay_s), n_win, n_base,
+                        0.0 if omega is None else float(omega), omega is not None,
+                        float(first_fraction))
+    for j, key in enumerate(("tf", "tm", "pf", "pm", "rms")):
+        out[key] = res[:, j]
     return SoundPeaks(out["tf"], out["tm"], out["pf"], out["pm"], out["tf"] - t_imp,
                       out["tm"] - t_imp, spl_db(out["pf"]), spl_db(out["pm"]), out["rms"])
 

@@ -164,34 +164,26 @@ SETTLED_WITHIN = 0.005
 MAX_EXTRA_GUARD_S = 1e-3
 
 
-def step_error(v: np.ndarray, t_eval: np.ndarray, fits: list[tuple[object, object]],
+def step_error(v: np.ndarray, t_eval: np.ndarray, fits: np.ndarray,
                limits: list[tuple[int, int]], span: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The pooled step response's error around the impacts: ``(tau, median, noise)``.
 
     For each impact the normalised step ``(v - p) / (q - p)`` (``p``, ``q``: the fits
-    before and after, callables of the fractional sample index) less the ideal step at
+    before and after, rows ``fits[i, 0]`` and ``fits[i, 1]`` of
+    :func:`rattle_lab.detect._local_fits._fit_rows`) less the ideal step at
     ``t_eval``, over ``|k - t_eval| <= span`` within the impact's ``limits``; pooled in
     whole-sample bins of ``tau = k - t_eval``, the median and its noise
     (``1.2533 * 1.4826 MAD / sqrt(n)``) per bin (bins with fewer than 5 impacts: NaN).
     This is the chain's step response as the record shows it (a decoder's overshoot and
     ringing) less the ideal step.
     """
+    from ._jump_kernels import readonly, step_rows
+
     taus = np.arange(-span, span + 1)
-    rows = []
-    for te, (p, q), (lo, hi) in zip(t_eval, fits, limits):
-        if not np.isfinite(te) or p is None or q is None:
-            continue
-        k = np.arange(max(lo, int(np.ceil(te - span))), min(hi, int(np.floor(te + span))) + 1,
-                      dtype=float)
-        if k.size == 0:
-            continue
-        pk, qk = p(k), q(k)        # type: ignore[operator]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            r = np.where(k < te, (v[k.astype(int)] - pk) / (qk - pk),
-                         (v[k.astype(int)] - qk) / (qk - pk))
-        row = np.full(taus.size, np.nan)
-        row[np.round(k - te).astype(int) + span] = r
-        rows.append(row)
+    out, has = step_rows(readonly(v),
+                         np.ascontiguousarray(t_eval, dtype=float), np.ascontiguousarray(fits),
+                         np.asarray(limits, dtype=np.int64).reshape(-1, 2), int(span))
+    rows = out[has]
     nan = np.full(taus.size, np.nan)
     if len(rows) < MIN_DELAY_IMPACTS:
         return taus, nan, nan.copy()

@@ -125,3 +125,118 @@ def test_edges_and_no_impacts():
     for x, s in zip(batch, spans):
         assert_same(x, _jump_fits(v, *s, **kw))
     assert _jump_fits_all(v, [], **kw) == []
+
+
+def reference_sound_peaks(p, fs, t_imp, n_win, n_base, omega, fraction):
+    """The sound-peak rule written out with numpy (module docstring of detect._sound): the
+    window after each impact cut at the next, the forcing-frequency sinusoid fitted over
+    the baseline before it (columns 1, cos, sin of omega k) and removed, the first local
+    maximum reaching ``fraction`` of the largest, both refined by a parabola unless at an
+    onset."""
+    out = np.full((t_imp.size, 5), np.nan)
+    prev_hi = 0
+    for i, t in enumerate(t_imp):
+        lo = int(np.ceil(t * fs - 1e-9))
+        hi = lo + n_win if i + 1 == t_imp.size else min(lo + n_win,
+                                                        int(np.ceil(t_imp[i + 1] * fs - 1e-9)))
+        lo, hi = max(lo, 0), min(hi, p.size)
+        if hi <= lo:
+            continue
+        k = np.arange(lo, hi)
+        seg = np.abs(p[lo:hi])
+        b_lo = max(0, lo - n_base, prev_hi)
+        if lo - b_lo >= 9:
+            kb = np.arange(b_lo, lo)
+            design = lambda kk: np.column_stack([np.ones(kk.size), np.cos(omega * kk),  # noqa: E731
+                                                 np.sin(omega * kk)])
+            coef = np.linalg.lstsq(design(kb), p[b_lo:lo], rcond=None)[0]
+            seg = np.abs(p[lo:hi] - design(k) @ coef)
+        prev_hi = hi
+        out[i, 4] = np.sqrt(np.mean(seg ** 2))
+        k_max = int(np.argmax(seg))
+        is_peak = (seg >= fraction * seg[k_max]) & (seg >= np.r_[seg[1:], -np.inf])
+        k_first = int(np.flatnonzero(is_peak)[0])
+        for col, kk in ((0, k_first), (1, k_max)):
+            loc, h = float(kk), seg[kk]
+            if 0 < kk < seg.size - 1 and not seg[kk - 1] < 0.5 * seg[kk]:
+                a, b, c = seg[kk - 1], seg[kk], seg[kk + 1]
+                if a - 2 * b + c < 0:
+                    d = 0.5 * (a - c) / (a - 2 * b + c)
+                    loc, h = kk + d, b - 0.25 * (a - c) * d
+            out[i, col], out[i, col + 2] = (lo + loc) / fs, h
+    return out
+
+
+def test_sound_peaks_follow_the_rule_written_out():
+    from rattle_lab.detect import sound_peaks
+
+    rng = np.random.default_rng(11)
+    fs, f = 25600.0, 95.0
+    t = np.arange(int(0.4 * fs)) / fs
+    p = 0.3 * np.sin(2 * np.pi * f * t + 0.2) + 0.01 * rng.standard_normal(t.size)
+    t_imp = np.sort(rng.uniform(0.01, 0.39, 30))
+    for ti in t_imp:     # a decaying 2.5 kHz burst 0.4 ms after each impact
+        after = t > ti + 4e-4
+        p[after] += 2.0 * np.exp(-(t[after] - ti) / 1.5e-3) * np.sin(2 * np.pi * 2500 * (t[after] - ti))
+    n_win, n_base = round(5e-3 * fs), round(3e-3 * fs)
+    omega = 2 * np.pi * f / fs
+    got = sound_peaks(p, fs, t_imp, excitation_freq_hz=f)
+    want = reference_sound_peaks(p, fs, t_imp, n_win, n_base, omega, 0.5)
+    # the same arithmetic but for the baseline fit's basis (a rotation of cos, sin) and the
+    # order of sums: peak values ~1 Pa agree to ~1e-15 relative times the fit's condition
+    # (~10); times to rounding of t ~ 0.4 s
+    np.testing.assert_allclose(got.t_first_s, want[:, 0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.t_max_s, want[:, 1], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.p_first_pa, want[:, 2], rtol=1e-11)
+    np.testing.assert_allclose(got.p_max_pa, want[:, 3], rtol=1e-11)
+    np.testing.assert_allclose(got.p_rms_pa, want[:, 4], rtol=1e-11)
+    assert np.isfinite(want).all()
+    # without the excitation frequency no baseline is removed
+    raw = sound_peaks(p, fs, t_imp)
+    want_raw = reference_sound_peaks(p, fs, t_imp, n_win, 0, omega, 0.5)
+    np.testing.assert_allclose(raw.p_max_pa, want_raw[:, 3], rtol=1e-12)
+
+
+def test_a_zero_jump_divides_as_numpy_does():
+    # no jump at all: the fits either side agree and the normalised step is 0/0; the kernel
+    # must not raise (numba's default division would) and gives what the Python path gives
+    v = np.full(400, 0.25)
+    spans = [(200, 201, 0, 399)]
+    kw = dict(n_fit=51, n_guard=2, degree=2, omega_per_sample=None, accel=None)
+    with np.errstate(all="ignore"):
+        got, = _jump_fits_all(v, spans, **kw)
+        ref = _jump_fits(v, *spans[0], **kw)
+    assert np.isnan(got.t_v) and np.isnan(ref.t_v)
+    assert got.at(200.0) == ref.at(200.0) == (0.25, 0.25)
+
+
+def test_the_pooled_step_error_is_the_rows_written_out():
+    from rattle_lab.detect._timing import step_error
+
+    v, a = bouncing_record(9, contact_samples=5.0)
+    spans = spans_of(v)
+    jfits = _jump_fits_all(v, spans, n_fit=51, n_guard=2, degree=2,
+                           omega_per_sample=2 * np.pi * F_HZ / FS, accel=a)
+    t_ev = np.array([jf.t_a for jf in jfits])
+    t_ev[3] = np.nan                       # an impact without a time has no row
+    limits = [(lo, hi) for _, _, lo, hi in spans]
+    span = 12
+    taus, med, noise = step_error(v, t_ev, _fit_rows(jfits), limits, span)
+    rows = []
+    for jf, te, (lo, hi) in zip(jfits, t_ev, limits):
+        if not np.isfinite(te):
+            continue
+        k = np.arange(max(lo, int(np.ceil(te - span))), min(hi, int(np.floor(te + span))) + 1)
+        pk, qk = jf.p(k.astype(float)), jf.q(k.astype(float))
+        r = np.where(k < te, v[k] - pk, v[k] - qk) / (qk - pk)
+        row = np.full(2 * span + 1, np.nan)
+        row[np.round(k - te).astype(int) + span] = r
+        rows.append(row)
+    m = np.array(rows)
+    want = np.nanmedian(m, axis=0)
+    want[np.sum(np.isfinite(m), axis=0) < 5] = np.nan
+    np.testing.assert_array_equal(taus, np.arange(-span, span + 1))
+    # a normalised step of order one from fits ~10 times the jump: 1e-12 is ~1e3 roundings
+    np.testing.assert_allclose(med, want, rtol=0, atol=1e-12)
+    assert np.isfinite(med).sum() >= 2 * span      # the bins are filled
+    assert np.all(noise[np.isfinite(med)] > 0)
