@@ -1,5 +1,4 @@
-"""Compiled inner loops of the flight model (:mod:`rattle_lab.detect._flights`) and of the
-local fits either side of an impact (:mod:`rattle_lab.detect._local_fits`).
+"""Compiled inner loops of the flight model (:mod:`rattle_lab.detect._flights`).
 
 The variable-projection searches evaluate the run model thousands of times for new
 ``(f_s, sigma)`` or ringing poles; each evaluation touches every sample of the flights
@@ -7,10 +6,13 @@ used.  These loops do it in one pass with no temporaries.  The run-wide columns 
 two parts: the forced response's, hat functions in time that are zero on all but a few
 columns of each row (stored by rows: ``indptr``, ``indices``, ``values``), and a few dense
 columns ``r`` (the ringing).  :func:`free_sums` forms the per-flight sums of the free
-response's normal equations, :func:`residual_ss` the residual's sum of squares,
+response's normal equations, :func:`residual_ss` the residual's sum of squares
+(:func:`solve_flights` both and the elimination between them in one call),
 :func:`sparse_cross` the products of the two parts, :func:`added_sums` what new dense
 columns add to a model whose other parts are fixed, and :func:`tail_columns` the ringing
 carried on over later flights.  numba compiles them on first use and caches them on disk.
+(No function here calls a compiled function of another module: numba's cache does not notice
+when a callee in another file changes, and a stale copy of it fails at run time.)
 """
 
 from __future__ import annotations
@@ -48,18 +50,14 @@ def free_response(tau: np.ndarray, next_: np.ndarray, f_hz: float, sigma: float,
 
 
 @numba.njit(cache=True, nogil=True)
-def free_sums(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
-              p: int, r: np.ndarray, tau: np.ndarray, seg: np.ndarray, next_: np.ndarray,
-              n_seg: int, f_hz: float, sigma: float, dt: float
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
-    """Per flight ``s``: ``Z_s'Z_s`` (2x2), ``Z_s'[X_s R_s]`` (2 x (p + m)) and ``Z_s'y_s``,
-    where ``Z`` is the fundamental's free response ``exp(-sigma tau) [cos, sin](2 pi f tau)``
-    (see :func:`free_response`)."""
+def _sums_z(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
+            p: int, r: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """:func:`free_sums` with the free response ``z`` given."""
     n, m = r.shape
     zz = np.zeros((n_seg, 2, 2))
     zx = np.zeros((n_seg, 2, p + m))
     zy = np.zeros((n_seg, 2))
-    z = free_response(tau, next_, f_hz, sigma, dt)
     for i in range(n):
         z0 = z[i].real
         z1 = z[i].imag
@@ -82,13 +80,23 @@ def free_sums(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np
 
 
 @numba.njit(cache=True, nogil=True)
-def residual_ss(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
-                p: int, r: np.ndarray, beta: np.ndarray, tau: np.ndarray, seg: np.ndarray,
-                next_: np.ndarray, gamma: np.ndarray, f_hz: float, sigma: float, dt: float
-                ) -> float:  # pragma: no cover - compiled
-    """``sum (y - [X R] beta - Z gamma_seg)^2``, ``Z`` as in :func:`free_sums`."""
-    n, m = r.shape
+def free_sums(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
+              p: int, r: np.ndarray, tau: np.ndarray, seg: np.ndarray, next_: np.ndarray,
+              n_seg: int, f_hz: float, sigma: float, dt: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """Per flight ``s``: ``Z_s'Z_s`` (2x2), ``Z_s'[X_s R_s]`` (2 x (p + m)) and ``Z_s'y_s``,
+    where ``Z`` is the fundamental's free response ``exp(-sigma tau) [cos, sin](2 pi f tau)``
+    (see :func:`free_response`)."""
     z = free_response(tau, next_, f_hz, sigma, dt)
+    return _sums_z(y, indptr, indices, values, p, r, z, seg, n_seg)
+
+
+@numba.njit(cache=True, nogil=True)
+def _residual_z(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
+                p: int, r: np.ndarray, beta: np.ndarray, z: np.ndarray, seg: np.ndarray,
+                gamma: np.ndarray) -> float:  # pragma: no cover - compiled
+    """:func:`residual_ss` with the free response ``z`` given."""
+    n, m = r.shape
     total = 0.0
     for i in range(n):
         res = y[i]
@@ -100,6 +108,85 @@ def residual_ss(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: 
         res -= z[i].real * gamma[s, 0] + z[i].imag * gamma[s, 1]
         total += res * res
     return total
+
+
+@numba.njit(cache=True, nogil=True)
+def residual_ss(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
+                p: int, r: np.ndarray, beta: np.ndarray, tau: np.ndarray, seg: np.ndarray,
+                next_: np.ndarray, gamma: np.ndarray, f_hz: float, sigma: float, dt: float
+                ) -> float:  # pragma: no cover - compiled
+    """``sum (y - [X R] beta - Z gamma_seg)^2``, ``Z`` as in :func:`free_sums`."""
+    z = free_response(tau, next_, f_hz, sigma, dt)
+    return _residual_z(y, indptr, indices, values, p, r, beta, z, seg, gamma)
+
+
+@numba.njit(cache=True, nogil=True)
+def _solve2(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """``a^-1 b`` for a 2x2 ``a`` and 2 x k ``b``: LU with partial pivoting (LAPACK
+    ``gesv``'s steps for a 2x2)."""
+    a00, a01, a10, a11 = a[0, 0], a[0, 1], a[1, 0], a[1, 1]
+    swap = abs(a10) > abs(a00)
+    if swap:
+        a00, a01, a10, a11 = a10, a11, a00, a01
+    lo = a10 / a00
+    u11 = a11 - lo * a01
+    out = np.empty(b.shape)
+    for j in range(b.shape[1]):
+        b0, b1 = (b[1, j], b[0, j]) if swap else (b[0, j], b[1, j])
+        x1 = (b1 - lo * b0) / u11
+        out[1, j] = x1
+        out[0, j] = (b0 - a01 * x1) / a00
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def solve_flights(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
+                  p: int, r: np.ndarray, tau: np.ndarray, seg: np.ndarray, next_: np.ndarray,
+                  n_seg: int, f_hz: float, sigma: float, dt: float, xtx: np.ndarray,
+                  xty: np.ndarray, scale: np.ndarray
+                  ) -> tuple[float, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """``(rss, beta, gamma)`` of the run model at ``(f_s, sigma)`` in one call
+    (:meth:`rattle_lab.detect._flights._Model.solve`'s steps: each flight's free response
+    eliminated from the normal equations ``xtx``, ``xty`` of the run-wide columns, which are
+    solved scaled by ``scale`` with LAPACK ``gelsd`` at ``rcond = 1e-12``, then the
+    residual); the free response is formed once for both passes."""
+    z = free_response(tau, next_, f_hz, sigma, dt)
+    zz, zx, zy = _sums_z(y, indptr, indices, values, p, r, z, seg, n_seg)
+    q = zx.shape[2]
+    a = xtx.copy()
+    b = xty.copy()
+    g_zx = np.empty((n_seg, 2, q))
+    g_zy = np.empty((n_seg, 2))
+    rhs = np.empty((2, q + 1))
+    for s in range(n_seg):
+        m = zz[s].copy()
+        ridge = 1e-12 * (m[0, 0] + m[1, 1])
+        m[0, 0] += ridge
+        m[1, 1] += ridge
+        rhs[:, :q] = zx[s]
+        rhs[:, q] = zy[s]
+        g = _solve2(m, rhs)
+        g_zx[s] = g[:, :q]
+        g_zy[s] = g[:, q]
+        for i in range(q):
+            zi0, zi1 = zx[s, 0, i], zx[s, 1, i]
+            for j in range(q):
+                a[i, j] -= zi0 * g[0, j] + zi1 * g[1, j]
+            b[i] -= zi0 * g[0, q] + zi1 * g[1, q]
+    for i in range(q):
+        for j in range(q):
+            a[i, j] /= scale[i] * scale[j]
+        b[i] /= scale[i]
+    beta = np.linalg.lstsq(a, b, 1e-12)[0] / scale
+    gamma = np.empty((n_seg, 2))
+    for s in range(n_seg):
+        for k in range(2):
+            acc = g_zy[s, k]
+            for j in range(q):
+                acc -= g_zx[s, k, j] * beta[j]
+            gamma[s, k] = acc
+    rss = _residual_z(y, indptr, indices, values, p, r, beta, z, seg, gamma)
+    return rss, beta, gamma
 
 
 @numba.njit(cache=True, nogil=True)
@@ -222,51 +309,3 @@ def sparse_gram(indptr: np.ndarray, indices: np.ndarray, values: np.ndarray, p: 
                 xtx[qa, indices[b]] += va * values[b]
     return xtx, xty
 
-
-# --- compiled local fits (detect/_local_fits): the design and its least squares -----------
-
-@numba.njit(cache=True, nogil=True)
-def local_design(k: np.ndarray, k0: float, scale: float, degree: int, w: float,
-                 periodic: bool) -> np.ndarray:  # pragma: no cover - compiled
-    """The design matrix of :class:`rattle_lab.detect._local_fits._LocalFit` at samples ``k``:
-    ``[u^degree .. u^0]`` (polynomial), or ``[1, u^j cos(w tau), u^j sin(w tau)]_j``
-    (``periodic``), ``tau = k - k0``, ``u = tau / scale``."""
-    n = k.size
-    if not periodic:
-        out = np.empty((n, degree + 1))
-        for i in range(n):
-            u = (k[i] - k0) / scale
-            x = 1.0
-            for j in range(degree, -1, -1):
-                out[i, j] = x
-                x *= u
-        return out
-    out = np.empty((n, 1 + 2 * (degree + 1)))
-    for i in range(n):
-        tau = k[i] - k0
-        u = tau / scale
-        c, s_ = math.cos(w * tau), math.sin(w * tau)
-        out[i, 0] = 1.0
-        x = 1.0
-        for j in range(degree + 1):
-            out[i, 1 + 2 * j] = x * c
-            out[i, 2 + 2 * j] = x * s_
-            x *= u
-    return out
-
-
-@numba.njit(cache=True, nogil=True)
-def local_lstsq(k: np.ndarray, v: np.ndarray, k0: float, scale: float, degree: int, w: float,
-                periodic: bool) -> np.ndarray:  # pragma: no cover - compiled
-    """Least-squares coefficients of :func:`local_design` for ``v`` (LAPACK ``gelsd``, as
-    :func:`numpy.linalg.lstsq`)."""
-    a = local_design(k, k0, scale, degree, w, periodic)
-    rcond = np.finfo(np.float64).eps * max(a.shape[0], a.shape[1])   # numpy's rcond=None
-    return np.linalg.lstsq(a, v, rcond)[0]
-
-
-@numba.njit(cache=True, nogil=True)
-def local_eval(k: np.ndarray, k0: float, scale: float, degree: int, w: float, periodic: bool,
-               coef: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
-    """The fit with coefficients ``coef`` at samples ``k``."""
-    return local_design(k, k0, scale, degree, w, periodic) @ coef

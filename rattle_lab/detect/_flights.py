@@ -356,23 +356,12 @@ class _Model:
     def solve(self, f_hz: float, sigma: float
               ) -> tuple[float, np.ndarray, np.ndarray]:
         """``(rss, beta, gamma)``: run-wide coefficients and each segment's free amplitudes."""
-        from ._flight_kernels import free_sums, residual_ss
+        from ._flight_kernels import solve_flights
 
-        sparse = (self.indptr, self.indices, self.values, self.p, self.r)
-        zz, zx, zy = free_sums(self.y, *sparse, self.tau, self.seg, self.next_, self.n_seg,
-                               float(f_hz), float(sigma), 1.0 / self.fs)
-        zz = zz + 1e-12 * np.trace(zz, axis1=1, axis2=2)[:, None, None] * np.eye(2)
-        g_zx = np.linalg.solve(zz, zx)
-        g_zy = np.linalg.solve(zz, zy[:, :, None])[:, :, 0]
-        q = zx.shape[2]
-        zx2 = zx.reshape(-1, q)
-        scale = self.scale
-        a = (self.xtx - zx2.T @ g_zx.reshape(-1, q)) / np.outer(scale, scale)
-        b = (self.xty - zx2.T @ g_zy.reshape(-1)) / scale
-        beta = np.linalg.lstsq(a, b, rcond=1e-12)[0] / scale
-        gamma = np.ascontiguousarray(g_zy - g_zx @ beta)
-        rss = residual_ss(self.y, *sparse, beta, self.tau, self.seg, self.next_, gamma,
-                          float(f_hz), float(sigma), 1.0 / self.fs)
+        rss, beta, gamma = solve_flights(
+            self.y, self.indptr, self.indices, self.values, self.p, self.r, self.tau,
+            self.seg, self.next_, self.n_seg, float(f_hz), float(sigma), 1.0 / self.fs,
+            np.ascontiguousarray(self.xtx), np.ascontiguousarray(self.xty), self.scale)
         return float(rss), beta, gamma
 
     def at(self, f_hz: float, sigma: float) -> _Fixed:

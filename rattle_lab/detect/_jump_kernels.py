@@ -4,7 +4,7 @@ called impact by impact, the fits' values at given instants (:func:`fits_at`), a
 sound peaks after each impact (:func:`sound_windows`, for :func:`~rattle_lab.detect.sound_peaks`).
 
 A fit is stored as one row: ``[k0, scale, degree, periodic, w, coef...]`` (``k0`` NaN: no
-fit, a side without samples); the coefficients are :func:`~rattle_lab.detect._flight_kernels.local_lstsq`'s.
+fit, a side without samples); the coefficients are :func:`local_lstsq`'s.
 Sums run in index order, where numpy's pairwise sums of the Python path may differ in the
 last bits.  A window holding a non-finite sample is left to the Python path (status 1).
 Division follows numpy (a zero divisor gives inf or NaN, as in the Python path, not an
@@ -18,7 +18,53 @@ import math
 import numba
 import numpy as np
 
-from ._flight_kernels import local_lstsq
+
+@numba.njit(cache=True, nogil=True)
+def local_design(k: np.ndarray, k0: float, scale: float, degree: int, w: float,
+                 periodic: bool) -> np.ndarray:  # pragma: no cover - compiled
+    """The design matrix of :class:`rattle_lab.detect._local_fits._LocalFit` at samples ``k``:
+    ``[u^degree .. u^0]`` (polynomial), or ``[1, u^j cos(w tau), u^j sin(w tau)]_j``
+    (``periodic``), ``tau = k - k0``, ``u = tau / scale``."""
+    n = k.size
+    if not periodic:
+        out = np.empty((n, degree + 1))
+        for i in range(n):
+            u = (k[i] - k0) / scale
+            x = 1.0
+            for j in range(degree, -1, -1):
+                out[i, j] = x
+                x *= u
+        return out
+    out = np.empty((n, 1 + 2 * (degree + 1)))
+    for i in range(n):
+        tau = k[i] - k0
+        u = tau / scale
+        c, s_ = math.cos(w * tau), math.sin(w * tau)
+        out[i, 0] = 1.0
+        x = 1.0
+        for j in range(degree + 1):
+            out[i, 1 + 2 * j] = x * c
+            out[i, 2 + 2 * j] = x * s_
+            x *= u
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def local_lstsq(k: np.ndarray, v: np.ndarray, k0: float, scale: float, degree: int, w: float,
+                periodic: bool) -> np.ndarray:  # pragma: no cover - compiled
+    """Least-squares coefficients of :func:`local_design` for ``v`` (LAPACK ``gelsd``, as
+    :func:`numpy.linalg.lstsq`)."""
+    a = local_design(k, k0, scale, degree, w, periodic)
+    rcond = np.finfo(np.float64).eps * max(a.shape[0], a.shape[1])   # numpy's rcond=None
+    return np.linalg.lstsq(a, v, rcond)[0]
+
+
+@numba.njit(cache=True, nogil=True)
+def local_eval(k: np.ndarray, k0: float, scale: float, degree: int, w: float, periodic: bool,
+               coef: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """The fit with coefficients ``coef`` at samples ``k``."""
+    return local_design(k, k0, scale, degree, w, periodic) @ coef
+
 
 def readonly(x: np.ndarray) -> np.ndarray:
     """``x`` as a contiguous float64 read-only view (one compiled variant for samples read

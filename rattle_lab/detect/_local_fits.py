@@ -36,7 +36,7 @@ class _LocalFit:
         # keeps what it gives there)
         self.compiled = bool(np.all(np.isfinite(v)))
         if self.compiled:
-            from ._flight_kernels import local_lstsq
+            from ._jump_kernels import local_lstsq
 
             self.coef = local_lstsq(np.ascontiguousarray(k, float),
                                     np.ascontiguousarray(v, float), self.k0, self.scale,
@@ -80,7 +80,7 @@ class _LocalFit:
             return np.array([fit_value(self.row, k)])
         kk = np.atleast_1d(np.asarray(k, dtype=float))
         if self.compiled:
-            from ._flight_kernels import local_eval
+            from ._jump_kernels import local_eval
 
             return local_eval(np.ascontiguousarray(kk), self.k0, self.scale, self.degree,
                               0.0 if self.w is None else float(self.w), self.w is not None,

@@ -445,3 +445,17 @@ def test_ringing_runs_without_a_share_or_modes_are_named_unmeasured():
     assert ratios_of_runs([log(1.5), log(1.0), log(float("nan"))]).ringing_runs_unmeasured == 1
     carried = ratios_of_runs([log(1.5, ((171.0, 21.5),)), log(1.3, ((171.0, 21.5),))])
     assert carried.ringing_runs_unmeasured == 0 and carried.value == pytest.approx(0.55)
+
+
+def test_the_two_by_two_elimination_pivots_as_lapack_does():
+    # each flight's 2x2 normal equations are solved in the compiled kernel; against numpy's
+    # LAPACK gesv, with and without a row swap (|a10| > |a00|), to ~cond * eps
+    from rattle_lab.detect._flight_kernels import _solve2
+
+    rng = np.random.default_rng(2)
+    b = rng.normal(size=(2, 5))
+    for a in (np.array([[4.0, 1.0], [1.0, 3.0]]), np.array([[1e-3, 2.0], [3.0, 1.0]]),
+              rng.normal(size=(2, 2))):
+        want = np.linalg.solve(a, b)
+        np.testing.assert_allclose(_solve2(a, b), want,
+                                   rtol=0, atol=1e-13 * np.linalg.cond(a) * np.abs(want).max())

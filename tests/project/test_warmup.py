@@ -41,3 +41,17 @@ def test_the_warm_up_names_every_cached_compiled_function():
     assert found - listed == set(), "add the new compiled functions to rattle_lab._warmup"
     assert listed - found == set(), "rattle_lab._warmup names functions that are gone"
 
+
+
+def test_no_cached_compiled_function_is_imported_from_another_module():
+    # numba's cache is checked against the source file of the function compiled, not of the
+    # compiled functions it calls: a callee from another file that changes leaves a stale
+    # copy in the caller's cache, which failed at run time ("'descr' is NULL") after an edit
+    modules = {module for module, _ in _cached_dispatchers()}
+    imported = []
+    for name in sorted(modules):
+        module = importlib.import_module(name)
+        for attr, obj in vars(module).items():
+            if isinstance(obj, numba.core.dispatcher.Dispatcher) and obj.__module__ != name:
+                imported.append(f"{name}.{attr} (from {obj.__module__})")
+    assert imported == []
