@@ -84,13 +84,28 @@ def apply_weighting(pressure_pa: np.ndarray, fs_hz: float, weighting: Weighting)
     weighting's decay (time constant ``1 / (2 pi 20.6 Hz) = 7.7 ms``) does not wrap
     around to the start; the result is the causal filter's output over the record.
     """
+    return apply_weightings(pressure_pa, fs_hz, (weighting,))[0]
+
+
+def apply_weightings(pressure_pa: np.ndarray, fs_hz: float,
+                     weightings: tuple[Weighting, ...]) -> list[np.ndarray]:
+    """:func:`apply_weighting` for several weightings from one transform of the signal."""
     p = np.asarray(pressure_pa, dtype=float)
-    if weighting == "Z" or p.size == 0:
-        return p.copy()
+    if p.size == 0:
+        return [p.copy() for _ in weightings]
     n_fft = int(2 ** np.ceil(np.log2(p.size + max(round(0.5 * fs_hz), 1))))
-    spec = np.fft.rfft(p, n=n_fft)
-    h = weighting_response(weighting, np.fft.rfftfreq(n_fft, 1.0 / fs_hz))
-    return np.fft.irfft(spec * h, n=n_fft)[: p.size]
+    spec = None
+    out = []
+    for weighting in weightings:
+        if weighting == "Z":
+            out.append(p.copy())
+            continue
+        if spec is None:
+            spec = np.fft.rfft(p, n=n_fft)
+            freq = np.fft.rfftfreq(n_fft, 1.0 / fs_hz)
+        h = weighting_response(weighting, freq)
+        out.append(np.fft.irfft(spec * h, n=n_fft)[: p.size])
+    return out
 
 
 def band_edges_hz(band_number: int) -> tuple[float, float, float]:
@@ -153,5 +168,5 @@ def band_mean_squares(x: np.ndarray, fs_hz: float) -> dict[str, float]:
 
 
 __all__ = ["BAND_NUMBERS", "G10", "NOMINAL_THIRD_OCTAVE_HZ", "Weighting", "apply_weighting",
-           "band_edges_hz", "band_gain", "band_mean_squares", "weighting_db",
+           "apply_weightings", "band_edges_hz", "band_gain", "band_mean_squares", "weighting_db",
            "weighting_response"]

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from rattle_lab.exceptions import ParameterError
-from ._filters import apply_weighting, band_mean_squares
+from ._filters import apply_weightings, band_mean_squares
 
 P_REF_PA = 20e-6
 #: Time constant of the F (fast) time weighting, s (IEC 61672-1).
@@ -122,8 +122,7 @@ def sound_levels(pressure_pa: object, fs_hz: float, *, bands: bool = True) -> So
         raise ParameterError(f"`fs_hz` must be > 0, was {fs_hz}")
     if p.ndim != 1 or p.size == 0 or not np.all(np.isfinite(p)):
         raise ParameterError("`pressure_pa` must be a non-empty 1-D finite signal")
-    p_a = apply_weighting(p, fs_hz, "A")
-    p_c = apply_weighting(p, fs_hz, "C")
+    p_a, p_c = apply_weightings(p, fs_hz, ("A", "C"))
     laeq = _db10(float(np.mean(p_a**2)))
     lafmax = _db10(float(np.max(fast_time_weighted(p_a**2, fs_hz))))
     peak = float(np.max(np.abs(p_c)))
