@@ -128,8 +128,12 @@ def _solve2(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # pragma: no cover - c
     swap = abs(a10) > abs(a00)
     if swap:
         a00, a01, a10, a11 = a10, a11, a00, a01
+    if a00 == 0.0:
+        raise np.linalg.LinAlgError("Singular matrix")   # numpy's error and message
     lo = a10 / a00
     u11 = a11 - lo * a01
+    if u11 == 0.0:
+        raise np.linalg.LinAlgError("Singular matrix")
     out = np.empty(b.shape)
     for j in range(b.shape[1]):
         b0, b1 = (b[1, j], b[0, j]) if swap else (b[0, j], b[1, j])

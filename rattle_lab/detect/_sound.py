@@ -86,6 +86,9 @@ def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window
         omega = 2.0 * np.pi * excitation_freq_hz / fs_hz
     n_base = n_samples_of(baseline_s, fs_hz, name="baseline_s")
     t_imp = np.atleast_1d(np.asarray(impact_t_s, dtype=float))
+    if not np.all(np.isfinite(t_imp)):
+        bad = int(np.flatnonzero(~np.isfinite(t_imp))[0])
+        raise ParameterError(f"`impact_t_s` must be finite, has NaN/Inf at impact {bad}")
     if not 0 < first_fraction <= 1:
         raise ParameterError(f"`first_fraction` must be in (0, 1], was {first_fraction}")
     n_win = n_samples_of(window_s, fs_hz, name="window_s")

@@ -459,3 +459,8 @@ def test_the_two_by_two_elimination_pivots_as_lapack_does():
         want = np.linalg.solve(a, b)
         np.testing.assert_allclose(_solve2(a, b), want,
                                    rtol=0, atol=1e-13 * np.linalg.cond(a) * np.abs(want).max())
+    for singular in (np.zeros((2, 2)), np.array([[1.0, 2.0], [2.0, 4.0]])):
+        with pytest.raises(np.linalg.LinAlgError):
+            np.linalg.solve(singular, b)
+        with pytest.raises(np.linalg.LinAlgError):
+            _solve2(singular, b)

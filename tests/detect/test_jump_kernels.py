@@ -71,6 +71,10 @@ def assert_same(a: _JumpFits, b: _JumpFits) -> None:
             assert abs(x - y) <= 1e-8, (name, x, y)
     for t in (a.t_half - 3.0, a.t_half, a.t_half + 3.5):
         np.testing.assert_allclose(a.at(t), b.at(t), rtol=1e-10, atol=0.0)
+        # the compiled scalar evaluator against the design matrix times the coefficients
+        for fit, value in zip((b.p, b.q), a.at(t)):
+            if fit is not None:
+                np.testing.assert_allclose(value, fit(np.array([t]))[0], rtol=1e-10, atol=0.0)
 
 
 @pytest.mark.parametrize("omega, degree, with_accel, contact", [
@@ -114,10 +118,38 @@ def test_a_non_finite_sample_goes_the_python_way_and_the_rest_stay_compiled():
         assert_same(x, _jump_fits(v, *s, **kw))
 
 
+@pytest.mark.parametrize("omega", [2 * np.pi * F_HZ / FS, None])
+def test_windows_cut_short_by_neighbours(omega):
+    # a neighbouring trigger 0-9 samples beyond each guard: fits over fewer samples than
+    # n_fit (the forced-mode basis drops to degree 0), fewer than its parameters (a
+    # low-degree polynomial instead), or none at all
+    v, a = bouncing_record(13, seconds=0.2)
+    base = spans_of(v)
+    spans = []
+    for i, (j_lo, j_hi, _, _) in enumerate(base):
+        n_pad = (j_hi - j_lo + 1) + 2
+        cut_lo, cut_hi = i % 10, (3 * i) % 10
+        spans.append((j_lo, j_hi, j_lo - 1 - n_pad - cut_lo + 1, j_hi + n_pad + cut_hi - 1))
+    kw = dict(n_fit=51, n_guard=2, degree=2, omega_per_sample=omega, accel=a)
+    batch = _jump_fits_all(v, spans, **kw)
+    kinds = set()
+    for x, s_ in zip(batch, spans):
+        ref = _jump_fits(v, *s_, **kw)
+        assert_same(x, ref)
+        for fx, fr in ((x.p, ref.p), (x.q, ref.q)):
+            assert (fx is None) == (fr is None)
+            kinds.add(None if fr is None else (fr.degree, fr.w is None))
+            if fr is not None:
+                assert (fx.degree, fx.w is None) == (fr.degree, fr.w is None)
+    # the fallbacks were reached: no fit, and fits of two kinds at least (forced-mode degree
+    # 0 and a polynomial of degree 0; polynomials of degree 0, 1 and 2 without omega)
+    assert None in kinds and len(kinds) >= 3
+
+
 def test_edges_and_no_impacts():
     v, a = bouncing_record(7, seconds=0.1)
     spans = spans_of(v)
-    # the first impact's window cut by the record's start; a side with no samples at all
+    # a neighbour right before the jump: no sample left for the fit before it
     spans = [(spans[0][0], spans[0][1], spans[0][0] - 1, spans[0][3])] + spans
     kw = dict(n_fit=51, n_guard=2, degree=2, omega_per_sample=2 * np.pi * F_HZ / FS, accel=a)
     batch = _jump_fits_all(v, spans, **kw)
@@ -127,7 +159,7 @@ def test_edges_and_no_impacts():
     assert _jump_fits_all(v, [], **kw) == []
 
 
-def reference_sound_peaks(p, fs, t_imp, n_win, n_base, omega, fraction):
+def reference_sound_peaks(p, fs, t_imp, n_win, n_base, omega, fraction, t0=0.0, delay=0.0):
     """The sound-peak rule written out with numpy (module docstring of detect._sound): the
     window after each impact cut at the next, the forcing-frequency sinusoid fitted over
     the baseline before it (columns 1, cos, sin of omega k) and removed, the first local
@@ -136,9 +168,9 @@ def reference_sound_peaks(p, fs, t_imp, n_win, n_base, omega, fraction):
     out = np.full((t_imp.size, 5), np.nan)
     prev_hi = 0
     for i, t in enumerate(t_imp):
-        lo = int(np.ceil(t * fs - 1e-9))
-        hi = lo + n_win if i + 1 == t_imp.size else min(lo + n_win,
-                                                        int(np.ceil(t_imp[i + 1] * fs - 1e-9)))
+        lo = int(np.ceil((t + delay - t0) * fs - 1e-9))
+        hi = lo + n_win if i + 1 == t_imp.size else min(
+            lo + n_win, int(np.ceil((t_imp[i + 1] + delay - t0) * fs - 1e-9)))
         lo, hi = max(lo, 0), min(hi, p.size)
         if hi <= lo:
             continue
@@ -154,6 +186,8 @@ def reference_sound_peaks(p, fs, t_imp, n_win, n_base, omega, fraction):
         prev_hi = hi
         out[i, 4] = np.sqrt(np.mean(seg ** 2))
         k_max = int(np.argmax(seg))
+        if seg[k_max] == 0.0:      # silence: no peak
+            continue
         is_peak = (seg >= fraction * seg[k_max]) & (seg >= np.r_[seg[1:], -np.inf])
         k_first = int(np.flatnonzero(is_peak)[0])
         for col, kk in ((0, k_first), (1, k_max)):
@@ -163,7 +197,7 @@ def reference_sound_peaks(p, fs, t_imp, n_win, n_base, omega, fraction):
                 if a - 2 * b + c < 0:
                     d = 0.5 * (a - c) / (a - 2 * b + c)
                     loc, h = kk + d, b - 0.25 * (a - c) * d
-            out[i, col], out[i, col + 2] = (lo + loc) / fs, h
+            out[i, col], out[i, col + 2] = t0 + (lo + loc) / fs, h
     return out
 
 
@@ -240,3 +274,28 @@ def test_the_pooled_step_error_is_the_rows_written_out():
     np.testing.assert_allclose(med, want, rtol=0, atol=1e-12)
     assert np.isfinite(med).sum() >= 2 * span      # the bins are filled
     assert np.all(noise[np.isfinite(med)] > 0)
+
+
+def test_sound_peaks_with_a_start_time_a_delay_silence_and_a_repeated_impact():
+    from rattle_lab.detect import sound_peaks
+    from rattle_lab.exceptions import ParameterError
+
+    rng = np.random.default_rng(4)
+    fs, t0, delay = 25600.0, 12.5, 1.2e-3
+    p = 0.02 * rng.standard_normal(int(0.2 * fs))
+    p[2000:2600] = 0.0                       # a silent stretch
+    t_imp = t0 + np.array([0.01, 0.03, 0.03, 0.0785, 0.12, 0.199])
+    t_imp[4] = t0 + 2000 / fs + 0.002        # its window is silent
+    n_win, n_base = round(5e-3 * fs), round(3e-3 * fs)
+    got = sound_peaks(p, fs, t_imp, start_time_s=t0, delay_s=delay, excitation_freq_hz=95.0)
+    want = reference_sound_peaks(p, fs, t_imp, n_win, n_base, 2 * np.pi * 95.0 / fs, 0.5,
+                                 t0=t0, delay=delay)
+    assert np.isnan(got.p_max_pa[1])         # the first of two equal times has no window
+    assert np.isnan(got.p_max_pa[4]) and got.p_rms_pa[4] == 0.0
+    for g, w in ((got.t_first_s, want[:, 0]), (got.t_max_s, want[:, 1])):
+        np.testing.assert_allclose(g, w, rtol=0, atol=1e-12)
+    for g, w in ((got.p_first_pa, want[:, 2]), (got.p_max_pa, want[:, 3]),
+                 (got.p_rms_pa, want[:, 4])):
+        np.testing.assert_allclose(g, w, rtol=1e-11, atol=1e-15)
+    with pytest.raises(ParameterError, match="impact_t_s"):
+        sound_peaks(p, fs, [0.01, np.nan], start_time_s=0.0)
