@@ -106,6 +106,9 @@ class FlightFit:
         Ringing modes found in the record (frequency, decay rate).
     note : str
         Empty when every impact has flight-model velocities, else why not.
+    searched : tuple of float
+        The fundamental's ``(f_s, sigma)`` of the first search, without ringing (NaN
+        without one): :func:`ringing_problem` on the same impacts starts from it.
     """
 
     v_in_m_s: np.ndarray
@@ -116,6 +119,7 @@ class FlightFit:
     ring_hz: tuple[float, ...] = ()
     ring_sigma_1_s: tuple[float, ...] = ()
     note: str = ""
+    searched: tuple[float, float] = (float("nan"), float("nan"))
 
 
 @dataclass(frozen=True)
@@ -585,6 +589,8 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     model = forced_sub if modes_given is None else forced_sub.extended(
         ring(sub.k / fs_hz, dv, list(modes_given)))
     f_s, sigma = model.search(f_hz, 0.02 * omega, grid=True)
+    if modes_given is None:
+        fallback = replace(fallback, searched=(f_s, sigma))
     # identifiable?  steady motion repeats the same flight: forced and free then trade off
     rss0 = model.solve(f_s, sigma)[0]
     bump = 0.5 * (model.solve(1.02 * f_s, sigma)[0] + model.solve(0.98 * f_s, sigma)[0])
@@ -627,7 +633,8 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
                                   "long enough on a side, or a flight-model jump not within "
                                   "a factor 2 of the local fits')")
     return FlightFit(np.where(sane, vin, v_in_local), np.where(sane, vout, v_out_local), sane,
-                     f_s, sigma, tuple(m[0] for m in modes), tuple(m[1] for m in modes), note)
+                     f_s, sigma, tuple(m[0] for m in modes), tuple(m[1] for m in modes), note,
+                     fallback.searched)
 
 
 def _setup(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray, pad: np.ndarray
@@ -672,15 +679,23 @@ class RingingProblem:
 
 
 def ringing_problem(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
-                    pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray
-                    ) -> RingingProblem | None:
-    """One run's part of the campaign's search for ringing modes (None where too short)."""
+                    pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray,
+                    searched: tuple[float, float] | None = None) -> RingingProblem | None:
+    """One run's part of the campaign's search for ringing modes (None where too short).
+
+    ``searched``: the fundamental's ``(f_s, sigma)`` that :func:`flight_velocities` found on
+    the same arguments (:attr:`FlightFit.searched`: the same model and the same search, its
+    start ``sigma`` equal to rounding); searched here where it is not given or NaN.
+    """
     setup = _setup(v, fs_hz, f_hz, k_imp, pad)
     if isinstance(setup, str):
         return None
     _, sub, xf_sub, _ = setup
     y = np.asarray(v, float)[sub.k]
-    f_s, sigma = _Model(y, sub, fs_hz, xf_sub).search(f_hz, 0.04 * np.pi * f_hz, grid=True)
+    if searched is not None and np.all(np.isfinite(searched)):
+        f_s, sigma = float(searched[0]), float(searched[1])
+    else:
+        f_s, sigma = _Model(y, sub, fs_hz, xf_sub).search(f_hz, 0.04 * np.pi * f_hz, grid=True)
     return RingingProblem(y, sub, float(fs_hz), xf_sub, np.asarray(k_imp, float) / fs_hz,
                           np.nan_to_num(np.asarray(v_out_local, float)
                                         - np.asarray(v_in_local, float)),

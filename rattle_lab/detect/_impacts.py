@@ -645,7 +645,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                             f"needs >= {MIN_SHARE_IMPACTS}")
                 # lightly damped modes?  the campaign's runs together may find them
                 problem = ringing_problem(v, fs_hz, excitation_freq_hz, k_keep, pad_keep,
-                                          vin[keep], vout[keep])
+                                          vin[keep], vout[keep], searched=flights.searched)
     return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,
                      onset_s=start_time_s + np.asarray(onsets, dtype=float)[keep] / fs_hz,
                      v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],

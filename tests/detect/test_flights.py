@@ -464,3 +464,26 @@ def test_the_two_by_two_elimination_pivots_as_lapack_does():
             np.linalg.solve(singular, b)
         with pytest.raises(np.linalg.LinAlgError):
             _solve2(singular, b)
+
+
+def test_the_ringing_problem_reuses_the_flight_models_first_search(record):
+    # ringing_problem searches the same model from the same start as flight_velocities'
+    # first search (its sigma equal to rounding): given that search's result it skips its
+    # own.  The two agree to the Nelder-Mead tolerance (xatol 1e-4 in Hz and 1/s), and the
+    # problem is otherwise the same arrays
+    from rattle_lab.detect._flights import ringing_problem
+
+    v, _, _ = record
+    log = detect_impacts(FS_HZ, velocity_m_s=v, excitation_freq_hz=F_HZ)
+    k, pad = log.t_s * FS_HZ, np.full(log.t_s.size, 10.0)
+    fit = flight_velocities(v, FS_HZ, F_HZ, k, pad, log.v_in_m_s, log.v_out_m_s)
+    assert np.all(np.isfinite(fit.searched))
+    args = (v, FS_HZ, F_HZ, k, pad, log.v_in_m_s, log.v_out_m_s)
+    own, reused = ringing_problem(*args), ringing_problem(*args, searched=fit.searched)
+    assert (reused.f_s_hz, reused.sigma_1_s) == fit.searched
+    assert abs(own.f_s_hz - reused.f_s_hz) < 1e-3 and abs(own.sigma_1_s - reused.sigma_1_s) < 1e-2
+    np.testing.assert_array_equal(own.y, reused.y)
+    np.testing.assert_array_equal(own.dv, reused.dv)
+    # without a search (too few impacts) nothing is reused
+    few = flight_velocities(v, FS_HZ, F_HZ, k[:5], pad[:5], log.v_in_m_s[:5], log.v_out_m_s[:5])
+    assert np.all(np.isnan(few.searched))
