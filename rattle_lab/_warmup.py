@@ -41,6 +41,7 @@ COMPILED: dict[str, tuple[str, ...]] = {
                                         "fit_value", "fits_at", "_half_region", "_step_centroid",
                                         "_contact_pulse", "jump_fits_batch", "_refined",
                                         "sound_windows", "step_rows"),
+    "rattle_lab.detect._trigger": ("_onsets",),
     "rattle_lab.records._scan": ("_n_equal", "flat_runs"),
     "rattle_lab.acoustics._iso532": ("_slopes", "_decay_frame", "_weight_frame", "_run",
                                      "_core_loudness"),

@@ -57,8 +57,8 @@ class _LocalFit:
         fit.w = float(row[4]) if row[3] else None
         n_coef = 3 + 2 * fit.degree if fit.w is not None else fit.degree + 1
         fit.compiled = True
-        fit.coef = np.array(row[FIT_HEAD:FIT_HEAD + n_coef])
-        fit.row = np.array(row[:FIT_HEAD + n_coef])
+        fit.row = row[:FIT_HEAD + n_coef]      # views of the run's rows
+        fit.coef = fit.row[FIT_HEAD:]
         return fit
 
     def _design(self, k: np.ndarray) -> np.ndarray:

@@ -299,3 +299,41 @@ def test_sound_peaks_with_a_start_time_a_delay_silence_and_a_repeated_impact():
         np.testing.assert_allclose(g, w, rtol=1e-11, atol=1e-15)
     with pytest.raises(ParameterError, match="impact_t_s"):
         sound_peaks(p, fs, [0.01, np.nan], start_time_s=0.0)
+
+
+def reference_onsets(cf, on, off, n_min_sep):
+    """The trigger rule written out (ObsPy's on/off design with merging)."""
+    out = []
+    k = 0
+    while k < cf.size:
+        if cf[k] <= on:
+            k += 1
+            continue
+        start = k
+        while start > 0 and cf[start - 1] > off:
+            start -= 1
+        end = k
+        while end + 1 < cf.size and cf[end + 1] > off:
+            end += 1
+        peak = start + int(np.argmax(cf[start:end + 1]))
+        if out and peak - out[-1][1] < n_min_sep:
+            s0, p0, e0 = out[-1]
+            out[-1] = (s0, p0 if cf[p0] >= cf[peak] else peak, max(end, e0))
+        else:
+            out.append((start, peak, end))
+        k = end + 1
+    return out
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_compiled_trigger_is_the_rule_written_out(seed):
+    rng = np.random.default_rng(seed)
+    cf = np.abs(rng.standard_normal(20000))
+    hits = rng.choice(cf.size, 300, replace=False)
+    cf[hits] += rng.uniform(5, 40, hits.size)        # events, some close enough to merge
+    cf[hits[:50] + 1] += 20.0                         # and some two samples wide
+    cf[np.clip(hits[:20] + 3, 0, cf.size - 1)] = cf[hits[:20]]   # equal peaks: the first wins
+    got = trigger_onsets(cf, 8.0, 2.5, 30)
+    assert got == reference_onsets(cf, 8.0, 2.5, 30)
+    assert 150 < len(got) < 300
+    assert trigger_onsets(np.zeros(10), 8.0, 2.5, 30) == []
