@@ -397,3 +397,40 @@ def step_rows(v: np.ndarray, t_eval: np.ndarray, fits: np.ndarray, limits: np.nd
             r = ((v[kk] - pk) if kk < te else (v[kk] - qk)) / (qk - pk)
             out[i, int(np.rint(kk - te)) + span] = r
     return out, has
+
+
+@numba.njit(cache=True, nogil=True)
+def onsets(cf: np.ndarray, on: float, off: float, n_min_sep: int
+            ) -> np.ndarray:  # pragma: no cover - compiled
+    """The rows of :func:`~rattle_lab.detect._trigger.trigger_onsets`, ``(m, 3)``."""
+    n = cf.size
+    out = np.empty((16, 3), dtype=np.int64)
+    m = 0
+    k = 0
+    while k < n:
+        if not cf[k] > on:
+            k += 1
+            continue
+        start = k
+        while start > 0 and cf[start - 1] > off:    # back-track to the onset
+            start -= 1
+        end = k
+        while end + 1 < n and cf[end + 1] > off:
+            end += 1
+        peak = start
+        for j in range(start + 1, end + 1):
+            if cf[j] > cf[peak]:
+                peak = j
+        if m > 0 and peak - out[m - 1, 1] < n_min_sep:
+            prev_peak = out[m - 1, 1]
+            out[m - 1, 1] = prev_peak if cf[prev_peak] >= cf[peak] else peak
+            out[m - 1, 2] = max(end, out[m - 1, 2])
+        else:
+            if m == out.shape[0]:
+                grown = np.empty((2 * m, 3), dtype=np.int64)
+                grown[:m] = out
+                out = grown
+            out[m, 0], out[m, 1], out[m, 2] = start, peak, end
+            m += 1
+        k = end + 1          # the next sample above `on` after this trigger
+    return out[:m].copy()

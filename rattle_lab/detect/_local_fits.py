@@ -5,10 +5,24 @@ steps 4-5)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ._trigger import _half_region
+
+_KERNELS: Any = None
+
+
+def _kernels() -> Any:
+    """:mod:`rattle_lab.detect._jump_kernels`, imported on first use (it imports numba:
+    ``import rattle_lab.detect`` stays light) and kept (the fits are made by the thousand)."""
+    global _KERNELS
+    if _KERNELS is None:
+        from . import _jump_kernels
+
+        _KERNELS = _jump_kernels
+    return _KERNELS
 
 
 class _LocalFit:
@@ -36,9 +50,7 @@ class _LocalFit:
         # keeps what it gives there)
         self.compiled = bool(np.all(np.isfinite(v)))
         if self.compiled:
-            from ._jump_kernels import local_lstsq
-
-            self.coef = local_lstsq(np.ascontiguousarray(k, float),
+            self.coef = _kernels().local_lstsq(np.ascontiguousarray(k, float),
                                     np.ascontiguousarray(v, float), self.k0, self.scale,
                                     self.degree, 0.0 if self.w is None else float(self.w),
                                     self.w is not None)
@@ -50,15 +62,14 @@ class _LocalFit:
     @classmethod
     def of_row(cls, row: np.ndarray) -> _LocalFit:
         """The fit a compiled row holds (see :mod:`rattle_lab.detect._jump_kernels`)."""
-        from ._jump_kernels import FIT_HEAD
-
+        head = _kernels().FIT_HEAD
         fit = cls.__new__(cls)
         fit.k0, fit.scale, fit.degree = float(row[0]), float(row[1]), int(row[2])
         fit.w = float(row[4]) if row[3] else None
         n_coef = 3 + 2 * fit.degree if fit.w is not None else fit.degree + 1
         fit.compiled = True
-        fit.row = row[:FIT_HEAD + n_coef]      # views of the run's rows
-        fit.coef = fit.row[FIT_HEAD:]
+        fit.row = row[:head + n_coef]      # views of the run's rows
+        fit.coef = fit.row[head:]
         return fit
 
     def _design(self, k: np.ndarray) -> np.ndarray:
@@ -75,14 +86,10 @@ class _LocalFit:
 
     def __call__(self, k: np.ndarray | float) -> np.ndarray:
         if isinstance(k, float) and self.compiled:
-            from ._jump_kernels import fit_value
-
-            return np.array([fit_value(self.row, k)])
+            return np.array([_kernels().fit_value(self.row, k)])
         kk = np.atleast_1d(np.asarray(k, dtype=float))
         if self.compiled:
-            from ._jump_kernels import local_eval
-
-            return local_eval(np.ascontiguousarray(kk), self.k0, self.scale, self.degree,
+            return _kernels().local_eval(np.ascontiguousarray(kk), self.k0, self.scale, self.degree,
                               0.0 if self.w is None else float(self.w), self.w is not None,
                               self.coef)
         return self._design(kk) @ self.coef

@@ -4,7 +4,6 @@ with merging (ObsPy's trigger design), half-height regions and their centroids
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
 from ._common import detrended_abs, robust_sigma
@@ -31,7 +30,7 @@ def trigger_onsets(cf: np.ndarray, on: float, off: float, n_min_sep: int
     was last at or below ``off``, its end forward to the same, its peak is the first
     largest value between; a trigger whose peak is within ``n_min_sep`` samples of the
     previous one's is merged into it (the higher peak, the later end).  One compiled pass
-    (:func:`_onsets`).
+    (:func:`rattle_lab.detect._jump_kernels.onsets`).
 
     Examples
     --------
@@ -40,46 +39,11 @@ def trigger_onsets(cf: np.ndarray, on: float, off: float, n_min_sep: int
     >>> trigger_onsets(cf, 10.0, 3.0, 2)
     [(2, 3, 4), (10, 10, 10)]
     """
-    rows = _onsets(np.ascontiguousarray(cf, dtype=np.float64), float(on), float(off),
-                   int(n_min_sep))
+    from ._jump_kernels import onsets   # here: importing detect stays light (no numba)
+
+    rows = onsets(np.ascontiguousarray(cf, dtype=np.float64), float(on), float(off),
+                  int(n_min_sep))
     return [(int(a), int(b), int(c)) for a, b, c in rows.tolist()]
-
-
-@numba.njit(cache=True, nogil=True)
-def _onsets(cf: np.ndarray, on: float, off: float, n_min_sep: int
-            ) -> np.ndarray:  # pragma: no cover - compiled
-    """The rows of :func:`trigger_onsets`, ``(m, 3)``."""
-    n = cf.size
-    out = np.empty((16, 3), dtype=np.int64)
-    m = 0
-    k = 0
-    while k < n:
-        if not cf[k] > on:
-            k += 1
-            continue
-        start = k
-        while start > 0 and cf[start - 1] > off:    # back-track to the onset
-            start -= 1
-        end = k
-        while end + 1 < n and cf[end + 1] > off:
-            end += 1
-        peak = start
-        for j in range(start + 1, end + 1):
-            if cf[j] > cf[peak]:
-                peak = j
-        if m > 0 and peak - out[m - 1, 1] < n_min_sep:
-            prev_peak = out[m - 1, 1]
-            out[m - 1, 1] = prev_peak if cf[prev_peak] >= cf[peak] else peak
-            out[m - 1, 2] = max(end, out[m - 1, 2])
-        else:
-            if m == out.shape[0]:
-                grown = np.empty((2 * m, 3), dtype=np.int64)
-                grown[:m] = out
-                out = grown
-            out[m, 0], out[m, 1], out[m, 2] = start, peak, end
-            m += 1
-        k = end + 1          # the next sample above `on` after this trigger
-    return out[:m].copy()
 
 
 def _half_region(cf: np.ndarray, peak: int) -> tuple[int, int]:
