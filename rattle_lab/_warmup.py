@@ -38,7 +38,7 @@ COMPILED: dict[str, tuple[str, ...]] = {
                                           "added_sums", "eliminate_free", "sparse_cross",
                                           "tail_columns", "sparse_gram"),
     "rattle_lab.detect._jump_kernels": ("local_design", "local_lstsq", "local_eval", "_fit",
-                                        "fit_value", "fits_at", "_half_region", "_step_centroid",
+                                        "fit_value", "fits_at", "half_region", "_step_centroid",
                                         "_contact_pulse", "jump_fits_batch", "_refined",
                                         "sound_windows", "step_rows", "onsets"),
     "rattle_lab.records._scan": ("_n_equal", "flat_runs"),

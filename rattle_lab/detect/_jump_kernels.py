@@ -148,7 +148,8 @@ def fits_at(fits: np.ndarray, t: np.ndarray) -> np.ndarray:  # pragma: no cover 
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _half_region(r: np.ndarray, peak: int) -> tuple[int, int]:  # pragma: no cover - compiled
+def half_region(r: np.ndarray, peak: int) -> tuple[int, int]:  # pragma: no cover - compiled
+    """The contiguous samples around ``peak`` above half its height (inclusive)."""
     half = 0.5 * r[peak]
     lo = peak
     while lo > 0 and r[lo - 1] > half:
@@ -205,7 +206,7 @@ def _contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, n_fit: int
     sign = 1.0 if r[pk] > 0 else (-1.0 if r[pk] < 0 else 0.0)
     for i in range(m):
         r[i] *= sign
-    r_lo, r_hi = _half_region(r, pk)
+    r_lo, r_hi = half_region(r, pk)
     widen = int(math.ceil(0.25 * (r_hi - r_lo + 1)))
     r_lo, r_hi = max(0, r_lo - widen), min(m - 1, r_hi + widen)
     sw = swk = 0.0

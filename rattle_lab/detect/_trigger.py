@@ -47,15 +47,12 @@ def trigger_onsets(cf: np.ndarray, on: float, off: float, n_min_sep: int
 
 
 def _half_region(cf: np.ndarray, peak: int) -> tuple[int, int]:
-    """The contiguous samples around ``peak`` above half its height (inclusive)."""
-    half = 0.5 * cf[peak]
-    lo = peak
-    while lo > 0 and cf[lo - 1] > half:
-        lo -= 1
-    hi = peak
-    while hi + 1 < cf.size and cf[hi + 1] > half:
-        hi += 1
-    return lo, hi
+    """The contiguous samples around ``peak`` above half its height (inclusive); the
+    compiled impact loops' own rule (:func:`rattle_lab.detect._jump_kernels.half_region`)."""
+    from ._jump_kernels import half_region   # here: importing detect stays light (no numba)
+
+    lo, hi = half_region(np.ascontiguousarray(cf, dtype=np.float64), int(peak))
+    return int(lo), int(hi)
 
 
 def _centroid(cf: np.ndarray, peak: int, offset: float) -> float:
