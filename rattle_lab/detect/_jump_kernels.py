@@ -435,3 +435,22 @@ def onsets(cf: np.ndarray, on: float, off: float, n_min_sep: int
             m += 1
         k = end + 1          # the next sample above `on` after this trigger
     return out[:m].copy()
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def lag_correlation(x: np.ndarray, y: np.ndarray, max_lag: int
+                    ) -> np.ndarray:  # pragma: no cover - compiled
+    """``sum_k x[k] y[k + lag]`` for the lags ``0..max_lag, -max_lag..-1`` (that order:
+    :func:`~rattle_lab.detect._timing.coarse_lag`), over the samples where ``x`` is not
+    zero."""
+    n = x.size
+    out = np.zeros(2 * max_lag + 1)
+    for k in range(n):
+        xk = x[k]
+        if xk == 0.0:
+            continue
+        for lag in range(-max_lag, max_lag + 1):
+            j = k + lag
+            if 0 <= j < n:
+                out[lag if lag >= 0 else 2 * max_lag + 1 + lag] += xk * y[j]
+    return out

@@ -337,3 +337,27 @@ def test_the_compiled_trigger_is_the_rule_written_out(seed):
     assert got == reference_onsets(cf, 8.0, 2.5, 30)
     assert 150 < len(got) < 300
     assert trigger_onsets(np.zeros(10), 8.0, 2.5, 30) == []
+
+
+def test_the_coarse_lag_is_the_fft_cross_correlations():
+    # the direct sums over the accelerometer's event samples against numpy's FFT
+    # correlation of the same clipped functions; the peak lag the same, the values to the
+    # FFT's rounding (~1e-16 times the total energy, ~1e-9 here)
+    from rattle_lab.detect._jump_kernels import lag_correlation
+    from rattle_lab.detect._timing import coarse_lag
+
+    rng = np.random.default_rng(8)
+    for lag_true in (0, 3, -7, 40):
+        a = np.abs(rng.standard_normal(30000))
+        ev = rng.choice(np.arange(100, 29800), 60, replace=False)
+        a[ev] += rng.uniform(10, 50, ev.size)
+        v = np.abs(rng.standard_normal(a.size))
+        v[ev + lag_true] += a[ev] * rng.uniform(0.5, 1.5, ev.size)
+        assert coarse_lag(v, a, 51, 3.0) == lag_true
+        x, y = np.clip(a - 3.0, 0, None), np.clip(v - 3.0, 0, None)
+        m = 1 << int(np.ceil(np.log2(2 * x.size)))
+        c = np.fft.irfft(np.conj(np.fft.rfft(x, m)) * np.fft.rfft(y, m), m)
+        want = np.r_[c[:52], c[m - 51:]]
+        np.testing.assert_allclose(lag_correlation(x, y, 51), want, rtol=0,
+                                   atol=1e-12 * np.sum(x * x + y * y))
+    assert coarse_lag(np.zeros(50), np.zeros(50), 51, 3.0) == 0
