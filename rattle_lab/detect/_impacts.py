@@ -60,18 +60,17 @@ from ._timing import (MAX_COARSE_LAG_S, MAX_EXTRA_GUARD_S, DelayEstimate, channe
 DELAY_REVERSAL_SHARE = 0.9
 
 
-def _delay_keeps_reversals(jfits: list[_JumpFits], d_new: float, d_old: float,
-                           min_reversal: float) -> bool:
+def _delay_keeps_reversals(jfits: list[_JumpFits], rows: np.ndarray, d_new: float,
+                           d_old: float, min_reversal: float) -> bool:
     """Whether reading the velocity fits at the contact pulses plus ``d_new`` samples keeps
     at least :data:`DELAY_REVERSAL_SHARE` as many reversing triggers (:func:`_reverses`) as
     reading them at ``d_old``.  Without the pulses' times, or no trigger reversing at
-    ``d_old``: True."""
+    ``d_old``: True.  ``rows``: the fits' rows (:func:`_fit_rows`)."""
     t_a = np.array([jf.t_a for jf in jfits], dtype=float)
     ok = np.isfinite(t_a)
     if min_reversal == 0.0 or not ok.any():
         return True
     counts = []
-    rows = _fit_rows(jfits)
     for d in (d_old, d_new):
         vv = _fits_at(rows, t_a + d)[ok]
         counts.append(int(_reverses(vv[:, 0], vv[:, 1], min_reversal).sum()))
@@ -438,9 +437,11 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         lo_lim = trig[j - 1][2] + 1 if j > 0 else 0
         hi_lim = trig[j + 1][0] - 1 if j + 1 < len(trig) else v.size - 1
         spans.append((j_lo, j_hi, lo_lim, hi_lim))
+    rows = np.zeros((0, 2, 1))
     if v is not None:
         jfits = _jump_fits_all(v, spans, n_fit=n_fit, n_guard=n_guard, degree=degree,
                                omega_per_sample=omega, accel=a)
+        rows = _fit_rows(jfits)
     # issue 28: the velocity steps' centroids against the contact pulses' measure what is
     # left of the vibrometer's delay after the declared one (the first moment of any
     # filter's impulse response is its low-frequency group delay): the fits are evaluated
@@ -473,7 +474,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     # :func:`rattle_lab.fit._chain.delay_systematic`)
     measured = bool(np.isfinite(delay.value)) and not velocity_delay_declared
     applied = measured and delay.resolved and delay_significant(delay)
-    if applied and not _delay_keeps_reversals(jfits, delay.value - lag, -float(lag),
+    if applied and not _delay_keeps_reversals(jfits, rows, delay.value - lag, -float(lag),
                                               params.min_reversal):
         # an impact reverses the velocity whatever the chain: a delay under which fewer
         # triggers do than without it is not the chain's (a slow decoder and the plate's
@@ -494,7 +495,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         t_ev = np.array([t_eval_of(jf) for jf in jfits])
         n_pad0 = max(hi - lo + 1 for lo, hi, _, _ in spans) + n_guard
         n_extra_max = int(round(MAX_EXTRA_GUARD_S * fs_hz))
-        taus, med, noise = step_error(v, t_ev, _fit_rows(jfits),
+        taus, med, noise = step_error(v, t_ev, rows,
                                       [(lo_l, hi_l) for _, _, lo_l, hi_l in spans],
                                       n_pad0 + n_extra_max)
         first, last = settled_span(taus, med, noise)
@@ -514,7 +515,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             # not settled within MAX_EXTRA_GUARD_S: not a decoder's step response but the
             # plate's higher modes ringing in the vibrometer (the flight model's business)
             extra = 0
-        first_fits = jfits
+        first_fits, first_rows = jfits, rows
         if extra > 0:
             wide = [replace(w, t_a=jf.t_a, a_lo=jf.a_lo, a_hi=jf.a_hi, a_sign=jf.a_sign)
                     for w, jf in zip(_jump_fits_all(v, spans, n_fit=n_fit,
@@ -536,7 +537,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                 delay = replace(est, value=est.value + lag)
                 d_use = est.value
                 method_err = 0.0   # its change from the first is the window term
-        rows = _fit_rows(jfits)
+                rows = _fit_rows(jfits)
         t_ev = np.array([t_eval_of(jf) for jf in jfits])
         if measured:
             # how much e moves per sample of delay: the fits read a quarter sample either
@@ -549,7 +550,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         if first_fits is not jfits:
             # what moving the fits out of the unsettled step changed in e: the part of the
             # chain's step response the first fits read (a systematic error of their own)
-            v0, v1 = _fits_at(_fit_rows(first_fits), t_ev), _fits_at(rows, t_ev)
+            v0, v1 = _fits_at(first_rows, t_ev), _fits_at(rows, t_ev)
             with np.errstate(divide="ignore", invalid="ignore"):
                 mv = -v1[:, 1] / v1[:, 0] + v0[:, 1] / v0[:, 0]
             mv = mv[np.isfinite(mv)]
@@ -574,7 +575,6 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         # it lasts; read at the centroid, a slow one's fits then show no reversal.  Those are
         # judged again by the fits at the contact pulse's ends, first touch and separation.
         # Their velocities stay the centroid's (the rigid impact's that the SDF model has)
-        rows = _fit_rows(jfits)
         vin_e = _fits_at(rows, np.array([jf.a_lo for jf in jfits]) + d_use)[:, 0]
         vout_e = _fits_at(rows, np.array([jf.a_hi for jf in jfits]) + d_use)[:, 1]
         sign_a = np.array([jf.a_sign for jf in jfits])
