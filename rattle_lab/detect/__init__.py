@@ -21,7 +21,7 @@ if TYPE_CHECKING:
                        merge_segment_impacts, reused_result, run_segments, segment_impacts,
                        segment_sound)
     from ._flights import RingingProblem, campaign_ring_modes
-    from ._impacts import ImpactLog, ImpactParams, detect_impacts
+    from ._impacts import ImpactLog, ImpactParams, Recognition, detect_impacts
     from ._ringing import RINGING_RESIDUAL_RATIO
     from ._trigger import trigger_onsets
     from ._pairing import base_velocity_at, onto_grid
@@ -56,6 +56,7 @@ _LAZY: dict[str, str] = {
     "campaign_ring_modes": "_flights",
     "ImpactLog": "_impacts",
     "ImpactParams": "_impacts",
+    "Recognition": "_impacts",
     "detect_impacts": "_impacts",
     "RINGING_RESIDUAL_RATIO": "_ringing",
     "trigger_onsets": "_trigger",
@@ -82,7 +83,8 @@ _LAZY: dict[str, str] = {
 }
 
 __all__ = [
-    "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "RingingProblem", "SoundPeaks",
+    "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "Recognition", "RingingProblem",
+    "SoundPeaks",
     "a_weight", "a_weighting_db", "campaign_ring_modes", "cross_correlation_delay", "detect_impacts", "impact_pattern",
     "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
     "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle",

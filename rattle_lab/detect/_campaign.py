@@ -33,7 +33,9 @@ def campaign_ringing(results: Sequence[RunResult], detect: DetectParams,
     them, detected again with ``velocity_model = "flights"``: their own test for ringing
     sees the tails on both sides of an impact and can pass them by), and every shaker run
     with impacts is detected again with them (``ring_modes``: each impact's ringing carried
-    on, ``v_in`` and ``v_out`` from the flight model).  Otherwise, where no mode is found,
+    on, ``v_in`` and ``v_out`` from the flight model).  Both passes change the velocity model
+    only: ``redetect`` may start each run from its first pass's
+    :attr:`~rattle_lab.detect.ImpactLog.recognition`.  Otherwise, where no mode is found,
     or where the modes give no run any velocities, the results are returned as they are
     (the fit then flags the ratios).  The runs' parts of the search are dropped from the
     results either way.
@@ -86,9 +88,11 @@ def campaign_ringing(results: Sequence[RunResult], detect: DetectParams,
                     results[i] = r
             # (else the modes gave no run velocities: the first pass stands, and the fit
             # flags its ratios as uncorrected)
-    return [r if r.impacts is None or r.impacts.ringing_problem is None
-            else dataclasses.replace(r, impacts=dataclasses.replace(r.impacts,
-                                                                    ringing_problem=None))
+    # (and what the passes started from: neither is a result)
+    return [r if r.impacts is None or (r.impacts.ringing_problem is None
+                                       and r.impacts.recognition is None)
+            else dataclasses.replace(r, impacts=dataclasses.replace(
+                r.impacts, ringing_problem=None, recognition=None))
             for r in results]
 
 

@@ -39,7 +39,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field, replace
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -204,6 +204,42 @@ class ImpactParams:
 
 
 @dataclass(frozen=True)
+class Recognition:
+    """What :func:`detect_impacts` found before its velocity model (steps 1-7): a run's
+    triggers, their local-fit velocities (after the offset), which are impacts, the
+    vibrometer's delay.  A detection pass that changes only the velocity model
+    (``velocity_model``, ``ring_modes``: the campaign's ringing passes) starts from it
+    instead of finding the impacts again (``recognised``).  Per trigger arrays, small
+    beside the record; not kept in caches."""
+
+    key: tuple[object, ...]           # what it depends on (:func:`_recognition_key`)
+    lag: int                          # the velocity's coarse lag, samples
+    names: tuple[str, ...]            # channels used
+    t_idx: np.ndarray                 # per trigger: impact time, samples
+    onsets: np.ndarray
+    strength: np.ndarray
+    pads: np.ndarray                  # the flight model's pads (with a velocity)
+    spans: tuple[tuple[int, int, int, int], ...]
+    keep: np.ndarray                  # which triggers are impacts
+    v_in: np.ndarray                  # local fits, offset taken off
+    v_out: np.ndarray
+    e: np.ndarray
+    offset: float
+    d_use: float                      # the delay the fits were read at, samples
+    delay: DelayEstimate
+    delay_first: float
+    method_err: float
+    step_guard_s: float
+    e_slope: float
+    e_window: float
+    n_fit: int
+    n_guard: int
+    degree: int
+    omega: float | None
+    ratio: float | None = None        # the ringing test's ratio, once computed
+
+
+@dataclass(frozen=True)
 class ImpactLog:
     """Impacts found in one run (arrays of equal length, one entry per impact).
 
@@ -278,6 +314,9 @@ class ImpactLog:
         interval by it (:func:`rattle_lab.fit._chain.measurand_systematic`).
     e_measurand_alt_se : float
         The standard error of the absolute reading's median e there (NaN elsewhere).
+    recognition : Recognition or None
+        What the detector found before its velocity model, for a pass that changes only
+        that (:func:`detect_impacts`' ``recognised``; not compared, not kept in caches).
     """
 
     t_s: np.ndarray
@@ -305,6 +344,7 @@ class ImpactLog:
     e_window_change: float = 0.0
     e_measurand_diff: float = 0.0
     e_measurand_alt_se: float = float("nan")
+    recognition: Recognition | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:   # (pairs come back from a cache as lists)
         object.__setattr__(self, "ring_modes",
@@ -319,7 +359,8 @@ class ImpactLog:
 def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: object = None,
                    params: ImpactParams | None = None, start_time_s: float = 0.0,
                    excitation_freq_hz: float | None = None,
-                   velocity_delay_declared: bool = False) -> ImpactLog:
+                   velocity_delay_declared: bool = False,
+                   recognised: Recognition | None = None) -> ImpactLog:
     """Find impacts in a vibrometer velocity and/or plate acceleration record.
 
     Parameters
@@ -348,6 +389,13 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         stands and the measurement only checks it (the fit flags a contradiction,
         :func:`rattle_lab.fit._chain.velocity_delay_flags`).  Either way it is in
         :attr:`ImpactLog.velocity_delay_s`.
+    recognised : Recognition, optional
+        An earlier call's :attr:`ImpactLog.recognition` on the same record: where it was
+        made with the same channels' lengths, rate, excitation frequency, declared delay and
+        parameters but for the velocity model's (``velocity_model``, ``ring_modes``,
+        ``ring_modes_runs``), steps 1-7 are taken from it and only the velocity model is
+        applied (the same log as without it, bit for bit; the caller's to ensure that it
+        was made from the same samples).  Otherwise it is ignored.
 
     Returns
     -------
@@ -368,6 +416,42 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     (1, True, True)
     """
     params = params if params is not None else ImpactParams()
+    key = _recognition_key(fs_hz, velocity_m_s, accel_ms2, params, excitation_freq_hz,
+                           velocity_delay_declared)
+    if recognised is not None and recognised.key == key:
+        # the same record and recognition parameters: only the velocity model is applied
+        # (the campaign's ringing passes, issue 29)
+        rec, v = recognised, None
+        if velocity_m_s is not None:
+            v = as_signal(velocity_m_s, "velocity_m_s")
+            if rec.lag:
+                v = shift_earlier(v, rec.lag)
+    else:
+        rec, v = _recognise(fs_hz, velocity_m_s, accel_ms2, params, excitation_freq_hz,
+                            velocity_delay_declared, key)
+    return _with_velocity_model(rec, v, fs_hz, params, start_time_s, excitation_freq_hz)
+
+
+def _recognition_key(fs_hz: float, velocity_m_s: object, accel_ms2: object,
+                     params: ImpactParams, excitation_freq_hz: float | None,
+                     velocity_delay_declared: bool) -> tuple[object, ...]:
+    """What a :class:`Recognition` depends on: the channels' presence and length, the rate,
+    the excitation frequency, the declared delay and the parameters but for the velocity
+    model's (``velocity_model``, ``ring_modes``, ``ring_modes_runs``)."""
+    def size(x: Any) -> int | None:
+        return None if x is None else int(np.size(x))
+
+    return (float(fs_hz), size(velocity_m_s), size(accel_ms2),
+            None if excitation_freq_hz is None else float(excitation_freq_hz),
+            bool(velocity_delay_declared),
+            replace(params, velocity_model="auto", ring_modes=(), ring_modes_runs=0))
+
+
+def _recognise(fs_hz: float, velocity_m_s: object, accel_ms2: object, params: ImpactParams,
+               excitation_freq_hz: float | None, velocity_delay_declared: bool,
+               key: tuple[object, ...]) -> tuple[Recognition, np.ndarray | None]:
+    """Steps 1-7 of :func:`detect_impacts` (everything but the velocity model): the
+    recognition, and the velocity shifted by the coarse lag (None without one)."""
     if velocity_m_s is None and accel_ms2 is None:
         raise ParameterError("detect_impacts needs `velocity_m_s` or `accel_ms2` (got neither)")
     n_detrend = n_samples_of(params.detrend_window_s, fs_hz, name="detrend_window_s")
@@ -590,6 +674,36 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         vin, vout = vin - offset, vout - offset
         with np.errstate(divide="ignore", invalid="ignore"):
             e = np.where(vin != 0, -vout / vin, np.nan)
+    return Recognition(
+        key=key, lag=int(lag), names=tuple(names), t_idx=np.asarray(t_idx, dtype=float),
+        onsets=np.asarray(onsets, dtype=float), strength=np.asarray(strength, dtype=float),
+        pads=np.asarray(pads, dtype=float), spans=tuple(spans), keep=keep, v_in=vin,
+        v_out=vout, e=e, offset=float(offset), d_use=float(d_use), delay=delay,
+        delay_first=float(delay_first), method_err=float(method_err),
+        step_guard_s=float(step_guard_s), e_slope=float(e_slope), e_window=float(e_window),
+        n_fit=int(n_fit), n_guard=int(n_guard), degree=int(degree), omega=omega), v
+
+
+def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
+                         params: ImpactParams, start_time_s: float,
+                         excitation_freq_hz: float | None) -> ImpactLog:
+    """The last step of :func:`detect_impacts`: the velocity model (``velocity_model``,
+    ``ring_modes``) applied to a recognition, and the log."""
+    t_idx, onsets, strength, pads, spans = rec.t_idx, rec.onsets, rec.strength, rec.pads, \
+        list(rec.spans)
+    keep, vin, vout, e, offset, d_use = rec.keep, rec.v_in, rec.v_out, rec.e, rec.offset, \
+        rec.d_use
+    delay, n_fit, n_guard, degree, omega = rec.delay, rec.n_fit, rec.n_guard, rec.degree, \
+        rec.omega
+
+    def ratio_of() -> float:
+        # the local fits' residual after the impacts over that before (once per recognition)
+        nonlocal rec
+        assert v is not None   # (called with a velocity only)
+        if rec.ratio is None:
+            rec = replace(rec, ratio=_ringing_residual_ratio(v, spans, keep, n_fit, n_guard,
+                                                             degree, omega))
+        return float(rec.ratio)   # type: ignore[arg-type]
     note, share, ratio = "", float("nan"), float("nan")
     problem: RingingProblem | None = None
     model = params.velocity_model
@@ -599,7 +713,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     if params.ring_modes and v is not None and excitation_freq_hz is not None:
         carried = True
         model = "local"
-        ratio = _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree, omega)
+        ratio = ratio_of()
         # every trigger with a jump bounds a flight and starts a tail, also one whose
         # reversal test failed (an absolute vibrometer's velocities carry the base's): a
         # missing impact would leave its jump and its ringing out of the run-wide model
@@ -623,7 +737,7 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
             note = (f"no velocities for {n_out} of {int(keep.sum())} impacts, left out (their "
                     f"local fits read the ringing modes' tails): {why}")
     elif model != "local" and v is not None and excitation_freq_hz is not None:
-        ratio = _ringing_residual_ratio(v, spans, keep, n_fit, n_guard, degree, omega)
+        ratio = ratio_of()
         if model == "auto":
             model = "flights" if ratio >= RINGING_RESIDUAL_RATIO else "local"
     if model == "flights" and v is not None:
@@ -650,15 +764,16 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                      onset_s=start_time_s + np.asarray(onsets, dtype=float)[keep] / fs_hz,
                      v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],
                      strength=np.asarray(strength, dtype=float)[keep],
-                     channels=tuple(names), params=params, fs_hz=float(fs_hz),
+                     channels=rec.names, params=params, fs_hz=float(fs_hz),
                      velocity_note=note, velocity_offset_m_s=offset, ringing_share=share,
                      ringing_ratio=ratio, ring_modes=params.ring_modes if carried else (),
                      ringing_problem=problem,
                      velocity_delay_s=delay.value / fs_hz if delay.n else float("nan"),
-                     velocity_delay_stderr_s=math.hypot(delay.stderr, method_err) / fs_hz
+                     velocity_delay_stderr_s=math.hypot(delay.stderr, rec.method_err) / fs_hz
                      if delay.n else float("nan"),
-                     velocity_delay_n=delay.n, velocity_delay_applied_s=(d_use + lag) / fs_hz,
-                     step_guard_s=step_guard_s,
-                     velocity_delay_window_s=abs(delay.value - delay_first) / fs_hz
+                     velocity_delay_n=delay.n, velocity_delay_applied_s=(d_use + rec.lag) / fs_hz,
+                     step_guard_s=rec.step_guard_s,
+                     velocity_delay_window_s=abs(delay.value - rec.delay_first) / fs_hz
                      if delay.n else float("nan"),
-                     e_per_delay_s=e_slope, e_window_change=e_window)
+                     e_per_delay_s=rec.e_slope, e_window_change=rec.e_window,
+                     recognition=rec)

@@ -26,7 +26,7 @@ from rattle_lab.records import FLAG_MEASURAND_UNDECLARED, declared_delay_s
 from ._chain import (SHOCK_QUANTITIES, _fs_of, _t0_of, infer_measurand, paired_plate_channels,
                      relative_to_striker, run_chain_flags, transient_shocks,
                      velocity_delay_flags)
-from ._impacts import ImpactLog, detect_impacts
+from ._impacts import ImpactLog, Recognition, detect_impacts
 from ._params import DetectParams
 from ._patterns import impact_pattern
 from ._segments import Span, core_mask, merge_arrays, merge_logs, segment_spans, segment_view
@@ -226,8 +226,13 @@ def analyse_run(input_key: str, run: Any, *, detect: DetectParams | Mapping[str,
     f_fit, delay_declared = plan.f_fit, plan.delay_declared
     # issue 15: each channel's time base less its declared filter delay; two channels at
     # different rates or offsets are brought onto the grid of the faster one before pairing
+    recognised = None
+    if (reuse is not None and reuse.impacts is not None
+            and (reuse.input_key, reuse.run_id) == (input_key, run.run_id)):
+        # the first pass's impacts: only the velocity model is applied again
+        recognised = reuse.impacts.recognition
     log, fs, t0, duration, flags = _impact_log(run, by_q, vel, acc, detect, f_fit,
-                                               delay_declared)
+                                               delay_declared, recognised)
     base["chain_flags"] = _with_log_flags(base["chain_flags"], log, delay_declared, flags)
     reused = reused_result(reuse, input_key, run.run_id, log, base["chain_flags"])
     if reused is not None:
@@ -278,7 +283,7 @@ def _threshold(run: Any, log: ImpactLog, freq: float, fit: Mapping[str, Any],
 
 
 def _impact_log(run: Any, by_q: Mapping[str, Any], vel: Any, acc: Any, detect: DetectParams,
-                f_fit: float | None, delay_declared: bool
+                f_fit: float | None, delay_declared: bool, recognised: Recognition | None = None
                 ) -> tuple[ImpactLog, float, float, float, tuple[str, ...] | None]:
     """The impacts of a run (or a segment's view of it): ``(log, fs, t0, duration, flags)``,
     the log relative to the striker where the vibrometer is absolute (declared or inferred),
@@ -286,7 +291,7 @@ def _impact_log(run: Any, by_q: Mapping[str, Any], vel: Any, acc: Any, detect: D
     fs, t0, v_si, a_si = paired_plate_channels(run, vel, acc)
     log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=detect.impact_params(),
                          start_time_s=t0, excitation_freq_hz=f_fit,
-                         velocity_delay_declared=delay_declared)
+                         velocity_delay_declared=delay_declared, recognised=recognised)
     flags: tuple[str, ...] | None = None
     # issue 28: the vibrometer's measurand, when the record does not say, inferred from
     # the data

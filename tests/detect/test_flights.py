@@ -487,3 +487,52 @@ def test_the_ringing_problem_reuses_the_flight_models_first_search(record):
     # without a search (too few impacts) nothing is reused
     few = flight_velocities(v, FS_HZ, F_HZ, k[:5], pad[:5], log.v_in_m_s[:5], log.v_out_m_s[:5])
     assert np.all(np.isnan(few.searched))
+
+
+def _same_log(a, b) -> bool:
+    """Two impact logs equal to the last bit (NaN equal to NaN), recognition aside."""
+    for f in dataclasses.fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if f.name in ("recognition", "ringing_problem"):
+            continue
+        if isinstance(x, np.ndarray):
+            if not (x.dtype == y.dtype and np.array_equal(x, y, equal_nan=True)):
+                return False
+        elif not (x == y or (isinstance(x, float) and x != x and y != y)):
+            return False
+    return True
+
+
+def test_a_pass_with_another_velocity_model_starts_from_the_first_recognition(
+        record, monkeypatch):
+    # issue 29: the campaign's ringing passes change only the velocity model; given the
+    # first pass's recognition, detect_impacts applies that model to it instead of finding
+    # the impacts again, and the log is the one it would compute from scratch, bit for bit
+    import rattle_lab.detect._impacts as impacts_module
+    from rattle_lab.detect import ImpactParams
+
+    v, _, _ = record
+    modes = ((1.4 * F_S_HZ, 1 / 3e-3), (2.3 * F_S_HZ, 1 / 3e-3))
+    first = detect_impacts(FS_HZ, velocity_m_s=v, excitation_freq_hz=F_HZ)
+    assert first.recognition is not None and first.n_impacts > 60
+    calls = []
+    real = impacts_module._recognise
+    monkeypatch.setattr(impacts_module, "_recognise",
+                        lambda *a, **k: calls.append(1) or real(*a, **k))
+    for again in (ImpactParams(velocity_model="flights"), ImpactParams(velocity_model="local"),
+                  ImpactParams(ring_modes=modes, ring_modes_runs=3)):
+        fresh = detect_impacts(FS_HZ, velocity_m_s=v, excitation_freq_hz=F_HZ, params=again)
+        n = len(calls)
+        started = detect_impacts(FS_HZ, velocity_m_s=v, excitation_freq_hz=F_HZ, params=again,
+                                 recognised=first.recognition)
+        assert len(calls) == n, "recognised again"
+        assert _same_log(started, fresh), again
+    assert not _same_log(fresh, first)      # the modes' pass is a real second pass
+    # made with other recognition parameters, another rate, length or frequency: ignored
+    for kwargs in ({"params": ImpactParams(on=15.0)}, {"excitation_freq_hz": 81.0},
+                   {"velocity_m_s": v[:-100]}, {"velocity_delay_declared": True}):
+        args = {"velocity_m_s": v, "excitation_freq_hz": F_HZ, **kwargs}
+        n = len(calls)
+        got = detect_impacts(FS_HZ, recognised=first.recognition, **args)
+        assert len(calls) == n + 1
+        assert _same_log(got, detect_impacts(FS_HZ, **args))

@@ -81,7 +81,8 @@ PACKAGES: dict[str, list[str]] = {
         "COMMAND_MODULES", "build_parser", "main"
     ],
     "rattle_lab.detect": [
-        "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "RingingProblem", "SoundPeaks",
+        "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "Recognition", "RingingProblem",
+        "SoundPeaks",
         "a_weight", "a_weighting_db", "campaign_ring_modes", "cross_correlation_delay",
         "detect_impacts", "impact_pattern",
         "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
