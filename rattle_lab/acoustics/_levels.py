@@ -117,6 +117,14 @@ def sound_levels(pressure_pa: object, fs_hz: float, *, bands: bool = True) -> So
     >>> round(lv.laeq_db, 2), round(lv.third_octave_db["1000"], 2)
     (93.98, 93.98)
     """
+    return levels_and_bands(pressure_pa, fs_hz, bands=bands)[0]
+
+
+def levels_and_bands(pressure_pa: object, fs_hz: float, *, bands: bool = True
+                     ) -> tuple[SoundLevels, dict[str, float]]:
+    """:func:`sound_levels` and the third-octave bands' mean squares it took its band levels
+    from (:func:`~rattle_lab.acoustics.band_mean_squares`, Pa^2; empty without ``bands``):
+    what pools the bands of several stretches, without their transforms again."""
     p = np.asarray(pressure_pa, dtype=float)
     if not (np.isfinite(fs_hz) and fs_hz > 0):
         raise ParameterError(f"`fs_hz` must be > 0, was {fs_hz}")
@@ -127,8 +135,9 @@ def sound_levels(pressure_pa: object, fs_hz: float, *, bands: bool = True) -> So
     lafmax = _db10(float(np.max(fast_time_weighted(p_a**2, fs_hz))))
     peak = float(np.max(np.abs(p_c)))
     lcpeak = float(20.0 * np.log10(peak / P_REF_PA)) if peak > 0 else float("-inf")
-    third = {k: _db10(v) for k, v in band_mean_squares(p, fs_hz).items()} if bands else {}
-    return SoundLevels(laeq, lafmax, lcpeak, third, p.size / fs_hz)
+    ms = band_mean_squares(p, fs_hz) if bands else {}
+    third = {k: _db10(v) for k, v in ms.items()}
+    return SoundLevels(laeq, lafmax, lcpeak, third, p.size / fs_hz), ms
 
 
 def rattle_episodes(impact_t_s: object, *, start_time_s: float, duration_s: float,
@@ -158,8 +167,8 @@ def rattle_episodes(impact_t_s: object, *, start_time_s: float, duration_s: floa
     return out
 
 
-__all__ = ["P_REF_PA", "SoundLevels", "TAU_FAST_S", "fast_time_weighted", "rattle_episodes",
-           "sound_levels"]
+__all__ = ["P_REF_PA", "SoundLevels", "TAU_FAST_S", "fast_time_weighted", "levels_and_bands",
+           "rattle_episodes", "sound_levels"]
 
 
 def energy_mean_db(levels_db: object) -> float:

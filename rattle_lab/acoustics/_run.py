@@ -15,7 +15,7 @@ import numpy as np
 
 from rattle_lab.exceptions import RattleLabError
 from ._episodes import episode_psychoacoustics
-from ._levels import P_REF_PA, SoundLevels, rattle_episodes, sound_levels
+from ._levels import P_REF_PA, SoundLevels, levels_and_bands, rattle_episodes, sound_levels
 from ._loudness import FieldType, Loudness, joined_loudness, loudness
 
 #: Loudness needs ISO 532-1's 0.1 s at least; shorter stretches get none.
@@ -102,13 +102,16 @@ def channel_calibration(channel: Any) -> dict[str, Any]:
             "flags": [f for f in flags.split(",") if f]}
 
 
-def _pooled_bands(pieces: list[np.ndarray], fs_hz: float) -> dict[str, float]:
+def _pooled_bands(pieces: list[np.ndarray], fs_hz: float,
+                  known: list[dict[str, float]] | None = None) -> dict[str, float]:
+    """Third-octave levels of ``pieces`` together: each band's mean square weighted by the
+    pieces' lengths (``known``: the pieces' band mean squares, already computed)."""
     from ._filters import band_mean_squares
 
     total: dict[str, float] = {}
     dur: dict[str, float] = {}
-    for x in pieces:
-        for k, ms in band_mean_squares(x, fs_hz).items():
+    for i, x in enumerate(pieces):
+        for k, ms in (known[i] if known is not None else band_mean_squares(x, fs_hz)).items():
             total[k] = total.get(k, 0.0) + ms * x.size
             dur[k] = dur.get(k, 0.0) + x.size
     return {k: float(10 * np.log10(total[k] / dur[k] / P_REF_PA**2)) if total[k] > 0
@@ -160,6 +163,7 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
     kept = []
     inside = np.zeros(p.size, dtype=bool)
     rattle_pieces = []
+    rattle_ms: list[dict[str, float]] = []   # their band mean squares (pooled below)
     for a, b in eps:
         i0 = max(0, round((a - start_time_s) * fs_hz))
         i1 = min(p.size, round((b - start_time_s) * fs_hz))
@@ -168,8 +172,9 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
         inside[i0:i1] = True
         rattle_pieces.append(p[i0:i1])
         kept.append((a, b))
-        episodes.append({"t_start_s": a, "t_end_s": b,
-                         **sound_levels(p[i0:i1], fs_hz).to_dict()})
+        lv_episode, ms = levels_and_bands(p[i0:i1], fs_hz)
+        rattle_ms.append(ms)
+        episodes.append({"t_start_s": a, "t_end_s": b, **lv_episode.to_dict()})
     edges = np.flatnonzero(np.diff(np.concatenate([[1], inside.astype(int), [1]])))
     spans = [(int(edges[i]), int(edges[i + 1])) for i in range(0, edges.size - 1, 2)
              if edges[i + 1] - edges[i] >= 2]
@@ -184,7 +189,7 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
         ecma418_s=ecma418_s)
     episodes = [{**e, **x} for e, x in zip(episodes, per_episode)]
     run["background_stretches"] = per_background
-    return RunAcoustics(lv, ld, tuple(episodes), _pooled_bands(rattle_pieces, fs_hz),
+    return RunAcoustics(lv, ld, tuple(episodes), _pooled_bands(rattle_pieces, fs_hz, rattle_ms),
                         _pooled_bands(background, fs_hz), calib, run)
 
 
