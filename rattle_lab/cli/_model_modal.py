@@ -39,7 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--freq", type=float, default=99.8, metavar="FREQ_HZ",
                    help="forcing frequency [Hz] (default 99.8: omega = 0.95)")
     p.add_argument("--zeta", type=float, default=0.05, help="modal damping ratio of every mode (default 0.05)")
-    p.add_argument("--modes", type=int, default=16, help="number of modes N (default 16)")
+    p.add_argument("--modes", type=int, default=64,
+                   help="number of modes N (default 64: with the omitted modes' element the thesis "
+                        "plate's contact episodes change by about 2 %% or less from 64 to 128 modes)")
     p.add_argument("--all-modes", action="store_true",
                    help="keep modes that neither the pressure nor a centred striker excite (default: skip them)")
     p.add_argument("--no-omitted-modes", dest="omitted_modes", action="store_false",
