@@ -219,7 +219,7 @@ class Recognition:
     onsets: np.ndarray
     strength: np.ndarray
     pads: np.ndarray                  # the flight model's pads (with a velocity)
-    spans: tuple[tuple[int, int, int, int], ...]
+    spans: np.ndarray                 # per trigger (j_lo, j_hi, lo_lim, hi_lim), int64 (n, 4)
     keep: np.ndarray                  # which triggers are impacts
     v_in: np.ndarray                  # local fits, offset taken off
     v_out: np.ndarray
@@ -677,7 +677,8 @@ def _recognise(fs_hz: float, velocity_m_s: object, accel_ms2: object, params: Im
     return Recognition(
         key=key, lag=int(lag), names=tuple(names), t_idx=np.asarray(t_idx, dtype=float),
         onsets=np.asarray(onsets, dtype=float), strength=np.asarray(strength, dtype=float),
-        pads=np.asarray(pads, dtype=float), spans=tuple(spans), keep=keep, v_in=vin,
+        pads=np.asarray(pads, dtype=float),
+        spans=np.asarray(spans, dtype=np.int64).reshape(-1, 4), keep=keep, v_in=vin,
         v_out=vout, e=e, offset=float(offset), d_use=float(d_use), delay=delay,
         delay_first=float(delay_first), method_err=float(method_err),
         step_guard_s=float(step_guard_s), e_slope=float(e_slope), e_window=float(e_window),
@@ -689,8 +690,8 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
                          excitation_freq_hz: float | None) -> ImpactLog:
     """The last step of :func:`detect_impacts`: the velocity model (``velocity_model``,
     ``ring_modes``) applied to a recognition, and the log."""
-    t_idx, onsets, strength, pads, spans = rec.t_idx, rec.onsets, rec.strength, rec.pads, \
-        list(rec.spans)
+    t_idx, onsets, strength, pads = rec.t_idx, rec.onsets, rec.strength, rec.pads
+    spans = [(a, b, c, d) for a, b, c, d in rec.spans.tolist()]
     keep, vin, vout, e, offset, d_use = rec.keep, rec.v_in, rec.v_out, rec.e, rec.offset, \
         rec.d_use
     delay, n_fit, n_guard, degree, omega = rec.delay, rec.n_fit, rec.n_guard, rec.degree, \
