@@ -201,6 +201,21 @@ def test_bad_input_is_rejected():
         plate_system(THESIS, n_modes=1, striker_xy_m=(0.1, 0.0))  # on the clamped edge y = 0
 
 
+def test_bad_scalars_are_refused_before_the_plate_solve(monkeypatch):
+    # the CLI's 64 modes take a Ritz solve of seconds: a bad gap, pressure or frequency is
+    # refused first, with ModalSystem's own message
+    import rattle_lab.model.plate as plate_module
+
+    def no_solve(*args, **kwargs):
+        raise AssertionError("the Ritz solve ran")
+
+    monkeypatch.setattr(plate_module, "ritz_modes", no_solve)
+    for kwargs, name in (({"gap_m": -1e-3}, "gap_m"), ({"gap_m": math.nan}, "gap_m"),
+                         ({"pressure_pa": -1.0}, "pressure_pa"), ({"freq_hz": 0.0}, "freq_hz")):
+        with pytest.raises(ParameterError, match=f"`{name}` must be finite and"):
+            plate_system(THESIS, n_modes=64, **kwargs)
+
+
 def test_one_mode_chatter_and_sticking_agree_with_the_sdf_simulator():
     # Below resonance with a small gap (F ~ 3) the impacts chatter, accumulate and stick.
     # Releases are where F cos(theta) = 1: agreement to 1e-12.  The accumulation point

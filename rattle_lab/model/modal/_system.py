@@ -375,6 +375,11 @@ def plate_system(plate: Plate = THESIS_PLATE, *, n_modes: int = 8, gap_m: float 
     if not (0.0 <= xs <= plate.a_m and 0.0 <= ys <= plate.b_m):
         raise ParameterError(f"`striker_xy_m` must lie on the plate [0, {plate.a_m}] x [0, {plate.b_m}], "
                              f"was ({xs}, {ys})")
+    # the scalars first (ModalSystem checks them again): a bad one is refused before the
+    # Ritz solve, which takes seconds for the CLI's 64 modes
+    _pos("gap_m", gap_m)
+    _pos("pressure_pa", pressure_pa, True)
+    _pos("freq_hz", freq_hz)
     n_solve = 4 * n + 4 if skip_unexcited else (n + 4 if omitted_modes else n)
     terms = n_terms if n_terms is not None else min(max(MODAL_N_TERMS, int(math.ceil(2.0 * math.sqrt(n_solve))) + 4),
                                                     MODAL_N_TERMS_MAX)
