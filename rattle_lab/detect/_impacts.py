@@ -22,7 +22,11 @@
    this at the impact time is judged again by the velocity fits at its contact pulse's
    ends (first touch and separation), provided its pulse has the kept impacts' sign: a
    contact lasting ``T`` adds the free flight's ``a T`` to the jump, so a slow impact of
-   a long contact shows no reversal at its centroid (:func:`_reversed_at_ends`).
+   a long contact shows no reversal at its centroid (:func:`_reversed_at_ends`).  Last, one
+   that the fits reject either way is judged by the velocity samples just outside its contact
+   pulse, the side and polarity taken from the triggers whose samples reverse: on a plate
+   ringing in many lightly damped modes the fits read the ringing
+   (:func:`_reversed_by_samples`; such impacts keep no velocities).
 5. Incoming and rebound velocities: fits to the velocity over a window before and
    after the jump, clear of it by its half-height width plus a guard (a finite contact
    and a band-limited vibrometer spread a jump over several samples), each evaluated at
@@ -47,7 +51,7 @@ from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, n_samples_of
 from ._flights import RingingProblem, flight_velocities, ringing_problem
 from ._local_fits import _fit_rows, _fit_windows, _fits_at, _jump_fits_all, _JumpFits
-from ._offset import _reversed_at_ends, _reverses, velocity_offset
+from ._offset import _reversed_at_ends, _reversed_by_samples, _reverses, velocity_offset
 from ._ringing import MIN_SHARE_IMPACTS, RINGING_RESIDUAL_RATIO, _ringing_residual_ratio
 from ._trigger import _centroid, _half_region, characteristic, trigger_onsets
 from ._timing import (MAX_COARSE_LAG_S, MAX_EXTRA_GUARD_S, DelayEstimate, channel_delay,
@@ -664,6 +668,16 @@ def _recognise(fs_hz: float, velocity_m_s: object, accel_ms2: object, params: Im
         sign_a = np.array([jf.a_sign for jf in jfits])
         keep = keep | _reversed_at_ends(vin, vout, keep, vin_e, vout_e, sign_a,
                                         params.min_reversal)
+        # issue 24: on a plate ringing in many lightly damped modes the fits read the ringing;
+        # the velocity samples just outside the contact pulse show the impact.  Those impacts
+        # keep no velocities (their fits read the ringing, not the approach and rebound)
+        by_samples = _reversed_by_samples(
+            v, keep, np.array([jf.a_lo for jf in jfits]) + d_use,
+            np.array([jf.a_hi for jf in jfits]) + d_use, sign_a, params.min_reversal)
+        if by_samples.any():
+            vin = np.where(by_samples, np.nan, vin)
+            vout = np.where(by_samples, np.nan, vout)
+            keep = keep | by_samples
     with np.errstate(divide="ignore", invalid="ignore"):
         e = np.where(vin != 0, -vout / vin, np.nan)
     offset = 0.0

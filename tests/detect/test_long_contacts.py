@@ -103,3 +103,45 @@ def test_slow_impacts_of_a_long_contact_are_found(vel_sign, accel_sign):
     near = (log.t_s[:, None] > lo[None, :]) & (log.t_s[:, None] < hi[None, :])
     assert np.all(near.sum(axis=0) == 1), (touch[near.sum(axis=0) != 1], v_in[near.sum(axis=0) != 1])
     assert np.all(near.sum(axis=1) == 1), log.t_s[near.sum(axis=1) != 1]
+
+
+def test_the_velocity_samples_outside_a_contact_pulse_judge_what_the_fits_reject():
+    """Issue 24: the rule of ``_reversed_by_samples``, on samples written out here.
+
+    Five triggers at samples 100, 200, ..., each with a contact pulse of two samples.  The
+    approach (the sample before first touch) and rebound (after separation) are set by hand:
+    three impacts approach at +0.5 m/s and stop (e = 0: a many-mode plate's contact point),
+    one is a ringing swing (+0.5 -> +0.4, no reversal), one approaches from the other side.
+    The fits are not used: the side and the pulse polarity come from the reversing samples.
+    """
+    from rattle_lab.detect._offset import _reversed_by_samples
+
+    v = np.zeros(700)
+    starts = np.array([100, 200, 300, 400, 500])
+    before = np.array([0.5, 0.5, 0.5, 0.5, -0.5])
+    after = np.array([0.0, -0.05, 0.02, 0.4, 0.0])
+    for k, vb, va in zip(starts, before, after):
+        v[k - 1], v[k + 2] = vb, va            # pulse on samples k and k + 1
+    a_lo, a_hi = starts.astype(float), starts + 1.0
+    sign_a = np.array([-1.0, -1.0, -1.0, -1.0, 1.0])   # deceleration against the approach
+    none = np.zeros(5, dtype=bool)
+    got = _reversed_by_samples(v, none, a_lo, a_hi, sign_a, 0.5)
+    np.testing.assert_array_equal(got, [True, True, True, False, False])
+    # kept triggers are not returned; the side is the majority's even so
+    kept = np.array([True, False, False, False, False])
+    np.testing.assert_array_equal(_reversed_by_samples(v, kept, a_lo, a_hi, sign_a, 0.5),
+                                  [False, True, True, False, False])
+    # a pulse of the other polarity for the same approach is not an impact of this run
+    flipped = sign_a.copy()
+    flipped[1] = 1.0
+    assert not _reversed_by_samples(v, none, a_lo, a_hi, flipped, 0.5)[1]
+    # no pulse, a pulse at the record's edge, min_reversal 0: nothing added
+    assert not _reversed_by_samples(v, none, a_lo, a_hi, np.zeros(5), 0.5).any()
+    edge = a_lo.copy()
+    edge[0] = 0.0
+    assert not _reversed_by_samples(v, none, edge, a_hi, sign_a, 0.5)[0]
+    assert not _reversed_by_samples(v, none, a_lo, a_hi, sign_a, 0.0).any()
+    # the samples are read just outside the pulse, whatever its sub-sample ends
+    np.testing.assert_array_equal(
+        _reversed_by_samples(v, none, a_lo + 0.3, a_hi - 0.2, sign_a, 0.5),
+        [True, True, True, False, False])
