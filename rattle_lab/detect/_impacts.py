@@ -663,17 +663,18 @@ def _recognise(fs_hz: float, velocity_m_s: object, accel_ms2: object, params: Im
         # it lasts; read at the centroid, a slow one's fits then show no reversal.  Those are
         # judged again by the fits at the contact pulse's ends, first touch and separation.
         # Their velocities stay the centroid's (the rigid impact's that the SDF model has)
-        vin_e = _fits_at(rows, np.array([jf.a_lo for jf in jfits]) + d_use)[:, 0]
-        vout_e = _fits_at(rows, np.array([jf.a_hi for jf in jfits]) + d_use)[:, 1]
+        pulse_lo = np.array([jf.a_lo for jf in jfits]) + d_use   # in the velocity's samples
+        pulse_hi = np.array([jf.a_hi for jf in jfits]) + d_use
+        vin_e = _fits_at(rows, pulse_lo)[:, 0]
+        vout_e = _fits_at(rows, pulse_hi)[:, 1]
         sign_a = np.array([jf.a_sign for jf in jfits])
         keep = keep | _reversed_at_ends(vin, vout, keep, vin_e, vout_e, sign_a,
                                         params.min_reversal)
         # issue 24: on a plate ringing in many lightly damped modes the fits read the ringing;
         # the velocity samples just outside the contact pulse show the impact.  Those impacts
         # keep no velocities (their fits read the ringing, not the approach and rebound)
-        by_samples = _reversed_by_samples(
-            v, keep, np.array([jf.a_lo for jf in jfits]) + d_use,
-            np.array([jf.a_hi for jf in jfits]) + d_use, sign_a, params.min_reversal)
+        by_samples = _reversed_by_samples(v, keep, pulse_lo, pulse_hi, sign_a,
+                                          params.min_reversal)
         if by_samples.any():
             vin = np.where(by_samples, np.nan, vin)
             vout = np.where(by_samples, np.nan, vout)
