@@ -29,7 +29,7 @@ CYCLES = 30
 
 
 #: One Ritz basis for every N (the largest the solver handles), so that only N changes.
-N_TERMS = 32
+N_TERMS = 48
 
 
 def run(freq_hz: float, n: int, corrected: bool) -> dict:

@@ -341,6 +341,25 @@ class TestRitz:
         coefs = np.abs(modes.coefficients[1])
         assert coefs[0, 1] > 0.99 * coefs.max() and coefs[1, 0] < 1e-8 * coefs.max()
 
+
+    @pytest.mark.parametrize("n_terms", [28, 36, 48])
+    def test_large_bases_keep_each_shape_with_its_eigenvalue(self, n_terms):
+        # Issue 24: a tie-break between "equal" eigenvalues judged equal relative to the
+        # basis' largest eigenvalue (1e11-1e12 from 28 terms) swapped the shapes of modes of
+        # different symmetry 1e3 apart in lambda**2: at 36 terms the thesis plate's mode 3
+        # (an excited (3, 1) mode, lambda 48.3) carried the shape of mode 5 (antisymmetric,
+        # no net force).  Each shape must stay with its eigenvalue whatever the basis: the
+        # pattern of modes with zero net force (Q1) and the Q1 of the others agree with a
+        # 20-term basis (lambda agree to 2e-4; Q1, an integral over the plate, to 2e-3 or to
+        # 1e-4 of the largest Q1 where it is small: the basis' error in a shape is relative
+        # to the whole shape, not to its small net force).
+        ref = ritz_modes(0.9, "CFCF", nu=NU_THESIS, n_modes=40, n_terms=20)
+        big = ritz_modes(0.9, "CFCF", nu=NU_THESIS, n_modes=40, n_terms=n_terms)
+        np.testing.assert_allclose(big.lam, ref.lam, rtol=2e-4)
+        excited = np.abs(ref.Q1) > 1e-9
+        assert (np.abs(big.Q1) > 1e-9).tolist() == excited.tolist()
+        np.testing.assert_allclose(big.Q1[excited], ref.Q1[excited], rtol=2e-3,
+                                   atol=1e-4 * np.abs(ref.Q1).max())
     def test_shapes_normalised(self):
         modes = _ritz(0.9, "CFCF", NU_THESIS)
         w_ref = modes.evaluate(modes.ref_xi[:, None], modes.ref_eta[:, None])

@@ -67,12 +67,14 @@ THESIS_HERTZ_N_M15 = 4.0 / 3.0 / ((1 - 0.3**2) / 2.1e11 + (1 - 0.34**2) / 7e10) 
 #: ~100 modes of the thesis plate; lambda_1 of CFCF (free edges converge slowly, from
 #: above) moves by 3e-4 relative from 24 to 28 terms.
 MODAL_N_TERMS = 24
-#: At most this many beam functions per side: from 34 terms the CFCF solve mixes up
-#: modes (measured: modes 8 to 12 of the thesis plate change which of them are seen at
-#: the centre, and a 40-term basis moves mode 2 of the excited set from 186 Hz to 312 Hz;
-#: 20 to 32 terms agree to 1e-4 in lambda), so more modes than this basis resolves are
-#: refused rather than computed wrong.
-MODAL_N_TERMS_MAX = 32
+#: At most this many terms per side.  (Until 29 Nov 2026 this was 32: from 28 terms the
+#: solve's tie-breaking between (numerically) equal eigenvalues took modes of different
+#: symmetry 1e3 apart in lambda**2 for equal and swapped their shapes, which looked like a
+#: basis that "mixes up modes" from 34 terms; fixed in :func:`~rattle_lab.model.plate._ritz.
+#: _rotate_degenerate`.  With the fix, 32, 36, 40 and 48 terms give the same first 20
+#: excited modes.)  48 terms hold 576 functions of each symmetry, enough for N = 256
+#: excited modes; the solve takes about 12 s.
+MODAL_N_TERMS_MAX = 48
 
 
 def _pos(name: str, v: float, allow_zero: bool = False) -> float:

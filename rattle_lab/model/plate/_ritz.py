@@ -67,7 +67,9 @@ MAX_N_TERMS = 40
 #: such centres vanish to rounding (~1e-14); 1e-6 leaves room for that.
 NODE_RTOL = 1e-6
 
-#: Relative gap of lambda**2 below which eigenvalues count as degenerate.
+#: Relative gap of lambda**2 below which eigenvalues count as degenerate (relative to the
+#: pair's own lambda**2; the eigensolver's rounding, relative to the largest eigenvalue of
+#: the basis, is added: :func:`_rotate_degenerate`).
 DEGENERATE_RTOL = 1e-8
 
 _GRID_SEARCH = 101
@@ -163,12 +165,17 @@ def _rotate_degenerate(vals: np.ndarray, vecs: np.ndarray, weight: np.ndarray) -
     combinations, ordered by their dominant term, e.g. (1, 2) before (2, 1).
     """
     vecs = vecs.copy()
-    scale = max(float(np.max(np.abs(vals))), 1.0)
+    # the eigensolver's rounding is relative to the largest eigenvalue of the basis (it
+    # grows like the basis size to the 8th power); a gap relative to that largest one, as
+    # this once was, made modes of a 36-term basis 1e3 apart in lambda**2 one "cluster" and
+    # rotated them into each other (mode 3 of the CFCF thesis plate lost its excitation)
+    noise = 1e3 * np.finfo(float).eps * max(float(np.max(np.abs(vals))), 1.0)
     start = 0
     n = vals.size
     while start < n:
         stop = start + 1
-        while stop < n and vals[stop] - vals[stop - 1] <= DEGENERATE_RTOL * scale:
+        while stop < n and vals[stop] - vals[stop - 1] <= (
+                DEGENERATE_RTOL * max(abs(float(vals[stop])), 1.0) + noise):
             stop += 1
         if stop - start > 1:
             block = vecs[:, start:stop]
