@@ -97,7 +97,7 @@ def main() -> None:
     print("|---|" + "---|" * len(ns))
     for key, name in ROWS:
         print(f"| {name} | " + " | ".join(f"{o[key]:.4g}" for o in out) + " |")
-    print(f"| run [s] | " + " | ".join(f"{o['s']:.1f}" for o in out) + " |")
+    print("| run [s] | " + " | ".join(f"{o['s']:.1f}" for o in out) + " |")
     print("\nN -> 2N, relative change:")
     for lo, hi in zip(out, out[1:]):
         if hi["n"] == 2 * lo["n"]:

@@ -9,8 +9,9 @@ columns ``r`` (the ringing).  :func:`free_sums` forms the per-flight sums of the
 response's normal equations, :func:`residual_ss` the residual's sum of squares
 (:func:`solve_flights` both and the elimination between them in one call),
 :func:`sparse_cross` the products of the two parts, :func:`added_sums` what new dense
-columns add to a model whose other parts are fixed, and :func:`tail_columns` the ringing
-carried on over later flights.  numba compiles them on first use and caches them on disk.
+columns (given, or the ringing carried on over later flights, generated as it goes) add to
+a model whose other parts are fixed, and :func:`tail_columns` that ringing's columns.
+numba compiles them on first use and caches them on disk.
 (No function here calls a compiled function of another module: numba's cache does not notice
 when a callee in another file changes, and a stale copy of it fails at run time.)
 """
@@ -193,34 +194,195 @@ def solve_flights(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values
     return rss, beta, gamma
 
 
-@numba.njit(cache=True, nogil=True)
-def added_sums(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
-               p: int, r: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int
+#: Most samples in one block of :func:`added_sums` (a flight, or part of a long one).
+BLOCK = 512
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def added_sums(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int, bounds: np.ndarray,
+               xptr: np.ndarray, xcols: np.ndarray, xoff: np.ndarray, xvals: np.ndarray,
+               n_x: int, r: np.ndarray, last: np.ndarray, dt: np.ndarray, next_: np.ndarray,
+               dt_step: float, d: np.ndarray, gaps: np.ndarray, f_hz: np.ndarray, s: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
-    """What dense columns ``r`` add to a model whose other parts are fixed, in one pass:
-    ``(R'R, R'X, R'y, Z_s'R_s)`` (``X`` stored by rows, ``p`` columns; ``z`` the free
-    response of :func:`free_response`, per flight ``s``)."""
-    n, m = r.shape
+    """What new dense columns ``R`` add to a model whose other parts are fixed, in one pass
+    over the samples: ``(R'R, R'X, R'y, Z_s'R_s)``.
+
+    ``R`` is the columns ``r`` given followed by two columns (real, imaginary) per ringing
+    mode ``(f_hz[j], s[j])``, :func:`tail_columns`'s, generated here and never stored whole:
+    the same recursion over the impacts and the same rows evaluated exactly (where a sample
+    is not its predecessor's next after the same impact, and every :data:`REANCHOR`
+    rotations); a row ``k`` rotations after one is that row's value times ``step^k``, from
+    a table of the powers formed by the same repeated products (rows independent of each
+    other, at the same rounding error).  The samples go in blocks within one flight
+    (:data:`BLOCK`).  ``X`` (the model's run-wide columns) comes block by block, only its
+    columns that are nonzero in the block, each as a contiguous row of the block's values;
+    a block's new columns are formed into rows alike, and every sum is a dot product of two
+    rows, two new columns at a time (compiled with reassociation: vectorised, each sum
+    rounded in another order than sample after sample, ~1e-16 relative).
+
+    Parameters
+    ----------
+    y : ndarray
+        The samples (``n``).
+    z : ndarray
+        The fundamental's free response (:func:`free_response`), per sample.
+    seg : ndarray
+        Each sample's flight (a block lies in one).
+    n_seg : int
+        The number of flights.
+    bounds : ndarray
+        Block ``b`` is samples ``bounds[b]`` to ``bounds[b + 1] - 1``.
+    xptr, xcols, xoff, xvals : ndarray
+        ``X`` by blocks: block ``b``'s nonzero columns are ``xcols[xptr[b]:xptr[b + 1]]``,
+        the ``t``-th of them its values ``xvals[xoff[b] + t L_b + u]``, ``u < L_b`` (the
+        block's length).
+    n_x : int
+        The number of columns of ``X``.
+    r : ndarray
+        The new columns given (``n x m_r``, may be ``n x 0``).
+    last, dt, next_, dt_step, d, gaps : ndarray, ndarray, ndarray, float, ndarray, ndarray
+        Where the samples lie after the impacts, and the impacts' amplitudes, as
+        :func:`tail_columns` takes them (unused without modes).
+    f_hz, s : ndarray
+        The ringing modes' frequencies and decay rates (may be empty).
+
+    Returns
+    -------
+    rr : ndarray
+        ``R'R`` (``m x m``, ``m = m_r + 2 n_modes``).
+    rx : ndarray
+        ``R'X`` (``m x n_x``).
+    ry : ndarray
+        ``R'y`` (``m``).
+    zr : ndarray
+        Per flight ``Z_s'R_s`` (``n_seg x 2 x m``).
+    """
+    m_r = r.shape[1]
+    n_modes = f_hz.size
+    m = m_r + 2 * n_modes
+    # each mode's C_k = C_{k-1} exp(p gap_k) + d_k over the impacts (as tail_columns)
+    c = np.empty((n_modes, d.size), dtype=np.complex128)
+    poles = np.empty(n_modes, dtype=np.complex128)
+    steps = np.empty(n_modes, dtype=np.complex128)
+    for j in range(n_modes):
+        pole = complex(-s[j], 2.0 * math.pi * f_hz[j])
+        poles[j] = pole
+        steps[j] = np.exp(pole * dt_step)
+        acc = 0j
+        for k in range(d.size):
+            if k:
+                acc = acc * np.exp(pole * gaps[k - 1]) + d[k]
+            else:
+                acc = complex(d[0], 0.0)
+            c[j, k] = acc
+    e = np.zeros(n_modes, dtype=np.complex128)
+    pw = np.empty((n_modes, REANCHOR + 1), dtype=np.complex128)
+    for j in range(n_modes):
+        pw[j, 0] = 1.0
+        for k in range(1, REANCHOR + 1):
+            pw[j, k] = pw[j, k - 1] * steps[j]
     rr = np.zeros((m, m))
-    rx = np.zeros((m, p))
+    rx = np.zeros((m, n_x))
     ry = np.zeros(m)
     zr = np.zeros((n_seg, 2, m))
-    for i in range(n):
-        s = seg[i]
-        z0 = z[i].real
-        z1 = z[i].imag
-        for a in range(m):
-            ra = r[i, a]
-            ry[a] += ra * y[i]
-            zr[s, 0, a] += z0 * ra
-            zr[s, 1, a] += z1 * ra
-            for b in range(a, m):
-                rr[a, b] += ra * r[i, b]
-            for k in range(indptr[i], indptr[i + 1]):
-                rx[a, indices[k]] += ra * values[k]
+    longest = 0
+    for b in range(bounds.size - 1):
+        longest = max(longest, bounds[b + 1] - bounds[b])
+    buf = np.empty((m, longest))       # the block's new columns, one a row
+    z0 = np.empty(longest)
+    z1 = np.empty(longest)
+    k_run = np.empty(longest, dtype=np.int64)
+    run = REANCHOR
+    for b in range(bounds.size - 1):
+        lo, hi = bounds[b], bounds[b + 1]
+        size = hi - lo
+        for u in range(size):
+            i = lo + u
+            z0[u] = z[i].real
+            z1[u] = z[i].imag
+            for a in range(m_r):
+                buf[a, u] = r[i, a]
+        if n_modes:
+            # the rotations' count since the last exact evaluation (-1: before any impact)
+            for u in range(size):
+                i = lo + u
+                li = last[i]
+                if li < 0:
+                    run = REANCHOR
+                    k_run[u] = -1
+                elif next_[i] and li == last[i - 1] and run < REANCHOR:
+                    run += 1
+                    k_run[u] = run
+                else:
+                    run = 0
+                    k_run[u] = 0
+            for j in range(n_modes):
+                ea = e[j]
+                for u in range(size):
+                    k = k_run[u]
+                    if k < 0:
+                        buf[m_r + 2 * j, u] = 0.0
+                        buf[m_r + 2 * j + 1, u] = 0.0
+                        continue
+                    i = lo + u
+                    if k == 0:
+                        ea = np.exp(poles[j] * dt[i])
+                    t = c[j, last[i]] * (ea * pw[j, k])
+                    buf[m_r + 2 * j, u] = t.real
+                    buf[m_r + 2 * j + 1, u] = t.imag
+                e[j] = ea
+        sg = seg[lo]
+        yb = y[lo:hi]
+        a = 0
+        while a < m:
+            ba = buf[a, :size]
+            two = a + 1 < m
+            bb = buf[a + 1 if two else a, :size]
+            sy = 0.0
+            s0 = 0.0
+            s1 = 0.0
+            ty = 0.0
+            t0 = 0.0
+            t1 = 0.0
+            for u in range(size):
+                sy += ba[u] * yb[u]
+                s0 += ba[u] * z0[u]
+                s1 += ba[u] * z1[u]
+                ty += bb[u] * yb[u]
+                t0 += bb[u] * z0[u]
+                t1 += bb[u] * z1[u]
+            ry[a] += sy
+            zr[sg, 0, a] += s0
+            zr[sg, 1, a] += s1
+            if two:
+                ry[a + 1] += ty
+                zr[sg, 0, a + 1] += t0
+                zr[sg, 1, a + 1] += t1
+            for a2 in range(a, m):
+                bc = buf[a2, :size]
+                acc1 = 0.0
+                acc2 = 0.0
+                for u in range(size):
+                    acc1 += ba[u] * bc[u]
+                    acc2 += bb[u] * bc[u]
+                rr[a, a2] += acc1
+                if two and a2 > a:
+                    rr[a + 1, a2] += acc2
+            for t in range(xptr[b], xptr[b + 1]):
+                start = xoff[b] + (t - xptr[b]) * size
+                xt = xvals[start:start + size]
+                acc1 = 0.0
+                acc2 = 0.0
+                for u in range(size):
+                    acc1 += ba[u] * xt[u]
+                    acc2 += bb[u] * xt[u]
+                rx[a, xcols[t]] += acc1
+                if two:
+                    rx[a + 1, xcols[t]] += acc2
+            a += 2
     for a in range(m):
-        for b in range(a):
-            rr[a, b] = rr[b, a]
+        for a2 in range(a):
+            rr[a, a2] = rr[a2, a]
     return rr, rx, ry, zr
 
 

@@ -274,6 +274,7 @@ class _Tails:
     t_imp: np.ndarray     # impact times, s
     next_: np.ndarray     # each sample is its predecessor's next one (dt larger by dt_step)
     dt_step: float        # the sampling interval, s (NaN: samples not on a grid)
+    gaps: np.ndarray      # between consecutive impacts, s
 
 
 def _tails(t_s: np.ndarray, t_imp_s: np.ndarray, fs_hz: float | None = None) -> _Tails:
@@ -286,8 +287,9 @@ def _tails(t_s: np.ndarray, t_imp_s: np.ndarray, fs_hz: float | None = None) -> 
     if fs_hz is not None and t_s.size > 1:
         steps = np.diff(t_s) * fs_hz
         next_[1:] = np.abs(steps - 1.0) < 1e-6
-    return _Tails(np.ascontiguousarray(last, np.int64), dt, np.asarray(t_imp_s, float), next_,
-                  float("nan") if fs_hz is None else 1.0 / fs_hz)
+    t_imp_s = np.asarray(t_imp_s, float)
+    return _Tails(np.ascontiguousarray(last, np.int64), dt, t_imp_s, next_,
+                  float("nan") if fs_hz is None else 1.0 / fs_hz, np.diff(t_imp_s))
 
 
 def _tail_columns(tails: _Tails, dv: np.ndarray, modes: list[tuple[float, float]]
@@ -302,11 +304,10 @@ def _tail_columns(tails: _Tails, dv: np.ndarray, modes: list[tuple[float, float]
 
     cols = np.zeros((tails.last.size, 2 * len(modes)))
     d = np.ascontiguousarray(np.nan_to_num(dv), float)
-    gaps = np.diff(tails.t_imp)
-    last = tails.last
     for j, (f_hz, s) in enumerate(modes):
-        cols[:, 2 * j:2 * j + 2] = tail_columns(last, tails.dt, tails.next_, tails.dt_step, d,
-                                                gaps, float(f_hz), float(s))
+        cols[:, 2 * j:2 * j + 2] = tail_columns(tails.last, tails.dt, tails.next_,
+                                                tails.dt_step, d, tails.gaps, float(f_hz),
+                                                float(s))
     return cols
 
 
@@ -399,11 +400,12 @@ class _Fixed:
     ``A beta = b``; adding ``R`` lowers the residual by ``c' S^-1 c``, where
     ``c = b_R - A_RX beta`` and ``S = A_RR - A_RX A^-1 A_XR`` (the Schur complement, the
     standard update of least squares by added regressors).  Only the sums that involve
-    ``R`` are formed, in one compiled pass (:func:`added_sums`), and the flights' free
-    responses are eliminated from them in another (:func:`eliminate_free`): the searches for
-    ringing modes evaluate thousands of ``R`` at one ``(f_s, sigma)``.  (Its set-up repeats
-    :meth:`_Model.solve`'s elimination once, to keep the per-flight factors.)  The result equals the
-    direct solution up to rounding, relative to the residual without ``R``.
+    ``R`` are formed, in one compiled pass (:func:`added_sums`, which also generates carried
+    ringing columns itself: :meth:`carried_rss`), and the flights' free responses are
+    eliminated from them in another (:func:`eliminate_free`): the searches for ringing modes
+    evaluate thousands of ``R`` at one ``(f_s, sigma)``.  (Its set-up repeats
+    :meth:`_Model.solve`'s elimination once, to keep the per-flight factors.)  The result
+    equals the direct solution up to rounding, relative to the residual without ``R``.
     """
 
     def __init__(self, model: _Model, f_hz: float, sigma: float):
@@ -424,29 +426,92 @@ class _Fixed:
         self.rss0, self.beta, _ = model.solve(f_hz, sigma)
         self.z = free_response(model.tau, model.next_, float(f_hz), float(sigma),
                                1.0 / model.fs)
+        self._x = _blocks(model.seg, model.indptr, model.indices, model.values, model.p,
+                          model.r)
+        self._none = np.zeros((model.y.size, 0))
+        self._no_tails = _tails(np.zeros(0), np.zeros(0))
 
     def rss(self, r: np.ndarray) -> float:
         """The residual sum of squares with the columns ``r`` added."""
-        from ._flight_kernels import eliminate_free
-
         if r.shape[1] == 0:
             return self.rss0
-        a_rr, a_rx, b_r = eliminate_free(*self._sums(np.ascontiguousarray(r, float)), self.h,
-                                         self.gx, self.gy)
+        return self._rss(np.ascontiguousarray(r, float), self._no_tails, np.zeros(0), [])
+
+    def carried_rss(self, tails: _Tails, d: np.ndarray, modes: list[tuple[float, float]]
+                    ) -> float:
+        """``rss(_tail_columns(tails, d, modes))`` without forming the columns (``d``: the
+        impacts' velocity changes, finite, float, contiguous)."""
+        if not modes:
+            return self.rss0
+        return self._rss(self._none, tails, d, modes)
+
+    def _rss(self, r: np.ndarray, tails: _Tails, d: np.ndarray,
+             modes: list[tuple[float, float]]) -> float:
+        from ._flight_kernels import added_sums, eliminate_free
+
+        m, x = self.m, self._x
+        sums = added_sums(m.y, self.z, m.seg, m.n_seg, x.bounds, x.ptr, x.cols, x.off, x.vals,
+                          x.n_cols, r, tails.last, tails.dt, tails.next_, tails.dt_step, d,
+                          tails.gaps, np.array([f for f, _ in modes], float),
+                          np.array([s for _, s in modes], float))
+        a_rr, a_rx, b_r = eliminate_free(*sums, self.h, self.gx, self.gy)
         c = b_r - a_rx @ self.beta
         schur = a_rr - a_rx @ self.a_inv @ a_rx.T
         gain = float(c @ np.linalg.lstsq(schur, c, rcond=1e-12)[0])
         return self.rss0 - gain
 
-    def _sums(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        from ._flight_kernels import added_sums
 
-        m = self.m
-        rr, rx, ry, zr = added_sums(m.y, m.indptr, m.indices, m.values, m.p, r, self.z, m.seg,
-                                    m.n_seg)
-        if m.r.shape[1]:   # the model's own dense columns: R'[X r0]
-            rx = np.hstack([rx, r.T @ m.r])
-        return rr, rx, ry, zr
+@dataclass(frozen=True)
+class _Blocks:
+    """A model's samples in blocks, and its run-wide columns block by block (for
+    :func:`~rattle_lab.detect._flight_kernels.added_sums`): block ``b``'s nonzero columns
+    ``cols[ptr[b]:ptr[b + 1]]``, each a contiguous row of the block's values in ``vals``
+    from ``off[b]``."""
+
+    bounds: np.ndarray
+    ptr: np.ndarray
+    cols: np.ndarray
+    off: np.ndarray
+    vals: np.ndarray
+    n_cols: int
+
+
+def _blocks(seg: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
+            p: int, r0: np.ndarray) -> _Blocks:
+    """The samples in blocks of consecutive samples of one flight (at most
+    :data:`~rattle_lab.detect._flight_kernels.BLOCK`), and the columns ``[X r0]`` (``X``
+    stored by rows, ``p`` columns; ``r0`` dense) by blocks: those of ``X`` with an entry in
+    the block, in order, then every column of ``r0``."""
+    from ._flight_kernels import BLOCK
+
+    n = seg.size
+    first = np.flatnonzero(np.r_[True, seg[1:] != seg[:-1]]) if n else np.zeros(0, np.int64)
+    counts = -(-np.diff(np.r_[first, n]) // BLOCK)
+    within = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    bounds = np.r_[np.repeat(first, counts) + BLOCK * within, n].astype(np.int64)
+    n_blocks = bounds.size - 1
+    size = np.diff(bounds)
+    block = np.repeat(np.arange(n_blocks), size)               # of each sample
+    row = np.repeat(np.arange(n), np.diff(indptr))             # of each entry of X
+    b = block[row]
+    present = np.zeros((n_blocks, p), bool)
+    present[b, indices] = True
+    n_sparse = present.sum(axis=1)
+    slot = np.cumsum(present, axis=1) - 1                      # within the block's columns
+    m0 = r0.shape[1]
+    n_cols = n_sparse + m0
+    ptr = np.r_[0, np.cumsum(n_cols)].astype(np.int64)
+    off = np.r_[0, np.cumsum(n_cols * size)].astype(np.int64)
+    cols = np.empty(ptr[-1], np.int64)
+    key_block, key_col = np.nonzero(present)                   # by block, then column
+    cols[ptr[key_block] + slot[key_block, key_col]] = key_col
+    vals = np.bincount(off[b] + slot[b, indices] * size[b] + (row - bounds[b]), weights=values,
+                       minlength=off[-1])
+    own = np.arange(n) - bounds[block]
+    for q in range(m0):
+        cols[ptr[:-1] + n_sparse + q] = p + q
+        vals[off[block] + (n_sparse[block] + q) * size[block] + own] = r0[:, q]
+    return _Blocks(bounds, ptr, cols, off[:-1].copy(), vals, p + m0)
 
 
 def _pack(modes: list[tuple[float, float]]) -> np.ndarray:
@@ -720,6 +785,7 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
     if not ok:
         return ()
     tails = [_tails(p.segments.k / p.fs_hz, p.t_imp_s, p.fs_hz) for p in ok]
+    dvs = [np.ascontiguousarray(np.nan_to_num(p.dv), float) for p in ok]
     # each run at its own fixed (f_s, sigma): the residual with ringing columns added
     fixed = [_Model(p.y, p.segments, p.fs_hz, p.forced).at(p.f_s_hz, p.sigma_1_s) for p in ok]
     base = [f.rss0 for f in fixed]
@@ -736,7 +802,7 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
 
     def rss(modes: list[tuple[float, float]]) -> np.ndarray:
         return np.array(list(pool.map(
-            lambda i: fixed[i].rss(_tail_columns(tails[i], ok[i].dv, modes)), range(len(ok)))))
+            lambda i: fixed[i].carried_rss(tails[i], dvs[i], modes), range(len(ok)))))
 
     def objective(par: np.ndarray) -> float:
         modes = _unpack(par)
@@ -758,15 +824,15 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
             # the scan moves the new mode only: the modes found so far are fixed columns (the
             # grid's modes are all within the objective's bounds)
             prev = fixed if not modes else [
-                f.m.extended(_tail_columns(tails[i], ok[i].dv, modes)).at(ok[i].f_s_hz,
-                                                                           ok[i].sigma_1_s)
+                f.m.extended(_tail_columns(tails[i], dvs[i], modes)).at(ok[i].f_s_hz,
+                                                                         ok[i].sigma_1_s)
                 for i, f in enumerate(fixed)]
             cands = [(fr, s) for fr in grid for s in (q * 2 * np.pi * fr
                                                       for q in (0.005, 0.02, 0.06, 0.15))]
 
             def scanned(c: tuple[float, float], prev: list[Any] = prev) -> float:
-                return float(np.mean([prev[i].rss(_tail_columns(tails[i], ok[i].dv, [c]))
-                                      / base[i] for i in range(len(ok))]))
+                return float(np.mean([prev[i].carried_rss(tails[i], dvs[i], [c]) / base[i]
+                                      for i in range(len(ok))]))
 
             scan = [(v, fr, s) for v, (fr, s) in zip(pool.map(scanned, cands), cands)]
             _, f0, s0 = min(scan, key=lambda c: c[0])

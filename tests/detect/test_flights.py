@@ -386,6 +386,55 @@ def test_compiled_variable_projection_is_the_direct_least_squares():
         np.testing.assert_allclose(start.at(f_hz, sigma).rss(x[:, fixed:]), r @ r, rtol=1e-9)
 
 
+def test_carried_ringing_sums_formed_as_they_go_are_those_of_the_columns():
+    # the campaign's mode search never forms the carried ringing's columns: added_sums
+    # generates each sample's tails on its way, block by block (a flight, at most BLOCK
+    # samples), with the model's run-wide columns gathered by blocks.  Against the columns
+    # formed (_tail_columns) and the sums written out in numpy, on flights longer than a
+    # block, samples before the first impact and impacts off the sample grid: the same to
+    # rounding (sums in another order, powers of the rotation from a table: ~1e-15
+    # relative; 1e-12 here); and the residual against the model extended by the columns and
+    # solved directly (the update's cond^2 eps, as above: 1e-9), also to a model with dense
+    # columns of its own
+    from rattle_lab.detect._flight_kernels import BLOCK, added_sums
+    from rattle_lab.detect._flights import _Model, _segments, _tail_columns, _tails
+
+    rng = np.random.default_rng(7)
+    fs, n = 2000.0, 4200
+    k_imp = np.array([250.0, 400.3, 700.0, 2300.6, 2450.0, 2600.0, 2900.2, 3100.0, 3350.0,
+                      3500.0, 3700.0, 3850.0])
+    sg = _segments(n, k_imp, np.full(k_imp.size, 3.0), 2000)
+    assert np.diff(sg.starts).max() > 2 * BLOCK and sg.left[0] < 0
+    x = rng.normal(size=(sg.k.size, 5))
+    x[rng.random(x.shape) < 0.3] = 0.0
+    y = rng.normal(size=sg.k.size)
+    dv = rng.uniform(0.05, 0.3, k_imp.size)
+    f_hz, sigma = 37.0, 9.0
+    modes = [(171.0, 21.5), (390.0, 2.0)]
+    tails = _tails(sg.k / fs, k_imp / fs, fs)
+    cols = _tail_columns(tails, dv, modes)
+    assert np.all(cols[sg.k < k_imp[0]] == 0.0) and np.any(sg.k < k_imp[0])
+    fixed = _Model(y, sg, fs, x).at(f_hz, sigma)
+    given = np.ascontiguousarray(rng.normal(size=(sg.k.size, 1)))
+    b = fixed._x
+    sums = added_sums(fixed.m.y, fixed.z, fixed.m.seg, fixed.m.n_seg, b.bounds, b.ptr, b.cols,
+                      b.off, b.vals, b.n_cols, given, tails.last, tails.dt, tails.next_,
+                      tails.dt_step, dv, tails.gaps, np.array([171.0, 390.0]),
+                      np.array([21.5, 2.0]))
+    r = np.hstack([given, cols])
+    z = np.zeros((sg.k.size, 2 * sg.starts.size))
+    z[np.arange(sg.k.size), 2 * sg.seg] = fixed.z.real
+    z[np.arange(sg.k.size), 2 * sg.seg + 1] = fixed.z.imag
+    want = (r.T @ r, r.T @ x, r.T @ y, (z.T @ r).reshape(sg.starts.size, 2, -1))
+    for got, ref in zip(sums, want):
+        np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    direct = _Model(y, sg, fs, x).extended(cols).solve(f_hz, sigma)[0]
+    own = _Model(y, sg, fs, x).extended(cols[:, :2]).at(f_hz, sigma)
+    for rss in (fixed.carried_rss(tails, dv, modes), own.carried_rss(tails, dv, modes[1:])):
+        np.testing.assert_allclose(rss, direct, rtol=1e-9)
+        assert abs(rss - fixed.rss(cols)) < 1e-12 * fixed.rss0
+
+
 def test_forced_rows_without_the_dense_matrix_are_the_dense_columns_bit_for_bit():
     # the whole run's forced columns are built by rows (at most five nonzero entries a
     # sample), not as the dense matrix (about 1 GB for a 50 s run at 25.6 kHz): the same
