@@ -6,11 +6,13 @@ used.  These loops do it in one pass with no temporaries.  The run-wide columns 
 two parts: the forced response's, hat functions in time that are zero on all but a few
 columns of each row (stored by rows: ``indptr``, ``indices``, ``values``), and a few dense
 columns ``r`` (the ringing).  :func:`free_sums` forms the per-flight sums of the free
-response's normal equations, :func:`residual_ss` the residual's sum of squares
-(:func:`solve_flights` both and the elimination between them in one call),
-:func:`sparse_cross` the products of the two parts, :func:`added_sums` what new dense
-columns (given, or the ringing carried on over later flights, generated as it goes) add to
-a model whose other parts are fixed, and :func:`tail_columns` that ringing's columns.
+response's normal equations, :func:`residual_ss` the residual's sum of squares, sample by
+sample; :func:`solve_flights` both and the elimination between them in one call, over
+blocks of a flight with the forced columns gathered by blocks (what the searches for
+``(f_s, sigma)`` evaluate); :func:`sparse_cross` the products of the two parts,
+:func:`added_sums` what new dense columns (given, or the ringing carried on over later
+flights, generated as it goes) add to a model whose other parts are fixed, and
+:func:`tail_columns` that ringing's columns.
 numba compiles them on first use and caches them on disk.
 (No function here calls a compiled function of another module: numba's cache does not notice
 when a callee in another file changes, and a stale copy of it fails at run time.)
@@ -144,45 +146,198 @@ def _solve2(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # pragma: no cover - c
     return out
 
 
-@numba.njit(cache=True, nogil=True)
-def solve_flights(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray,
-                  p: int, r: np.ndarray, tau: np.ndarray, seg: np.ndarray, next_: np.ndarray,
-                  n_seg: int, f_hz: float, sigma: float, dt: float, xtx: np.ndarray,
-                  xty: np.ndarray, scale: np.ndarray
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def solve_flights(y: np.ndarray, tau: np.ndarray, anchor: np.ndarray, seg: np.ndarray,
+                  n_seg: int, bounds: np.ndarray, xptr: np.ndarray, xcols: np.ndarray,
+                  xoff: np.ndarray, xvals: np.ndarray, r_t: np.ndarray, f_hz: float,
+                  sigma: float, dt: float, xtx: np.ndarray, xty: np.ndarray, scale: np.ndarray
                   ) -> tuple[float, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
-    """``(rss, beta, gamma)`` of the run model at ``(f_s, sigma)`` in one call
-    (:meth:`rattle_lab.detect._flights._Model.solve`'s steps: each flight's free response
-    eliminated from the normal equations ``xtx``, ``xty`` of the run-wide columns, which are
-    solved scaled by ``scale`` with LAPACK ``gelsd`` at ``rcond = 1e-12``, then the
-    residual); the free response is formed once for both passes."""
-    z = free_response(tau, next_, f_hz, sigma, dt)
-    zz, zx, zy = _sums_z(y, indptr, indices, values, p, r, z, seg, n_seg)
-    q = zx.shape[2]
+    """``(rss, beta, gamma)`` of the run model at ``(f_s, sigma)`` in one call.
+
+    :meth:`rattle_lab.detect._flights._Model.solve`'s steps: each flight's free response
+    eliminated from the normal equations ``xtx``, ``xty`` of the run-wide columns (``X``,
+    sparse, and ``R``, dense), which are solved scaled by ``scale`` with LAPACK ``gelsd``
+    at ``rcond = 1e-12``, then the residual.
+
+    The free response is :func:`free_response`'s: exact at the rows ``anchor`` (where a row
+    is not its predecessor's next sample, and every :data:`REANCHOR` rotations), each row
+    after one that row's value times ``step^k`` from a table of the powers formed by
+    repeated products (as :func:`added_sums`: the rows independent of each other, at the
+    same rounding error as one product after another).  The samples go in blocks within
+    one flight (as in :func:`added_sums`), ``X`` block by block, only its columns that are
+    nonzero in the block, each a contiguous row of the block's values, and ``R`` as rows
+    of ``R'``: the flights' sums and the residual are dot products and sums of rows, two
+    columns at a time (compiled with reassociation: vectorised, each sum rounded in
+    another order than sample after sample, ~1e-16 relative).
+
+    Parameters
+    ----------
+    y : ndarray
+        The samples (``n``).
+    tau : ndarray
+        Each sample's time in its flight's free response, s.
+    anchor : ndarray
+        The rows where the free response is evaluated exactly, increasing, then ``n``: rows
+        ``anchor[a] + k``, ``k < anchor[a + 1] - anchor[a] <= REANCHOR + 1``, are each its
+        predecessor's next sample (``tau`` larger by ``dt``).
+    seg : ndarray
+        Each sample's flight (a block lies in one).
+    n_seg : int
+        The number of flights.
+    bounds, xptr, xcols, xoff, xvals : ndarray
+        The blocks, and ``X`` by blocks, as :func:`added_sums` takes them (``p`` columns).
+    r_t : ndarray
+        ``R'`` (``m x n``, C-contiguous, may be ``0 x n``): columns ``p`` to ``q - 1``.
+    f_hz, sigma, dt : float
+        The free response's frequency, Hz, and decay rate, 1/s; the sampling interval, s.
+    xtx, xty : ndarray
+        ``W'W`` and ``W'y`` of the run-wide columns ``W = [X R]`` (``q x q``, ``q``).
+    scale : ndarray
+        The columns' scales for the solution (``q``).
+
+    Returns
+    -------
+    rss : float
+        The residual sum of squares.
+    beta : ndarray
+        The run-wide coefficients (``q``).
+    gamma : ndarray
+        Each flight's free amplitudes (``n_seg x 2``).
+    """
+    n = y.size
+    q = xty.size
+    m = r_t.shape[0]
+    p = q - m
+    # the free response, real and imaginary parts: each row its chain's exact value times
+    # a power of the step
+    pole = complex(-sigma, 2.0 * math.pi * f_hz)
+    step = np.exp(pole * dt)
+    pw0 = np.empty(REANCHOR + 1)
+    pw1 = np.empty(REANCHOR + 1)
+    w = 1.0 + 0j
+    for k in range(REANCHOR + 1):
+        pw0[k] = w.real
+        pw1[k] = w.imag
+        w = w * step
+    z0 = np.empty(n)
+    z1 = np.empty(n)
+    for j in range(anchor.size - 1):
+        i = anchor[j]
+        size = anchor[j + 1] - i
+        e = np.exp(pole * tau[i])
+        e0, e1 = e.real, e.imag
+        o0 = z0[i:i + size]
+        o1 = z1[i:i + size]
+        for k in range(size):
+            o0[k] = e0 * pw0[k] - e1 * pw1[k]
+            o1[k] = e0 * pw1[k] + e1 * pw0[k]
+    # per flight Z'Z (00, 01, 11), Z'W and Z'y, block by block: dot products of rows, two
+    # columns at a time (y with the block's first column, Z'Z alongside)
+    zz = np.zeros((n_seg, 3))
+    zx = np.zeros((n_seg, 2, q))
+    zy = np.zeros((n_seg, 2))
+    longest = 0
+    for b in range(bounds.size - 1):
+        lo, hi = bounds[b], bounds[b + 1]
+        size = hi - lo
+        longest = max(longest, size)
+        s = seg[lo]
+        a0 = z0[lo:hi]
+        a1 = z1[lo:hi]
+        yb = y[lo:hi]
+        nx = xptr[b + 1] - xptr[b]
+        tot = nx + m          # the block's columns: X's nonzero ones, then R's
+        t = -1
+        while t < tot:
+            # columns t and t + 1 (-1: y; the last one paired with itself)
+            t2 = t + 1 if t + 1 < tot else t
+            if t < 0:
+                xa, ca = yb, -1
+            elif t < nx:
+                st = xoff[b] + t * size
+                xa, ca = xvals[st:st + size], xcols[xptr[b] + t]
+            else:
+                xa, ca = r_t[t - nx, lo:hi], p + t - nx
+            if t2 < 0:
+                xb, cb = yb, -1
+            elif t2 < nx:
+                st = xoff[b] + t2 * size
+                xb, cb = xvals[st:st + size], xcols[xptr[b] + t2]
+            else:
+                xb, cb = r_t[t2 - nx, lo:hi], p + t2 - nx
+            c00 = 0.0
+            c01 = 0.0
+            c10 = 0.0
+            c11 = 0.0
+            if t < 0:
+                s00 = 0.0
+                s01 = 0.0
+                s11 = 0.0
+                for u in range(size):
+                    s00 += a0[u] * a0[u]
+                    s01 += a0[u] * a1[u]
+                    s11 += a1[u] * a1[u]
+                    c00 += a0[u] * xa[u]
+                    c01 += a1[u] * xa[u]
+                    c10 += a0[u] * xb[u]
+                    c11 += a1[u] * xb[u]
+                zz[s, 0] += s00
+                zz[s, 1] += s01
+                zz[s, 2] += s11
+                zy[s, 0] += c00
+                zy[s, 1] += c01
+            else:
+                for u in range(size):
+                    c00 += a0[u] * xa[u]
+                    c01 += a1[u] * xa[u]
+                    c10 += a0[u] * xb[u]
+                    c11 += a1[u] * xb[u]
+                zx[s, 0, ca] += c00
+                zx[s, 1, ca] += c01
+            if t2 > t:
+                zx[s, 0, cb] += c10
+                zx[s, 1, cb] += c11
+            t += 2
+    # each flight's 2x2 system (ridged) solved as _solve2 does, without its allocations,
+    # and eliminated from W'W, W'y
     a = xtx.copy()
-    b = xty.copy()
+    rhs = xty.copy()
     g_zx = np.empty((n_seg, 2, q))
     g_zy = np.empty((n_seg, 2))
-    rhs = np.empty((2, q + 1))
     for s in range(n_seg):
-        m = zz[s].copy()
-        ridge = 1e-12 * (m[0, 0] + m[1, 1])
-        m[0, 0] += ridge
-        m[1, 1] += ridge
-        rhs[:, :q] = zx[s]
-        rhs[:, q] = zy[s]
-        g = _solve2(m, rhs)
-        g_zx[s] = g[:, :q]
-        g_zy[s] = g[:, q]
+        ridge = 1e-12 * (zz[s, 0] + zz[s, 2])
+        a00, a01, a10, a11 = zz[s, 0] + ridge, zz[s, 1], zz[s, 1], zz[s, 2] + ridge
+        swap = abs(a10) > abs(a00)
+        if swap:
+            a00, a01, a10, a11 = a10, a11, a00, a01
+        if a00 == 0.0:
+            raise np.linalg.LinAlgError("Singular matrix")   # numpy's error and message
+        lo_ = a10 / a00
+        u11 = a11 - lo_ * a01
+        if u11 == 0.0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        for j in range(q + 1):
+            r0 = zx[s, 0, j] if j < q else zy[s, 0]
+            r1 = zx[s, 1, j] if j < q else zy[s, 1]
+            b0, b1 = (r1, r0) if swap else (r0, r1)
+            x1 = (b1 - lo_ * b0) / u11
+            x0 = (b0 - a01 * x1) / a00
+            if j < q:
+                g_zx[s, 0, j] = x0
+                g_zx[s, 1, j] = x1
+            else:
+                g_zy[s, 0] = x0
+                g_zy[s, 1] = x1
         for i in range(q):
             zi0, zi1 = zx[s, 0, i], zx[s, 1, i]
             for j in range(q):
-                a[i, j] -= zi0 * g[0, j] + zi1 * g[1, j]
-            b[i] -= zi0 * g[0, q] + zi1 * g[1, q]
+                a[i, j] -= zi0 * g_zx[s, 0, j] + zi1 * g_zx[s, 1, j]
+            rhs[i] -= zi0 * g_zy[s, 0] + zi1 * g_zy[s, 1]
     for i in range(q):
         for j in range(q):
             a[i, j] /= scale[i] * scale[j]
-        b[i] /= scale[i]
-    beta = np.linalg.lstsq(a, b, 1e-12)[0] / scale
+        rhs[i] /= scale[i]
+    beta = np.linalg.lstsq(a, rhs, 1e-12)[0] / scale
     gamma = np.empty((n_seg, 2))
     for s in range(n_seg):
         for k in range(2):
@@ -190,7 +345,56 @@ def solve_flights(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values
             for j in range(q):
                 acc -= g_zx[s, k, j] * beta[j]
             gamma[s, k] = acc
-    rss = _residual_z(y, indptr, indices, values, p, r, beta, z, seg, gamma)
+    # the residual, block by block: the free response's fit and the columns' taken off y two
+    # at a time, the squares summed with the last two
+    res = np.empty(longest)
+    rss = 0.0
+    for b in range(bounds.size - 1):
+        lo, hi = bounds[b], bounds[b + 1]
+        size = hi - lo
+        s = seg[lo]
+        yb = y[lo:hi]
+        rb = res[:size]
+        nx = xptr[b + 1] - xptr[b]
+        tot = nx + m
+        acc = 0.0
+        t = -2              # -2, -1: the free response's two columns
+        while t < tot:
+            t2 = t + 1
+            if t < 0:
+                xa, ba = z0[lo:hi], gamma[s, 0]
+            elif t < nx:
+                st = xoff[b] + t * size
+                xa, ba = xvals[st:st + size], beta[xcols[xptr[b] + t]]
+            else:
+                xa, ba = r_t[t - nx, lo:hi], beta[p + t - nx]
+            if t2 < 0:
+                xb, bb = z1[lo:hi], gamma[s, 1]
+            elif t2 >= tot:
+                xb, bb = xa, 0.0
+            elif t2 < nx:
+                st = xoff[b] + t2 * size
+                xb, bb = xvals[st:st + size], beta[xcols[xptr[b] + t2]]
+            else:
+                xb, bb = r_t[t2 - nx, lo:hi], beta[p + t2 - nx]
+            # (separate loops for y and rb, so that each vectorises)
+            if t + 2 < tot:
+                if t < 0:
+                    for u in range(size):
+                        rb[u] = yb[u] - (ba * xa[u] + bb * xb[u])
+                else:
+                    for u in range(size):
+                        rb[u] -= ba * xa[u] + bb * xb[u]
+            elif t < 0:
+                for u in range(size):
+                    r = yb[u] - (ba * xa[u] + bb * xb[u])
+                    acc += r * r
+            else:
+                for u in range(size):
+                    r = rb[u] - (ba * xa[u] + bb * xb[u])
+                    acc += r * r
+            t += 2
+        rss += acc
     return rss, beta, gamma
 
 
@@ -218,7 +422,8 @@ def added_sums(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int, bounds
     columns that are nonzero in the block, each as a contiguous row of the block's values;
     a block's new columns are formed into rows alike, and every sum is a dot product of two
     rows, two new columns at a time (compiled with reassociation: vectorised, each sum
-    rounded in another order than sample after sample, ~1e-16 relative).
+    rounded in another order than sample after sample, ~1e-16 relative); the dense columns
+    come as rows of ``R'``.
 
     Parameters
     ----------

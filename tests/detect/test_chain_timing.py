@@ -324,3 +324,33 @@ def test_undetermined_measurand_widens_or_is_established_across_runs():
     se, _ = measurand_systematic([_Log(e[0], diff=0.05, alt_se=0.003), _Log(e[1]), _Log(e[2])])
     assert se == pytest.approx(0.05 / 3)
     assert measurand_systematic([_Log(x) for x in e]) == (0.0, "")
+
+
+def test_heavily_damped_ringing_modes_are_found_and_e_holds(tmp_path):
+    # The plate's higher modes (171, 293, 390 Hz) at 15 % of critical damping ring in the
+    # vibrometer; a declared 7th-order 2 kHz Butterworth decoder; two 80-period dwells
+    # (93 and 99 Hz, as benchmarks/chain_timing.py), fitted as `rattle-lab fit` does.  The
+    # campaign's mode search once took a "mode" at its region's lower edge (104 Hz, 1.1
+    # f_s: the fundamental's misfit) before the 171 Hz mode, and e came out 12.7 % high
+    # (the 99 Hz run's 16 %).  Now: no mode at the edge, the strongest mode found within
+    # 3 % (the search's resolution is 5 %: two modes closer are refused), and e within the
+    # issue's 3 % with its 95 % interval covering the truth.
+    from rattle_lab.workflow import fit_store
+
+    plant = Plant()
+    chain = Chain(decoder="butterworth", decoder_order=7, decoder_cutoff_hz=2056.12,
+                  decoder_delay_s=0.01 / 25600.0, ring_zeta=(0.15, 0.15, 0.15))
+    runs = [{"run_id": f"dwell_{f:g}", "protocol": "sine_dwell", "freq_hz": f,
+             "levels": np.full(80, 1.5 * _grazing_ms2(plant, f))} for f in (93.0, 99.0)]
+    write_campaign(tmp_path / "c.h5", plant, chain, runs, seed=6)
+    ingest([tmp_path / "c.h5"], tmp_path / "s.h5", quiet=True)
+    res = fit_store(tmp_path / "s.h5", write=False, quiet=True)
+    modes = {m for r in res.runs if r.impacts is not None for m in r.impacts.ring_modes}
+    assert modes
+    # the region's edge is 1.1 times the runs' median fitted f_s (about 104 Hz here); the
+    # plate's ringing modes are all above 1.7 f_s
+    assert min(f for f, _ in modes) > 1.2 * plant.f_s_hz
+    assert min(f for f, _ in modes) == pytest.approx(chain.ring_hz[0], rel=0.03)
+    e = res.summary.fits.restitution_ratio
+    assert e.value == pytest.approx(plant.e, rel=0.03)
+    assert abs(e.value - plant.e) <= 1.96 * e.stderr

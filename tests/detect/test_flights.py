@@ -588,3 +588,66 @@ def test_a_pass_with_another_velocity_model_starts_from_the_first_recognition(
         n = len(calls)
         detect_impacts(FS_HZ, recognised=first.recognition, **args)
         assert len(calls) == n + 1
+
+
+def test_solve_in_blocks_is_the_sample_by_sample_solution():
+    # _Model.solve (solve_flights) goes over the samples in blocks of a flight, the run-wide
+    # columns gathered by blocks, the free response from a table of the rotation's powers,
+    # every sum vectorised (another rounding order); against the same steps sample by sample
+    # (free_sums, residual_ss: the free response rotated from row to row, X by rows), with
+    # flights longer than a block, a flight before the first impact, a block where X has
+    # no nonzero column, and one, two and four dense columns (odd and even counts, the
+    # pairs' last column alone): the same to rounding (~1e-15 relative; 1e-12 here)
+    from rattle_lab.detect._flight_kernels import BLOCK, REANCHOR, free_response, free_sums, \
+        residual_ss
+    from rattle_lab.detect._flights import _anchors, _Model, _segments
+
+    rng = np.random.default_rng(5)
+    fs, n = 2000.0, 4200
+    k_imp = np.array([250.0, 400.3, 700.0, 2300.6, 2450.0, 2600.0, 2900.2, 3100.0, 3350.0,
+                      3500.0, 3700.0, 3850.0])
+    sg = _segments(n, k_imp, np.full(k_imp.size, 3.0), 2000)
+    assert np.diff(sg.starts).max() > 2 * BLOCK and sg.left[0] < 0
+    x = rng.normal(size=(sg.k.size, 5))
+    x[rng.random(x.shape) < 0.3] = 0.0
+    x[:sg.starts[1]] = 0.0              # the flight before the first impact: no X at all
+    y = rng.normal(size=sg.k.size)
+    f_hz, sigma = 37.0, 9.0
+    base = _Model(y, sg, fs, x)
+    models = [base, base.extended(rng.normal(size=(sg.k.size, 1)))]
+    models += [models[1].extended(rng.normal(size=(sg.k.size, 1))),
+               base.extended(rng.normal(size=(sg.k.size, 4)))]
+    for m in models:
+        rss, beta, gamma = m.solve(f_hz, sigma)
+        sparse = (m.indptr, m.indices, m.values, m.p, m.r)
+        zz, zx, zy = free_sums(m.y, *sparse, m.tau, m.seg, m.next_, m.n_seg, f_hz, sigma,
+                               1.0 / fs)
+        zz = zz + 1e-12 * np.trace(zz, axis1=1, axis2=2)[:, None, None] * np.eye(2)
+        gx, gy = np.linalg.solve(zz, zx), np.linalg.solve(zz, zy[:, :, None])[:, :, 0]
+        q = zx.shape[2]
+        a = (m.xtx - zx.reshape(-1, q).T @ gx.reshape(-1, q)) / np.outer(m.scale, m.scale)
+        b = (m.xty - np.einsum("skq,sk->q", zx, gy)) / m.scale
+        want_beta = np.linalg.lstsq(a, b, rcond=1e-12)[0] / m.scale
+        want_gamma = gy - np.einsum("skq,q->sk", gx, want_beta)
+        want_rss = residual_ss(m.y, *sparse, want_beta, m.tau, m.seg, m.next_, want_gamma,
+                               f_hz, sigma, 1.0 / fs)
+        np.testing.assert_allclose(rss, want_rss, rtol=1e-12)
+        np.testing.assert_allclose(beta, want_beta, rtol=0, atol=1e-12 * np.abs(want_beta).max())
+        np.testing.assert_allclose(gamma, want_gamma, rtol=0,
+                                   atol=1e-12 * np.abs(want_gamma).max())
+    # the rows evaluated exactly: the first, each not its predecessor's next, and every
+    # REANCHOR rotations (as free_response rotates), then the number of rows
+    next_ = rng.random(3000) < 0.995
+    next_[0] = False
+    ref, run = [], 0
+    for i in range(next_.size):
+        if i > 0 and next_[i] and run < REANCHOR:
+            run += 1
+        else:
+            ref.append(i)
+            run = 0
+    np.testing.assert_array_equal(_anchors(next_), ref + [next_.size])
+    tau = np.cumsum(np.where(next_, 1.0 / fs, 0.013))
+    z = free_response(tau, next_, f_hz, sigma, 1.0 / fs)
+    np.testing.assert_allclose(z, np.exp(complex(-sigma, 2 * np.pi * f_hz) * tau), rtol=0,
+                               atol=1e-13)
