@@ -91,6 +91,8 @@ BOUND_RTOL = 0.01
 BOUND_SKIP = 1.2
 #: Most flights the searches for f_s, the damping and the ringing use.
 SEARCH_SEGMENTS = 60
+#: Batches of the campaign's scan's candidates per run (tasks for the cores).
+SCAN_BATCHES = 4
 #: A ringing mode is kept if it lowers the stacked residual by this many noise variances.
 RING_GAIN = 25.0
 
@@ -482,7 +484,39 @@ class _Fixed:
         impacts' velocity changes, finite, float, contiguous)."""
         if not modes:
             return self.rss0
-        return self._rss(self._none, tails, d, modes)
+        return float(self.carried_rss_many(tails, d, np.array([[f for f, _ in modes]], float),
+                                           np.array([[s for _, s in modes]], float))[0])
+
+    def carried_rss_many(self, tails: _Tails, d: np.ndarray, f_hz: np.ndarray, s: np.ndarray
+                         ) -> np.ndarray:
+        """:meth:`carried_rss` of several candidates in one compiled call
+        (:func:`~rattle_lab.detect._flight_kernels.carried_gains`).
+
+        Parameters
+        ----------
+        tails : _Tails
+            Where the model's samples lie after the impacts.
+        d : ndarray
+            The impacts' velocity changes (finite, float, contiguous).
+        f_hz, s : ndarray
+            The candidates' modes, one candidate a row (``n_cand x n_modes``, at least one
+            mode).
+
+        Returns
+        -------
+        ndarray
+            Each candidate's residual sum of squares.
+        """
+        from ._flight_kernels import carried_gains
+
+        m, x = self.m, self._x
+        gains = carried_gains(m.y, self.z, m.seg, m.n_seg, x.bounds, x.ptr, x.cols, x.off,
+                              x.vals, x.n_cols, self._none, tails.last, tails.dt, tails.next_,
+                              tails.dt_step, d, tails.gaps,
+                              np.ascontiguousarray(f_hz, float), np.ascontiguousarray(s, float),
+                              self.h, self.gx, self.gy, np.ascontiguousarray(self.beta),
+                              self.a_inv)
+        return self.rss0 - gains
 
     def _rss(self, r: np.ndarray, tails: _Tails, d: np.ndarray,
              modes: list[tuple[float, float]]) -> float:
@@ -712,7 +746,9 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     if not modes:
         return replace(fallback, f_s_hz=f_s, sigma_1_s=sigma,
                        note="local fits kept: no ringing found after the impacts")
-    model = forced_sub.extended(ring(sub.k / fs_hz, dv, modes))
+    if modes_given is None:
+        model = forced_sub.extended(ring(sub.k / fs_hz, dv, modes))
+    # (else the model searched above already has these modes' columns, the same dv)
     f_s, sigma = model.search(f_s, sigma, grid=False)
     vin, vout = v_in_local, v_out_local
     forced_all = _Model(y_all[sg.k], sg, fs_hz, _forced_rows(sg.k / fs_hz, omega, t_total, keep))
@@ -875,11 +911,22 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
             cands = [(fr, s) for fr in grid[grid >= floor] for s in (q * 2 * np.pi * fr
                                                       for q in (0.005, 0.02, 0.06, 0.15))]
 
-            def scanned(c: tuple[float, float], prev: list[Any] = prev) -> float:
-                return float(np.mean([prev[i].carried_rss(tails[i], dvs[i], [c]) / base[i]
-                                      for i in range(len(ok))]))
+            # each run's candidates in a few compiled calls (batches: the cores kept busy)
+            f_c = np.array([[fr] for fr, _ in cands], float)
+            s_c = np.array([[s] for _, s in cands], float)
+            cuts = np.linspace(0, len(cands), SCAN_BATCHES + 1).round().astype(int)
+            tasks = [(i, a, b) for i in range(len(ok)) for a, b in zip(cuts[:-1], cuts[1:])
+                     if b > a]
 
-            scan = [(v, fr, s) for v, (fr, s) in zip(pool.map(scanned, cands), cands)]
+            def scanned(task: tuple[int, int, int], prev: list[Any] = prev,
+                        f_c: np.ndarray = f_c, s_c: np.ndarray = s_c) -> np.ndarray:
+                i, a, b = task
+                return prev[i].carried_rss_many(tails[i], dvs[i], f_c[a:b], s_c[a:b])
+
+            rel = np.empty((len(ok), len(cands)))
+            for (i, a, b), got in zip(tasks, pool.map(scanned, tasks)):
+                rel[i, a:b] = got / base[i]
+            scan = [(float(np.mean(rel[:, j])), fr, s) for j, (fr, s) in enumerate(cands)]
             _, f0, s0 = min(scan, key=lambda c: c[0])
             trial = modes + [(f0, s0)]
             p0 = _pack(trial)

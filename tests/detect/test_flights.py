@@ -435,6 +435,34 @@ def test_carried_ringing_sums_formed_as_they_go_are_those_of_the_columns():
         assert abs(rss - fixed.rss(cols)) < 1e-12 * fixed.rss0
 
 
+def test_carried_rss_of_many_candidates_in_one_call_is_each_ones_alone():
+    # the campaign's scan evaluates a run's candidate modes in one compiled call
+    # (carried_gains): each candidate's residual is, bit for bit, carried_rss's for it alone
+    # (the same sums, the same elimination), and that of the columns solved directly
+    from rattle_lab.detect._flights import _Model, _segments, _tail_columns, _tails
+
+    rng = np.random.default_rng(11)
+    fs, n = 2000.0, 3000
+    k_imp = np.array([250.0, 400.3, 700.0, 1300.6, 1450.0, 1600.0, 1900.2, 2100.0, 2350.0,
+                      2500.0, 2700.0])
+    sg = _segments(n, k_imp, np.full(k_imp.size, 3.0), 600)
+    x = rng.normal(size=(sg.k.size, 5))
+    y = rng.normal(size=sg.k.size)
+    dv = rng.uniform(0.05, 0.3, k_imp.size)
+    tails = _tails(sg.k / fs, k_imp / fs, fs)
+    fixed = _Model(y, sg, fs, x).at(37.0, 9.0)
+    cands = [[(171.0, 21.5), (390.0, 2.0)], [(120.0, 5.0), (300.0, 40.0)],
+             [(250.0, 9.0), (410.0, 60.0)]]
+    many = fixed.carried_rss_many(tails, dv, np.array([[f for f, _ in c] for c in cands]),
+                                  np.array([[s for _, s in c] for c in cands]))
+    assert many.shape == (3,)
+    for got, modes in zip(many, cands):
+        assert got == fixed.carried_rss(tails, dv, modes)
+        direct = _Model(y, sg, fs, x).extended(_tail_columns(tails, dv, modes)).solve(37.0,
+                                                                                      9.0)[0]
+        np.testing.assert_allclose(got, direct, rtol=1e-9)
+
+
 def test_forced_rows_without_the_dense_matrix_are_the_dense_columns_bit_for_bit():
     # the whole run's forced columns are built by rows (at most five nonzero entries a
     # sample), not as the dense matrix (about 1 GB for a 50 s run at 25.6 kHz): the same
