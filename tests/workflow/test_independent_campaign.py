@@ -194,3 +194,32 @@ def test_ringing_modes_from_one_run_are_flagged(tmp_path):
     assert any("found in one run" in n for n in ratio["notes"])
     assert any("one run only" in n for n in ratio["notes"])
     assert abs(ratio["value"] / plant.e - 1) < 0.10, ratio
+
+
+def test_an_unphysical_e_from_the_ratios_keeps_the_ramp_corrected_fits(tmp_path):
+    """The ramp replays (ramp-corrected grazing fit, zeta ramp) need an e only for their
+    confirming impacts.  Local velocity fits read a ringing plate's tails (the higher modes
+    at 2 % of critical in the vibrometer) and give e about 1.08 here; that value must not
+    cost the campaign those fits (they were refused: "`e` must be in [0, 1]").  The
+    replays then use e = 0.6 (the onset hardly depends on it), and the corrected gap
+    keeps within 1 % of the truth (issue 15's target is 2 %; the rig's campaigns give
+    -0.11 %)."""
+    from rattle_lab.workflow import fit_store
+
+    plant = Plant()
+    runs = []
+    for f in (93.0, 95.0, 97.0, 98.0):
+        n = int(2.0 * f)
+        g = _grazing_ms2(plant, f)
+        runs.append({"run_id": f"up_{f:g}", "protocol": "amplitude_ramp_up", "freq_hz": f,
+                     "levels": np.linspace(0.5 * g, 1.5 * g, n)})
+        runs.append({"run_id": f"down_{f:g}", "protocol": "amplitude_ramp_down",
+                     "freq_hz": f, "levels": np.linspace(1.5 * g, 0.3 * g, n)})
+    write_campaign(tmp_path / "c.h5", plant, Chain(ring_in_velocity=True), runs, seed=3)
+    ingest([tmp_path / "c.h5"], tmp_path / "s.h5", quiet=True)
+    s = fit_store(tmp_path / "s.h5", detect={"velocity_model": "local"}, write=False,
+                  quiet=True).summary
+    assert s.fits.restitution_ratio.value > 1.0   # what the local fits read
+    assert "grazing_ramp" not in s.not_fitted and "damping_ramp" not in s.not_fitted
+    gap = s.fits.grazing_ramp.gap_m
+    assert gap.value == pytest.approx(plant.gap_m, rel=0.01)
