@@ -398,6 +398,60 @@ def solve_flights(y: np.ndarray, tau: np.ndarray, anchor: np.ndarray, seg: np.nd
     return rss, beta, gamma
 
 
+@numba.njit(cache=True, nogil=True)
+def solve_flights_rows(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray,
+                       values: np.ndarray, p: int, r: np.ndarray, tau: np.ndarray,
+                       seg: np.ndarray, next_: np.ndarray, n_seg: int, f_hz: float,
+                       sigma: float, dt: float, xtx: np.ndarray, xty: np.ndarray,
+                       scale: np.ndarray
+                       ) -> tuple[float, np.ndarray, np.ndarray]:  # pragma: no cover
+    """:func:`solve_flights` sample by sample, the run-wide columns ``X`` stored by rows
+    (``indptr``, ``indices``, ``values``; ``p`` columns) and ``r`` dense: no block layout,
+    whose dense rows per block take several times the rows' memory (a whole run's model,
+    solved once or twice).  ``(rss, beta, gamma)`` of the run model at ``(f_s, sigma)`` in
+    one call (:meth:`rattle_lab.detect._flights._Model.solve`'s steps: each flight's free response
+    eliminated from the normal equations ``xtx``, ``xty`` of the run-wide columns, which are
+    solved scaled by ``scale`` with LAPACK ``gelsd`` at ``rcond = 1e-12``, then the
+    residual); the free response is formed once for both passes."""
+    z = free_response(tau, next_, f_hz, sigma, dt)
+    zz, zx, zy = _sums_z(y, indptr, indices, values, p, r, z, seg, n_seg)
+    q = zx.shape[2]
+    a = xtx.copy()
+    b = xty.copy()
+    g_zx = np.empty((n_seg, 2, q))
+    g_zy = np.empty((n_seg, 2))
+    rhs = np.empty((2, q + 1))
+    for s in range(n_seg):
+        m = zz[s].copy()
+        ridge = 1e-12 * (m[0, 0] + m[1, 1])
+        m[0, 0] += ridge
+        m[1, 1] += ridge
+        rhs[:, :q] = zx[s]
+        rhs[:, q] = zy[s]
+        g = _solve2(m, rhs)
+        g_zx[s] = g[:, :q]
+        g_zy[s] = g[:, q]
+        for i in range(q):
+            zi0, zi1 = zx[s, 0, i], zx[s, 1, i]
+            for j in range(q):
+                a[i, j] -= zi0 * g[0, j] + zi1 * g[1, j]
+            b[i] -= zi0 * g[0, q] + zi1 * g[1, q]
+    for i in range(q):
+        for j in range(q):
+            a[i, j] /= scale[i] * scale[j]
+        b[i] /= scale[i]
+    beta = np.linalg.lstsq(a, b, 1e-12)[0] / scale
+    gamma = np.empty((n_seg, 2))
+    for s in range(n_seg):
+        for k in range(2):
+            acc = g_zy[s, k]
+            for j in range(q):
+                acc -= g_zx[s, k, j] * beta[j]
+            gamma[s, k] = acc
+    rss = _residual_z(y, indptr, indices, values, p, r, beta, z, seg, gamma)
+    return rss, beta, gamma
+
+
 #: Most samples in one block of :func:`added_sums` (a flight, or part of a long one).
 BLOCK = 512
 

@@ -89,6 +89,10 @@ MAX_RING_MODES = 3
 BOUND_RTOL = 0.01
 #: ... and the scan then starts at this many times its frequency.
 BOUND_SKIP = 1.2
+#: A model with at most this many samples is solved in blocks of a flight
+#: (:attr:`_Model.sparse_blocks`, :func:`~rattle_lab.detect._flight_kernels.solve_flights`);
+#: a larger one (a whole run's, solved once or twice) by rows (``solve_flights_rows``).
+KEEP_BLOCKS_MAX = 1 << 17
 #: Most flights the searches for f_s, the damping and the ringing use.
 SEARCH_SEGMENTS = 60
 #: Batches of the campaign's scan's candidates per run (tasks for the cores).
@@ -379,9 +383,13 @@ class _Model:
                         self.r.T @ r])
         new = object.__new__(_Model)
         new.__dict__.update(self.__dict__)
-        new.__dict__["_sparse_blocks"] = self.sparse_blocks   # formed once for all of them
         new.r = np.hstack([self.r, r])
-        new.r_t = np.ascontiguousarray(new.r.T)
+        if self.y.size <= KEEP_BLOCKS_MAX:   # solved in blocks (a whole run's by rows)
+            new.__dict__["_sparse_blocks"] = self.sparse_blocks   # formed once for all
+            new.r_t = np.ascontiguousarray(new.r.T)
+        else:
+            new.__dict__.pop("_sparse_blocks", None)
+            new.r_t = np.zeros((0, 0))
         new._normal(np.block([[self.xtx, xr], [xr.T, r.T @ r]]),
                     np.concatenate([self.xty, r.T @ self.y]))
         return new
@@ -391,6 +399,16 @@ class _Model:
         """``(rss, beta, gamma)``: run-wide coefficients and each segment's free amplitudes."""
         from ._flight_kernels import solve_flights
 
+        if self.y.size > KEEP_BLOCKS_MAX:
+            # a whole run's model, solved once or twice: the rows as they are (the blocks'
+            # layout and its temporaries took 100 MiB more at the peak on a 100 s run)
+            from ._flight_kernels import solve_flights_rows
+
+            rss, beta, gamma = solve_flights_rows(
+                self.y, self.indptr, self.indices, self.values, self.p,
+                np.ascontiguousarray(self.r), self.tau, self.seg, self.next_, self.n_seg,
+                float(f_hz), float(sigma), 1.0 / self.fs, self.xtx, self.xty, self.scale)
+            return float(rss), beta, gamma
         x = self.sparse_blocks
         rss, beta, gamma = solve_flights(
             self.y, self.tau, self.anchor, self.seg, self.n_seg, x.bounds, x.ptr, x.cols, x.off,
@@ -402,7 +420,9 @@ class _Model:
     def sparse_blocks(self) -> _Blocks:
         """The samples in blocks and the sparse run-wide columns ``X`` by blocks
         (:func:`_blocks`, without ``r``): formed at the first use and kept, also by the
-        models :meth:`extended` makes from this one (the same ``X``)."""
+        models :meth:`extended` makes from this one (the same ``X``).  Only models of at
+        most :data:`KEEP_BLOCKS_MAX` samples (the searches', solved hundreds of times)
+        use them in :meth:`solve`."""
         x = self.__dict__.get("_sparse_blocks")
         if x is None:
             x = _blocks(self.seg, self.indptr, self.indices, self.values, self.p,
@@ -566,22 +586,24 @@ def _blocks(seg: np.ndarray, indptr: np.ndarray, indices: np.ndarray, values: np
     size = np.diff(bounds)
     nnz = np.diff(indptr)
     block = np.repeat(np.arange(n_blocks), size)               # of each sample
-    key = np.repeat(block * p, nnz) + indices                  # (block, column) of each entry
-    present = np.zeros(n_blocks * p, bool)
-    present[key] = True
-    present = present.reshape(n_blocks, p)
-    n_sparse = present.sum(axis=1)
-    slot = np.cumsum(present, axis=1) - 1                      # within the block's columns
+    # (block, column) of each entry of X; the distinct pairs, by block then column (memory
+    # in the entries: a (blocks x p) table grows with the square of a run's length, 160 MiB
+    # of slots on a 100 s run)
+    key = np.repeat(block.astype(np.int64) * p, nnz) + indices
+    uniq, inv = np.unique(key, return_inverse=True)
+    key_block, key_col = uniq // p, uniq % p
+    n_sparse = np.bincount(key_block, minlength=n_blocks)
+    uslot = np.arange(uniq.size) - np.repeat(np.cumsum(n_sparse) - n_sparse, n_sparse)
     m0 = r0.shape[1]
     n_cols = n_sparse + m0
     ptr = np.r_[0, np.cumsum(n_cols)].astype(np.int64)
     off = np.r_[0, np.cumsum(n_cols * size)].astype(np.int64)
     cols = np.empty(ptr[-1], np.int64)
-    key_block, key_col = np.nonzero(present)                   # by block, then column
-    cols[ptr[key_block] + slot[key_block, key_col]] = key_col
+    cols[ptr[key_block] + uslot] = key_col                     # within the block's columns
     own = np.arange(n) + np.repeat(off[:-1] - bounds[:-1], size)    # in the block's first row
     vals = np.zeros(off[-1])
-    vals[np.repeat(own, nnz) + slot.ravel()[key] * np.repeat(np.repeat(size, size), nnz)] = values
+    vals[np.repeat(own, nnz) + uslot[inv.ravel()] * np.repeat(np.repeat(size, size), nnz)] = \
+        values
     for q in range(m0):
         cols[ptr[:-1] + n_sparse + q] = p + q
         vals[own + np.repeat((n_sparse + q) * size, size)] = r0[:, q]

@@ -618,7 +618,10 @@ def test_a_pass_with_another_velocity_model_starts_from_the_first_recognition(
         assert len(calls) == n + 1
 
 
-def test_solve_in_blocks_is_the_sample_by_sample_solution():
+@pytest.mark.parametrize("path", ["blocks", "rows"])
+def test_solve_in_blocks_is_the_sample_by_sample_solution(path, monkeypatch):
+    # "rows": a model of more than KEEP_BLOCKS_MAX samples (a whole run's) is solved by rows
+    # (solve_flights_rows) and keeps no blocks nor r transposed (memory); the same answer.
     # _Model.solve (solve_flights) goes over the samples in blocks of a flight, the run-wide
     # columns gathered by blocks, the free response from a table of the rotation's powers,
     # every sum vectorised (another rounding order); against the same steps sample by sample
@@ -628,8 +631,11 @@ def test_solve_in_blocks_is_the_sample_by_sample_solution():
     # pairs' last column alone): the same to rounding (~1e-15 relative; 1e-12 here)
     from rattle_lab.detect._flight_kernels import BLOCK, REANCHOR, free_response, free_sums, \
         residual_ss
+    from rattle_lab.detect import _flights
     from rattle_lab.detect._flights import _anchors, _Model, _segments
 
+    if path == "rows":
+        monkeypatch.setattr(_flights, "KEEP_BLOCKS_MAX", 0)
     rng = np.random.default_rng(5)
     fs, n = 2000.0, 4200
     k_imp = np.array([250.0, 400.3, 700.0, 2300.6, 2450.0, 2600.0, 2900.2, 3100.0, 3350.0,
@@ -647,6 +653,8 @@ def test_solve_in_blocks_is_the_sample_by_sample_solution():
                base.extended(rng.normal(size=(sg.k.size, 4)))]
     for m in models:
         rss, beta, gamma = m.solve(f_hz, sigma)
+        if path == "rows":
+            assert "_sparse_blocks" not in m.__dict__ and m.r_t.size == 0
         sparse = (m.indptr, m.indices, m.values, m.p, m.r)
         zz, zx, zy = free_sums(m.y, *sparse, m.tau, m.seg, m.next_, m.n_seg, f_hz, sigma,
                                1.0 / fs)
