@@ -33,7 +33,7 @@ from rattle_lab.model.modal import KelvinVoigtContact, plate_system, simulate_mo
 
 CYCLES = 10
 FREQ_HZ = 115.6
-N_TERMS = 32
+N_TERMS = 48
 
 
 def direct(system, k: float, rtol: float):
