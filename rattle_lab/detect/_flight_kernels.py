@@ -146,6 +146,29 @@ def _solve2(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # pragma: no cover - c
     return out
 
 
+@numba.njit(cache=True, nogil=True)
+def _beta_gamma(a: np.ndarray, b: np.ndarray, scale: np.ndarray, g_zx: np.ndarray,
+                g_zy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+    """The run-wide coefficients from the eliminated normal equations ``a beta = b`` (scaled
+    by ``scale``, LAPACK ``gelsd`` at ``rcond = 1e-12``; ``a`` and ``b`` are overwritten) and
+    each flight's free amplitudes ``gamma_s = g_zy_s - g_zx_s beta``."""
+    q = b.size
+    for i in range(q):
+        for j in range(q):
+            a[i, j] /= scale[i] * scale[j]
+        b[i] /= scale[i]
+    beta = np.linalg.lstsq(a, b, 1e-12)[0] / scale
+    n_seg = g_zy.shape[0]
+    gamma = np.empty((n_seg, 2))
+    for s in range(n_seg):
+        for k in range(2):
+            acc = g_zy[s, k]
+            for j in range(q):
+                acc -= g_zx[s, k, j] * beta[j]
+            gamma[s, k] = acc
+    return beta, gamma
+
+
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def solve_flights(y: np.ndarray, tau: np.ndarray, anchor: np.ndarray, seg: np.ndarray,
                   n_seg: int, bounds: np.ndarray, xptr: np.ndarray, xcols: np.ndarray,
@@ -333,18 +356,7 @@ def solve_flights(y: np.ndarray, tau: np.ndarray, anchor: np.ndarray, seg: np.nd
             for j in range(q):
                 a[i, j] -= zi0 * g_zx[s, 0, j] + zi1 * g_zx[s, 1, j]
             rhs[i] -= zi0 * g_zy[s, 0] + zi1 * g_zy[s, 1]
-    for i in range(q):
-        for j in range(q):
-            a[i, j] /= scale[i] * scale[j]
-        rhs[i] /= scale[i]
-    beta = np.linalg.lstsq(a, rhs, 1e-12)[0] / scale
-    gamma = np.empty((n_seg, 2))
-    for s in range(n_seg):
-        for k in range(2):
-            acc = g_zy[s, k]
-            for j in range(q):
-                acc -= g_zx[s, k, j] * beta[j]
-            gamma[s, k] = acc
+    beta, gamma = _beta_gamma(a, rhs, scale, g_zx, g_zy)
     # the residual, block by block: the free response's fit and the columns' taken off y two
     # at a time, the squares summed with the last two
     res = np.empty(longest)
@@ -436,18 +448,7 @@ def solve_flights_rows(y: np.ndarray, indptr: np.ndarray, indices: np.ndarray,
             for j in range(q):
                 a[i, j] -= zi0 * g[0, j] + zi1 * g[1, j]
             b[i] -= zi0 * g[0, q] + zi1 * g[1, q]
-    for i in range(q):
-        for j in range(q):
-            a[i, j] /= scale[i] * scale[j]
-        b[i] /= scale[i]
-    beta = np.linalg.lstsq(a, b, 1e-12)[0] / scale
-    gamma = np.empty((n_seg, 2))
-    for s in range(n_seg):
-        for k in range(2):
-            acc = g_zy[s, k]
-            for j in range(q):
-                acc -= g_zx[s, k, j] * beta[j]
-            gamma[s, k] = acc
+    beta, gamma = _beta_gamma(a, b, scale, g_zx, g_zy)
     rss = _residual_z(y, indptr, indices, values, p, r, beta, z, seg, gamma)
     return rss, beta, gamma
 
