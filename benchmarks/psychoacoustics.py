@@ -3,7 +3,9 @@
 Each metric's CPU time (``time.process_time``, one thread: BLAS/FFT threads pinned to 1) on a
 signal of rattle-like clicks in noise, as a multiple of real time (seconds of sound per
 second of CPU: the goal is >= 50x per core).  ECMA-418-2 (sottek-hearing-model, optional) on
-a shorter stretch: it is slow.  The number of repeats keeps each row under a few seconds.
+a shorter stretch: it is slow; beside it, the floor of any implementation of the standard
+(``ecma418_floor.py``: its filter bank compiled and its tonality's ACFs by FFT).  The number
+of repeats keeps each row under a few seconds.
 
 Run: ``python benchmarks/psychoacoustics.py [seconds_of_sound]``
 """
@@ -15,6 +17,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from threadpoolctl import threadpool_limits
 
@@ -47,8 +50,12 @@ def cpu(fn, repeats: int = 1) -> float:
     return (time.process_time() - t0) / repeats
 
 
-def main() -> None:
-    dur = float(sys.argv[1]) if len(sys.argv) > 1 else 10.0
+def measure(dur: float = 10.0, ecma_floor_s: float = 2.0) -> list[tuple[str, float, float]]:
+    """(metric, seconds of sound, CPU s) of each metric, one thread; ECMA-418-2 on 2 s when
+    sottek-hearing-model is installed, and the floor of any implementation of it
+    (``ecma418_floor.py``) on ``ecma_floor_s`` s."""
+    from ecma418_floor import floor_rows
+
     x, t_imp = clicks(dur)
     eps = rattle_episodes(t_imp, start_time_s=0.0, duration_s=dur)
     rows = []
@@ -61,7 +68,7 @@ def main() -> None:
         rows.append(("ISO 532-1 loudness (rattle_lab.acoustics.loudness)", dur,
                      cpu(lambda: loudness(x, FS))))
         rows.append(("run_acoustics: levels, bands, loudness of run + episodes", dur,
-                     cpu(lambda: run_acoustics(x, FS, t_imp))))
+                     cpu(lambda: run_acoustics(x, FS, t_imp), 3)))
         if ecma418_available():
             short = x[:round(2.0 * FS)]
             rows.append(("ECMA-418-2 tonality+loudness+roughness (sottek-hm)", 2.0,
@@ -69,11 +76,18 @@ def main() -> None:
         else:
             rows.append(("ECMA-418-2 (sottek-hearing-model not installed)", float("nan"),
                          float("nan")))
-    print(f"{'metric':58s} {'sound s':>8s} {'CPU s':>8s} {'x real time':>12s} {'>= 50x':>7s}")
+    rows.extend(floor_rows(ecma_floor_s))
+    return rows
+
+
+def main() -> None:
+    dur = float(sys.argv[1]) if len(sys.argv) > 1 else 10.0
+    rows = measure(dur)
+    print(f"{'metric':62s} {'sound s':>8s} {'CPU s':>8s} {'x real time':>12s} {'>= 50x':>7s}")
     for name, sound, t in rows:
         ratio = sound / t if t > 0 else float("nan")
         ok = "yes" if ratio >= 50 else "NO"
-        print(f"{name:58s} {sound:8.1f} {t:8.3f} {ratio:12.1f} {ok:>7s}")
+        print(f"{name:62s} {sound:8.1f} {t:8.3f} {ratio:12.1f} {ok:>7s}")
 
 
 if __name__ == "__main__":

@@ -12,6 +12,9 @@ One run, one machine, one table (machine, date and load average printed with it)
 * **loudness**: ``rattle_lab.acoustics.loudness`` (ISO 532-1, compiled) on a 51.2 kHz
   microphone signal, as a multiple of real time per CPU second, beside MoSQITo's
   ``loudness_zwtv`` on one second;
+* **psychoacoustics** (issue 26): each metric of ``benchmarks/psychoacoustics.py`` per CPU
+  second on a 51.2 kHz channel, and the floor of any ECMA-418-2 implementation
+  (``benchmarks/ecma418_floor.py``);
 * **imports**: what ``rattle-lab fit`` pays for imports (``PYTHONPROFILEIMPORTTIME``: the sum
   of the top-level imports' cumulative times, a run on a small store);
 * **scale-out**: the same fit (detect stage on the cluster) serial and on a ``LocalCluster``
@@ -48,8 +51,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from independent_campaign import Chain, Plant, write_campaign  # noqa: E402
+from psychoacoustics import measure as psycho_measure  # noqa: E402
 
 WEEK_SAMPLES = 1.2e11      # 4 channels x 51.2 kHz x 7 days (1.24e11), as the issue rounds it
 TEN_MINUTES_S = 600.0
@@ -487,6 +492,13 @@ def main() -> None:
         rows.append(("ISO 532-1 loudness, 51.2 kHz mic (compiled)",
                      f"{cpu_x:.0f}x real time per CPU s",
                      f"{wall_x:.0f}x per wall s; MoSQITo {mosq_x:.2f}x; goal >= 200x"))
+        print(rows[-1], flush=True)
+        # issue 26: every psychoacoustic metric, per core (benchmarks/psychoacoustics.py)
+        for name, sound, t in psycho_measure(10.0):
+            rate = sound / t if t > 0 else float("nan")
+            rows.append((f"{name}, 51.2 kHz" if "floor" not in name else name,
+                         f"{rate:.1f}x real time per CPU s",
+                         f"{t:.3f} CPU s for {sound:g} s of sound; goal >= 50x"))
         print(rows[-1], flush=True)
 
         # scale-out: the same fit, detect stage serial and on the cluster

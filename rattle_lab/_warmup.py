@@ -47,6 +47,7 @@ COMPILED: dict[str, tuple[str, ...]] = {
     "rattle_lab.acoustics._iso532": ("_slopes", "_decay_frame", "_weight_frame", "_run",
                                      "_core_loudness"),
     "rattle_lab.acoustics._nl_decay": ("_decay_rows",),
+    "rattle_lab.acoustics._filters": ("_band_power_sums", "_weighting_bins"),
 }
 
 

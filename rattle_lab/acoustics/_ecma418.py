@@ -81,12 +81,33 @@ class Ecma418:
 
 
 def ecma418_available() -> bool:
-    """Whether ``sottek-hearing-model`` can be imported."""
+    """Whether ``sottek-hearing-model`` can be imported (imported here, its side effects
+    on Matplotlib undone: see :func:`_import_package`)."""
     try:
-        import sottek_hearing_model  # noqa: F401
+        _import_package()
     except Exception:   # ImportError, or a broken install (its plotting backend)
         return False
     return True
+
+
+def _import_package() -> None:
+    """Import sottek-hearing-model and undo what its import does to Matplotlib: it sets
+    the global font sizes (16-20 pt) and family, which would break the layout of every
+    figure drawn afterwards in the process (the report's pages), and may switch the
+    backend."""
+    import sys
+
+    if "sottek_hearing_model" in sys.modules:
+        return
+    import matplotlib
+
+    backend = matplotlib.get_backend()
+    try:
+        with matplotlib.rc_context():
+            import sottek_hearing_model  # noqa: F401
+    finally:
+        if matplotlib.get_backend() != backend:
+            matplotlib.use(backend)
 
 
 def ecma418(pressure_pa: object, fs_hz: float, *,

@@ -5,8 +5,11 @@ the *background* is the rest of the run.  Per episode:
 
 * ``n_impacts`` and ``impacts_per_s`` -- the repetition rate ``(n - 1) / (t_last - t_first)``
   of its impacts (None with one impact);
-* ISO 532-1 loudness ``loudness_n5_sone`` / ``loudness_max_sone`` of the episode's sound
-  (the public :func:`~rattle_lab.acoustics.loudness`, from rest at the episode's start);
+* ISO 532-1 loudness ``loudness_n5_sone`` / ``loudness_max_sone`` of the episode's sound:
+  the 95th percentile and the largest of the run's ``N(t)`` over the episode, as a sound
+  level meter running through the run reads a stretch of it (the ear does not restart at
+  the first impact; without the run's ``N(t)``, the public
+  :func:`~rattle_lab.acoustics.loudness` of the episode from rest at its start);
 * impulsiveness (:mod:`._impulsiveness`): the most prominent onset of ``L_AF`` (computed once
   over the whole run, so that an episode's first onset rises from its background) that
   starts inside the episode, ``impulse_prominence`` ``P`` and ``impulse_penalty_db`` ``K_I``;
@@ -16,7 +19,8 @@ Per run: ``impacts_per_s`` over the episodes together (``sum(n - 1) / sum(t_last
 the most prominent onset of the run, the episodes' duration-weighted ECMA-418-2 values and
 ``rattle_loudness_n5_sone``, their duration-weighted N5.  The background stretches
 (at least :data:`MIN_BACKGROUND_S` long) get their own N5, of their central
-:data:`MAX_BACKGROUND_S` at most.
+:data:`MAX_BACKGROUND_S` at most, from rest (read off the run's ``N(t)``, a stretch's N5
+would carry the decay of the impact before it).
 
 The loudness *above background* compares the rattle with the background stretches of the
 whole campaign (all runs of one fit, runs without impacts included),
@@ -74,6 +78,20 @@ def _n5(p: np.ndarray, fs_hz: float, field_type: FieldType) -> tuple[float, floa
     return ld.n5_sone, ld.nmax_sone
 
 
+#: Step of the ISO 532-1 ``N(t)`` curve, s.
+_CURVE_STEP_S = 0.002
+
+
+def _curve_n5(curve: np.ndarray, t0_s: float, t1_s: float) -> tuple[float, float]:
+    """N5 and Nmax of the stretch ``[t0_s, t1_s)`` (s from the curve's start) of ``N(t)``."""
+    k0 = max(0, math.floor(t0_s / _CURVE_STEP_S))
+    k1 = min(curve.size, math.ceil(t1_s / _CURVE_STEP_S))
+    if k1 <= k0:
+        return _NAN, _NAN
+    part = curve[k0:k1]
+    return float(np.percentile(part, 95.0)), float(np.max(part))
+
+
 def _rate(t: np.ndarray) -> tuple[int, float]:
     """(intervals, span) of sorted impact times."""
     return (t.size - 1, float(t[-1] - t[0])) if t.size >= 2 else (0, 0.0)
@@ -90,7 +108,9 @@ def episode_psychoacoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: o
                             background: Sequence[tuple[int, int]], *,
                             start_time_s: float = 0.0, field_type: FieldType = "free",
                             calibrated: bool = True, with_loudness: bool = True,
-                            ecma418_s: float = 0.0) -> tuple[dict[str, Any],
+                            ecma418_s: float = 0.0, fast_a_ms: np.ndarray | None = None,
+                            loudness_curve: np.ndarray | None = None
+                            ) -> tuple[dict[str, Any],
                                                              list[dict[str, Any]],
                                                              list[dict[str, Any]]]:
     """Run-level keys, per-episode entries and background stretches (see the module).
@@ -117,6 +137,12 @@ def episode_psychoacoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: o
         Compute ISO 532-1 loudness per episode and per background stretch.
     ecma418_s : float
         Seconds of episode sound per run to rate with ECMA-418-2 (0: none).
+    fast_a_ms : ndarray, optional
+        The record's F-weighted A mean square per sample, when already computed (for
+        its ``L_AF``).
+    loudness_curve : ndarray, optional
+        The record's ISO 532-1 ``N(t)`` (sone every 2 ms from its first sample, in the
+        ``field_type`` asked for): the episodes' loudness is read off it.
 
     Returns
     -------
@@ -134,7 +160,8 @@ def episode_psychoacoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: o
     loud_ok = with_loudness and calibrated
     if not calibrated:
         flags.append(FLAG_UNCALIBRATED)
-    onsets = (find_onsets(p, fs_hz, start_time_s=start_time_s, step_s=ONSET_STEP_S)
+    onsets = (find_onsets(p, fs_hz, start_time_s=start_time_s, step_s=ONSET_STEP_S,
+                          fast_a_ms=fast_a_ms)
               if p.size >= 0.2 * fs_hz else Onsets(*(np.zeros(0) for _ in range(5))))
     want_ecma = ecma418_s > 0 and calibrated
     if want_ecma and not ecma418_available():
@@ -150,8 +177,12 @@ def episode_psychoacoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: o
         k, s = _rate(t_in)
         intervals, span = intervals + k, span + s
         seg = p[i0:i1]
-        n5, nmax = (_n5(seg, fs_hz, field_type) if loud_ok
-                    and seg.size >= MIN_EPISODE_LOUDNESS_S * fs_hz else (_NAN, _NAN))
+        if not (loud_ok and seg.size >= MIN_EPISODE_LOUDNESS_S * fs_hz):
+            n5, nmax = _NAN, _NAN
+        elif loudness_curve is not None:
+            n5, nmax = _curve_n5(loudness_curve, i0 / fs_hz, i1 / fs_hz)
+        else:
+            n5, nmax = _n5(seg, fs_hz, field_type)
         e: dict[str, Any] = {"t_start_s": a, "t_end_s": b, "n_impacts": int(t_in.size),
                              "impacts_per_s": k / s if s > 0 else None,
                              "loudness_n5_sone": n5, "loudness_max_sone": nmax,

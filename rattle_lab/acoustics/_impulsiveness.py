@@ -118,11 +118,14 @@ class Onsets:
                 "impulse_onset_rate_db_s": float(self.onset_rate_db_s[i])}
 
 
-def laf_db(pressure_pa: object, fs_hz: float, step_s: float = ONSET_STEP_S) -> np.ndarray:
+def laf_db(pressure_pa: object, fs_hz: float, step_s: float = ONSET_STEP_S, *,
+           fast_a_ms: np.ndarray | None = None) -> np.ndarray:
     """``L_AF`` sampled every ``step_s`` (sample ``k`` at ``(k + 1) step_s - 1/fs``), dB re 20 uPa.
 
     The F weighting starts at rest; the first 0.5 s are its start-up (callers
-    that rate onsets skip them: see :func:`find_onsets`).
+    that rate onsets skip them: see :func:`find_onsets`).  ``fast_a_ms``: the record's
+    F-weighted A mean square per sample, when already computed
+    (:func:`~rattle_lab.acoustics._levels.levels_bands_fast`).
     """
     p = np.asarray(pressure_pa, dtype=float)
     if not (np.isfinite(fs_hz) and fs_hz > 0):
@@ -130,13 +133,18 @@ def laf_db(pressure_pa: object, fs_hz: float, step_s: float = ONSET_STEP_S) -> n
     if p.ndim != 1 or p.size == 0 or not np.all(np.isfinite(p)):
         raise ParameterError("`pressure_pa` must be a non-empty 1-D finite signal")
     hop = max(1, round(step_s * fs_hz))
-    m = fast_time_weighted(apply_weighting(p, fs_hz, "A") ** 2, fs_hz)[hop - 1::hop]
+    if fast_a_ms is None:
+        fast_a_ms = fast_time_weighted(apply_weighting(p, fs_hz, "A") ** 2, fs_hz)
+    elif fast_a_ms.shape != p.shape:
+        raise ParameterError(f"`fast_a_ms` has {fast_a_ms.size} samples, the record {p.size}")
+    m = fast_a_ms[hop - 1::hop]
     floor = (P_REF_PA * 1e-6) ** 2   # -120 dB: a digital silence has a level
     return np.asarray(10.0 * np.log10(np.maximum(m, floor) / P_REF_PA**2))
 
 
 def find_onsets(pressure_pa: object, fs_hz: float, *, start_time_s: float = 0.0,
-                step_s: float = ONSET_STEP_S, settle_s: float = 0.5) -> Onsets:
+                step_s: float = ONSET_STEP_S, settle_s: float = 0.5,
+                fast_a_ms: np.ndarray | None = None) -> Onsets:
     """The onsets of ``L_AF`` (see the module) of a pressure record.
 
     Parameters
@@ -166,7 +174,7 @@ def find_onsets(pressure_pa: object, fs_hz: float, *, start_time_s: float = 0.0,
     >>> on.t_start_s.size, round(float(on.level_difference_db[0]))
     (1, 29)
     """
-    level = laf_db(pressure_pa, fs_hz, step_s)
+    level = laf_db(pressure_pa, fs_hz, step_s, fast_a_ms=fast_a_ms)
     hop = max(1, round(step_s * fs_hz))
     dt = hop / fs_hz
     t = start_time_s + (np.arange(level.size) + 1) * hop / fs_hz - 1.0 / fs_hz

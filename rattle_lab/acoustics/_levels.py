@@ -125,6 +125,15 @@ def levels_and_bands(pressure_pa: object, fs_hz: float, *, bands: bool = True
     """:func:`sound_levels` and the third-octave bands' mean squares it took its band levels
     from (:func:`~rattle_lab.acoustics.band_mean_squares`, Pa^2; empty without ``bands``):
     what pools the bands of several stretches, without their transforms again."""
+    lv, ms, _ = levels_bands_fast(pressure_pa, fs_hz, bands=bands)
+    return lv, ms
+
+
+def levels_bands_fast(pressure_pa: object, fs_hz: float, *, bands: bool = True
+                      ) -> tuple[SoundLevels, dict[str, float], np.ndarray]:
+    """:func:`levels_and_bands` and the F-weighted A mean square ``m_F(t)`` (Pa^2, one value
+    per sample) that LAFmax is the largest of: what ``L_AF`` of the impulsiveness rating
+    is sampled from (:func:`~rattle_lab.acoustics.laf_db`), without the weighting again."""
     p = np.asarray(pressure_pa, dtype=float)
     if not (np.isfinite(fs_hz) and fs_hz > 0):
         raise ParameterError(f"`fs_hz` must be > 0, was {fs_hz}")
@@ -132,12 +141,13 @@ def levels_and_bands(pressure_pa: object, fs_hz: float, *, bands: bool = True
         raise ParameterError("`pressure_pa` must be a non-empty 1-D finite signal")
     p_a, p_c = apply_weightings(p, fs_hz, ("A", "C"))
     laeq = _db10(float(np.mean(p_a**2)))
-    lafmax = _db10(float(np.max(fast_time_weighted(p_a**2, fs_hz))))
+    fast_a = fast_time_weighted(p_a**2, fs_hz)
+    lafmax = _db10(float(np.max(fast_a)))
     peak = float(np.max(np.abs(p_c)))
     lcpeak = float(20.0 * np.log10(peak / P_REF_PA)) if peak > 0 else float("-inf")
     ms = band_mean_squares(p, fs_hz) if bands else {}
     third = {k: _db10(v) for k, v in ms.items()}
-    return SoundLevels(laeq, lafmax, lcpeak, third, p.size / fs_hz), ms
+    return SoundLevels(laeq, lafmax, lcpeak, third, p.size / fs_hz), ms, fast_a
 
 
 def rattle_episodes(impact_t_s: object, *, start_time_s: float, duration_s: float,
@@ -168,7 +178,7 @@ def rattle_episodes(impact_t_s: object, *, start_time_s: float, duration_s: floa
 
 
 __all__ = ["P_REF_PA", "SoundLevels", "TAU_FAST_S", "fast_time_weighted", "levels_and_bands",
-           "rattle_episodes", "sound_levels"]
+           "levels_bands_fast", "rattle_episodes", "sound_levels"]
 
 
 def energy_mean_db(levels_db: object) -> float:

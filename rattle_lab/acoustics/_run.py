@@ -8,14 +8,15 @@ This is what ``rattle-lab fit --json`` reports per run as ``acoustics`` and
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from rattle_lab.exceptions import RattleLabError
 from ._episodes import episode_psychoacoustics
-from ._levels import P_REF_PA, SoundLevels, levels_and_bands, rattle_episodes, sound_levels
+from ._levels import (P_REF_PA, SoundLevels, levels_and_bands, levels_bands_fast,
+                      rattle_episodes)
 from ._loudness import FieldType, Loudness, joined_loudness, loudness
 
 #: Loudness needs ISO 532-1's 0.1 s at least; shorter stretches get none.
@@ -150,11 +151,11 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
         Keep the run's ``N(t)`` on its loudness, for :func:`joined_acoustics`.
     """
     p = np.asarray(pressure_pa, dtype=float)
-    lv = sound_levels(p, fs_hz)
+    lv, _, fast_a = levels_bands_fast(p, fs_hz)
     ld = None
     if with_loudness and p.size >= _MIN_LOUDNESS_S * fs_hz:
         try:
-            ld = loudness(p, fs_hz, field_type=field_type, keep_curve=keep_loudness_curve)
+            ld = loudness(p, fs_hz, field_type=field_type, keep_curve=True)
         except RattleLabError:
             ld = None
     eps = rattle_episodes(impact_t_s, start_time_s=start_time_s, duration_s=p.size / fs_hz,
@@ -186,7 +187,10 @@ def run_acoustics(pressure_pa: np.ndarray, fs_hz: float, impact_t_s: object, *,
     run, per_episode, per_background = episode_psychoacoustics(
         p, fs_hz, impact_t_s, kept, spans, start_time_s=start_time_s, field_type=field_type,
         calibrated=calib.get("source") != "none", with_loudness=with_loudness,
-        ecma418_s=ecma418_s)
+        ecma418_s=ecma418_s, fast_a_ms=fast_a,
+        loudness_curve=ld.curve[0] if ld is not None and ld.curve is not None else None)
+    if ld is not None and not keep_loudness_curve:
+        ld = replace(ld, curve=None)
     episodes = [{**e, **x} for e, x in zip(episodes, per_episode)]
     run["background_stretches"] = per_background
     return RunAcoustics(lv, ld, tuple(episodes), _pooled_bands(rattle_pieces, fs_hz, rattle_ms),

@@ -69,6 +69,10 @@ def pdf_output(output: str | os.PathLike[str]) -> Path:
 def render_pages(content: ReportContent) -> tuple[list[tuple[str, Figure]], tuple[str, ...]]:
     """Draw every page of ``content``, in order and numbered; nothing is computed here.
 
+    The pages are laid out for Matplotlib's default style, so they are drawn in it, whatever
+    the session's ``rcParams`` say (a user's ``matplotlibrc``, or a package that changes the
+    font sizes when imported).
+
     Returns
     -------
     pages : list of (str, Figure)
@@ -77,6 +81,13 @@ def render_pages(content: ReportContent) -> tuple[list[tuple[str, Figure]], tupl
     sections : tuple of str
         The sections present, ``"summary"`` first.
     """
+    import matplotlib.style
+
+    with matplotlib.style.context("default"):
+        return _render_pages(content)
+
+
+def _render_pages(content: ReportContent) -> tuple[list[tuple[str, Figure]], tuple[str, ...]]:
     renderers = dict(PAGES)
     pages: list[tuple[str, Figure]] = []
     for name, page_content in content.sections:
@@ -122,6 +133,7 @@ def write_pdf(content: ReportContent, output: str | os.PathLike[str]) -> ReportR
         If the output directory does not exist or the file cannot be written.
     """
     import matplotlib
+    import matplotlib.style
     from matplotlib.backends.backend_pdf import PdfPages
 
     output = pdf_output(output)
@@ -131,7 +143,8 @@ def write_pdf(content: ReportContent, output: str | os.PathLike[str]) -> ReportR
     metadata = {"Title": f"rattle_lab report: {content.store_name}", "Creator": "rattle_lab",
                 "Subject": "sections: " + ", ".join(sections),
                 "CreationDate": None, "ModDate": None}
-    with matplotlib.rc_context({"pdf.fonttype": 42, "svg.hashsalt": "rattle_lab"}):
+    with matplotlib.style.context("default"), \
+            matplotlib.rc_context({"pdf.fonttype": 42, "svg.hashsalt": "rattle_lab"}):
         with atomic_path(output) as tmp:
             with PdfPages(tmp, metadata=metadata) as pdf:  # type: ignore[arg-type]
                 for _, fig in all_pages:

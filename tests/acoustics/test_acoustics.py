@@ -379,3 +379,55 @@ def test_compiled_loudness_memory_is_the_output_curve():
     assert n_t.shape == (500 * 2,) and spec.shape == (240,)
     silent, _ = time_varying_loudness(np.zeros(4800))
     assert np.all(silent == 0.0)
+
+
+def test_fast_transform_length_is_the_smallest_5_smooth_length():
+    # Brute force over every n up to 3000: the smallest m >= n whose only prime factors
+    # are 2, 3 and 5.
+    from rattle_lab.acoustics._filters import fast_length
+
+    def smooth(m: int) -> bool:
+        for q in (2, 3, 5):
+            while m % q == 0:
+                m //= q
+        return m == 1
+
+    for n in range(1, 3000):
+        m = n
+        while not smooth(m):
+            m += 1
+        assert fast_length(n) == m, n
+    assert fast_length(537_600) == 540_000   # 10.5 s at 51.2 kHz: not 2**20
+
+
+@pytest.mark.parametrize("weighting", ["A", "C"])
+@pytest.mark.parametrize("n_fft, fs", [(1080, 48000.0), (540_000, 51200.0), (4096, 25600.0)])
+def test_compiled_weighting_on_the_bins_is_the_analog_response(weighting, n_fft, fs):
+    # The compiled evaluation against weighting_response (NumPy, the same closed form):
+    # a few roundings of a rational function of degree 6, relative 1e-13.
+    from rattle_lab.acoustics import weighting_response
+    from rattle_lab.acoustics._filters import _response_on_bins
+
+    h = _response_on_bins(weighting, n_fft, fs)
+    ref = weighting_response(weighting, np.arange(n_fft // 2 + 1) * fs / n_fft)
+    np.testing.assert_allclose(h, ref, rtol=1e-13, atol=0.0)
+
+
+def test_band_mean_squares_are_the_band_gains_summed_over_the_bins():
+    # The compiled one-pass sum against the plain NumPy sum of |H_b|^2 times the one-sided
+    # power spectrum, on noise with a strong low tone (the far bins matter): relative 1e-12
+    # (two summation orders over 2e4 positive terms).
+    from rattle_lab.acoustics import band_mean_squares
+
+    rng = np.random.default_rng(3)
+    x = rng.normal(0.0, 1.0, 48_001) + 30 * np.sin(2 * np.pi * 31.0 * np.arange(48_001) / FS)
+    ms = band_mean_squares(x, FS)
+    spec = np.abs(np.fft.rfft(x)) ** 2 / x.size**2
+    spec[1:] *= 2.0                                   # odd length: no Nyquist bin
+    freq = np.fft.rfftfreq(x.size, 1.0 / FS)
+    for x_band, label in zip(range(-17, 14), NOMINAL_THIRD_OCTAVE_HZ):
+        if band_edges_hz(x_band)[2] >= FS / 2:
+            assert label not in ms
+            continue
+        assert ms[label] == pytest.approx(np.sum(spec * band_gain(x_band, freq) ** 2),
+                                          rel=1e-12)

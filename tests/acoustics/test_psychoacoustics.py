@@ -256,3 +256,70 @@ def test_real_clap_is_one_prominent_impulse():
     assert on.t_start_s[i] == pytest.approx(0.8, abs=0.0101)
     assert on.prominence[i] > 5.0 and adjustment_db(on.prominence[i]) > 0.0
     assert find_onsets(x * 1e3, fs).prominence[i] == pytest.approx(on.prominence[i], abs=1e-9)
+
+
+def test_episode_loudness_is_the_runs_curve_over_the_episode():
+    # A 1 kHz tone at 60 dB (4 sone, ISO 532-1) switched on for the 2 s of an episode in a
+    # run of quiet noise.  The episode's N5 is read off the run's N(t); it equals the tone's
+    # loudness (ISO 532-1 anchor, 3 %) and the loudness function on the episode alone
+    # from rest within 0.1 % (they differ only in the first milliseconds, which a 95th
+    # percentile over 2 s does not see: 2e-8 measured).
+    from rattle_lab.acoustics import loudness
+
+    fs, dur = FS, 6.0
+    t = np.arange(round(dur * fs)) / fs
+    rng = np.random.default_rng(5)
+    p = rng.normal(0.0, P0 * 10 ** (20 / 20), t.size)          # about 20 dB of noise
+    on = (t >= 2.0) & (t < 4.0)
+    p[on] += np.sqrt(2) * P0 * 10 ** (60 / 20) * np.sin(2 * np.pi * 1000 * t[on])
+    impacts = np.arange(2.0, 3.951, 0.1)
+    ra = run_acoustics(p, fs, impacts)
+    (ep,) = ra.episodes
+    assert ep["loudness_n5_sone"] == pytest.approx(4.0, rel=0.03)
+    i0, i1 = round(ep["t_start_s"] * fs), round(ep["t_end_s"] * fs)
+    alone = loudness(p[i0:i1], fs)
+    assert ep["loudness_n5_sone"] == pytest.approx(alone.n5_sone, rel=1e-3)
+    assert ep["loudness_max_sone"] == pytest.approx(alone.nmax_sone, rel=1e-3)
+    # the run's N(t) is not kept unless asked for
+    assert ra.loudness is not None and ra.loudness.curve is None
+
+
+def test_laf_from_the_levels_weighted_signal_is_laf_of_the_record():
+    # run_acoustics hands its F-weighted A mean square to the onset search: the same L_AF.
+    from rattle_lab.acoustics import laf_db
+    from rattle_lab.acoustics._levels import levels_bands_fast
+
+    x = tone_step(40.0, 70.0)
+    _, _, fast_a = levels_bands_fast(x, FS)
+    np.testing.assert_array_equal(laf_db(x, FS, fast_a_ms=fast_a), laf_db(x, FS))
+
+
+def test_the_ecma_packages_import_leaves_matplotlib_as_it_was(tmp_path, monkeypatch):
+    # sottek-hearing-model sets Matplotlib's global font sizes (16-20 pt) and family when
+    # imported, which broke the report's layout in the same process.  A stand-in package
+    # that does the same (so this runs without the optional package): after
+    # ecma418_available(), rcParams and the backend are what they were.
+    import sys
+
+    import matplotlib
+
+    from rattle_lab.acoustics import ecma418_available
+
+    pkg = tmp_path / "sottek_hearing_model"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text(
+        "import matplotlib as mpl\n"
+        "import matplotlib.pyplot as plt\n"
+        "mpl.rcParams['font.family'] = 'sans-serif'\n"
+        "mpl.rcParams['font.sans-serif'] = 'Arial'\n"
+        "plt.rc('font', size=16)\n"
+        "plt.rc('axes', titlesize=18)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "sottek_hearing_model", raising=False)
+    before = dict(matplotlib.rcParams)
+    backend = matplotlib.get_backend()
+    assert ecma418_available()
+    assert sys.modules["sottek_hearing_model"].__file__.startswith(str(tmp_path))
+    assert dict(matplotlib.rcParams) == before
+    assert matplotlib.get_backend() == backend
+    monkeypatch.delitem(sys.modules, "sottek_hearing_model")

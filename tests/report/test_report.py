@@ -557,3 +557,22 @@ def test_the_listener_page_plots_each_runs_stored_psychoacoustics(stores: dict[s
     assert np.nanmax(m.above_background_sone) > 0 and np.nanmax(m.impacts_per_s) > 0
     # ECMA-418-2 is not rated by default ([fit] ecma418_s = 0): the panel says why
     assert np.isnan(m.loudness_ecma_sone).all() and "ecma418_s = 0" in m.ecma_note
+
+
+def test_pages_are_drawn_in_the_default_style_whatever_the_session_says(
+        stores: dict[str, Path]) -> None:
+    # A session whose rcParams carry large fonts (a user's matplotlibrc, or a package that
+    # sets them on import) draws the same pages: every text at the size it has by default.
+    import matplotlib
+
+    content = gather(stores["fitted"])
+
+    def sizes() -> list[list[float]]:
+        pages, _ = build_pages(content, model=False)
+        return [[t.get_fontsize() for t in fig.texts]
+                + [ax.title.get_fontsize() for ax in fig.axes] for _, fig in pages]
+
+    plain = sizes()
+    with matplotlib.rc_context({"font.size": 16, "axes.titlesize": 18, "figure.titlesize": 20}):
+        large = sizes()
+    assert large == plain

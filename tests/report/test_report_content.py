@@ -44,6 +44,7 @@ REPORT_MODULES = sorted(p.name for p in REPORT.glob("*.py"))
 ALLOWED: dict[str, set[str] | None] = {
     "numpy": None, "matplotlib": None, "matplotlib.figure": None, "matplotlib.lines": None,
     "matplotlib.patches": None, "matplotlib.ticker": None,
+    "matplotlib.style": None,   # drawing in the default style, whatever the session's rc
     "matplotlib.backends.backend_pdf": {"PdfPages"},
     # the report's own modules: pages, shared drawing helpers, content types, the renderer
     "rattle_lab.report": {"_pages", "_pages_acoustics", "_pages_model", "_pages_shocks"},
