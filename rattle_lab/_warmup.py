@@ -37,7 +37,7 @@ COMPILED: dict[str, tuple[str, ...]] = {
                                           "_sums_z", "_residual_z", "_solve2", "solve_flights",
                                           "added_sums", "eliminate_free", "sparse_cross",
                                           "tail_columns", "sparse_gram", "carried_gains",
-                                          "solve_flights_rows", "_beta_gamma"),
+                                          "solve_flights_rows", "_beta_gamma", "forced_rows"),
     "rattle_lab.detect._jump_kernels": ("local_design", "local_lstsq", "local_eval", "_fit",
                                         "fit_value", "fits_at", "half_region", "_step_centroid",
                                         "_contact_pulse", "jump_fits_batch", "_refined",

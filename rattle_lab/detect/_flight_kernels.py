@@ -785,3 +785,57 @@ def sparse_gram(indptr: np.ndarray, indices: np.ndarray, values: np.ndarray, p: 
                 xtx[qa, indices[b]] += va * values[b]
     return xtx, xty
 
+
+
+@numba.njit(cache=True, nogil=True)
+def forced_rows(t_s: np.ndarray, c: np.ndarray, s: np.ndarray, knots: np.ndarray,
+                j: np.ndarray, new_index: np.ndarray, keep: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """The forced columns' nonzero entries by rows (CSR ``indptr``, ``indices``, ``values``).
+
+    Sample ``i`` lies in knot interval ``j[i]``: its columns are ``1`` (column 0) and the
+    hats ``h_left``, ``h_right`` of knots ``j`` and ``j + 1`` times ``cos wt`` and ``sin wt``
+    (columns ``1 + 2 j`` .. ``4 + 2 j``), each hat computed as :func:`numpy.interp` computes
+    it; ``c``, ``s`` the cosine and sine (computed by the caller, as the dense path computes
+    them).  Kept columns only (``keep``), renumbered by ``new_index``; exact zeros left out.
+    Two passes (count, then fill): nothing larger than the result.
+    """
+    n = t_s.size
+    indptr = np.empty(n + 1, np.int64)
+    indptr[0] = 0
+    for fill in range(2):
+        if fill:
+            indices = np.empty(indptr[n], np.int64)
+            values = np.empty(indptr[n])
+        m = 0
+        for i in range(n):
+            k = j[i]
+            t = t_s[i]
+            if t >= knots[knots.size - 1]:
+                h_left, h_right = 0.0, 1.0
+            elif t == knots[k]:
+                h_left, h_right = 1.0, 0.0
+            else:
+                width = knots[k + 1] - knots[k]
+                off = t - knots[k]
+                h_left = ((0.0 - 1.0) / width) * off + 1.0
+                h_right = ((1.0 - 0.0) / width) * off + 0.0
+            for q in range(5):
+                if q == 0:
+                    col, v = 0, 1.0
+                elif q == 1:
+                    col, v = 1 + 2 * k, h_left * c[i]
+                elif q == 2:
+                    col, v = 2 + 2 * k, h_left * s[i]
+                elif q == 3:
+                    col, v = 3 + 2 * k, h_right * c[i]
+                else:
+                    col, v = 4 + 2 * k, h_right * s[i]
+                if v != 0.0 and keep[col]:
+                    if fill:
+                        indices[m] = new_index[col]
+                        values[m] = v
+                    m += 1
+            if not fill:
+                indptr[i + 1] = m
+    return indptr, indices, values

@@ -212,33 +212,17 @@ def _forced_rows(t_s: np.ndarray, omega: float, t_total_s: float, keep: np.ndarr
     without the dense matrix: a sample lies between two knots, so at most five of its
     ``1 + 2 n_knots`` columns are nonzero (the dense matrix of a 50 s run at 25.6 kHz was
     about 1 GB).  Each hat's value is computed as :func:`numpy.interp` computes it."""
-    t_s = np.asarray(t_s, float)
+    t_s = np.ascontiguousarray(t_s, float)
     n_knots = max(2, int(np.ceil(t_total_s / KNOT_S)) + 1)
     knots = np.linspace(0.0, t_total_s, n_knots)
-    j = np.clip(np.searchsorted(knots, t_s, side="right") - 1, 0, n_knots - 2)
-    width = knots[j + 1] - knots[j]
-    off = t_s - knots[j]
-    on_knot = t_s == knots[j]
-    beyond = t_s >= knots[-1]     # numpy.interp: the last value (of hat n_knots - 1)
-    h_left = np.where(on_knot, 1.0, ((0.0 - 1.0) / width) * off + 1.0)
-    h_right = np.where(on_knot, 0.0, ((1.0 - 0.0) / width) * off + 0.0)
-    h_left[beyond], h_right[beyond] = 0.0, 1.0
+    j = np.clip(np.searchsorted(knots, t_s, side="right") - 1, 0, n_knots - 2).astype(np.int64)
     c, s = np.cos(omega * t_s), np.sin(omega * t_s)
-    n = t_s.size
-    cols = np.empty((n, 5), np.int64)
-    cols[:, 0] = 0
-    cols[:, 1], cols[:, 2] = 1 + 2 * j, 2 + 2 * j
-    cols[:, 3], cols[:, 4] = 3 + 2 * j, 4 + 2 * j
-    vals = np.empty((n, 5))
-    vals[:, 0] = 1.0
-    vals[:, 1], vals[:, 2] = h_left * c, h_left * s
-    vals[:, 3], vals[:, 4] = h_right * c, h_right * s
     keep = np.asarray(keep, bool)
-    new_index = np.cumsum(keep) - 1
-    nz = (vals != 0.0) & keep[cols]
-    return _Rows(np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int64),
-                 new_index[cols[nz]].astype(np.int64), np.ascontiguousarray(vals[nz]),
-                 int(keep.sum()))
+    new_index = (np.cumsum(keep) - 1).astype(np.int64)
+    from ._flight_kernels import forced_rows
+
+    indptr, indices, values = forced_rows(t_s, c, s, knots, j, new_index, keep)
+    return _Rows(indptr, indices, values, int(keep.sum()))
 
 
 @dataclass(frozen=True)
