@@ -43,16 +43,20 @@ def run(freq_hz: float, n: int, corrected: bool) -> dict:
     assert plate is not None
     heard = peak_per_impact(microphone(ch.mic_pa, FS_HZ), t, ch.impacts.t_s, delay)
     im = ch.impacts
-    # The SPL law the pipeline fits: a line through the origin, p = S v_in (least squares).
+    # A line through the origin, p = S v_in (least squares): one number per run for N to 2N
     v = im.v_in_m_s
     S = float(np.sum(heard * v) / np.sum(v * v))
     S_se = float(np.sqrt(np.sum((heard - S * v) ** 2) / max(len(v) - 1, 1) / np.sum(v * v)))
+    # and the law the pipeline fits (`spl_law_first`, linear): p = S v_in + c, 95 % intervals
+    from rattle_lab.fit import fit_linear_law
+
+    law = fit_linear_law(v, heard)
     e = im.e_mode1[np.isfinite(im.e_mode1)]
     return {"n": n, "s": time.perf_counter() - t0, "impacts": im, "heard": heard,
             "e_mean": float(np.mean(e)), "e_std": float(np.std(e, ddof=1)), "e_se": float(np.std(e, ddof=1)
                                                                                          / math.sqrt(e.size)),
             "S_mean": S, "S_std": S_se, "count": len(im), "contacts": len(ch.result.contacts),
-            "q1_in": im.mode_velocity_in[:, 0]}
+            "q1_in": im.mode_velocity_in[:, 0], "law": law}
 
 
 def main() -> None:
@@ -80,6 +84,13 @@ def main() -> None:
             print(f"| {r['n']} | {r['s']:.0f} | {r['count']} | {r['contacts']} | {r['e_mean']:.4f} ({r['e_std']:.3f}; "
                   f"{r['e_se']:.3f}) | "
                   f"{r['S_mean']:.3f} ({r['S_std']:.3f}) |")
+        print("\nThe pipeline's linear SPL law (fit_linear_law: p = S v_in + c, 95 % intervals):")
+        for r in rows:
+            law = r["law"]
+            print(f"  N = {r['n']}: S = {law.slope:.3f} ({law.slope_ci_low:.3f} to {law.slope_ci_high:.3f}) "
+                  f"Pa/(m/s), c = {law.intercept:.3f} ({law.intercept_ci_low:.3f} to "
+                  f"{law.intercept_ci_high:.3f}) Pa, r2 {law.r2:.3f}, {law.n} impacts, v_in "
+                  f"{np.min(r['impacts'].v_in_m_s):.3f}-{np.max(r['impacts'].v_in_m_s):.3f} m/s")
         print("\nN -> 2N, relative change (first three impacts: t, v_in, e_mode1, peak; run means: e_mode1, slope)")
         for lo, hi in zip(rows, rows[1:]):
             if hi["n"] != 2 * lo["n"]:

@@ -118,11 +118,15 @@ def sweep(n: int, speeds: tuple[float, ...] = (0.5, 1.0, 2.0, 4.0)) -> dict[str,
     v = np.array([r["v_in"] for r in runs])
     p = np.array([abs(r["early_signed_pa"]) for r in runs])
     slope, intercept = np.polyfit(v, p, 1)
+    episode = np.array([r["mic"] * r["v_in"] for r in runs])
+    ep_slope, ep_intercept = np.polyfit(v, episode, 1)
     plate = system.plate
     per_force = RHO_AIR_KG_M3 / (2 * math.pi * plate.rho_kg_m3 * plate.h_p_m * R_MIC_M)
     force_slope = float(np.polyfit(v, [r["force"] for r in runs], 1)[0]) * per_force
     return {"n": n, "v": v, "p": p, "slope": float(slope), "intercept": float(intercept),
             "fit_residual": float(np.max(np.abs(p - (slope * v + intercept)))),
+            "episode": episode, "episode_slope": float(ep_slope),
+            "episode_intercept": float(ep_intercept),
             "force_slope": force_slope, "static": static_sound_pa(system),
             "force_over_zv": [r["force"] / (system.local_impedance_n_s_m * r["v_in"])
                               for r in runs], "bound": runs[0]["bound"]}
@@ -165,6 +169,8 @@ def main() -> None:
     print(f"  S against the bound rho_0 Z / (2 pi m'' r) = {sw['bound']:.3f}: "
           f"{sw['slope'] / sw['bound']:.3f} times")
     print(f"  c against the plate's elastic deceleration at the gap: {sw['static']:.3f} Pa")
+    print("  the whole episode's peak [Pa]: " + ", ".join(f"{x:.3f}" for x in sw["episode"])
+          + f": p = {sw['episode_slope']:.3f} v + {sw['episode_intercept']:.3f}")
 
 
 if __name__ == "__main__":
