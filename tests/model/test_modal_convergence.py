@@ -81,7 +81,8 @@ def test_band_mobility_approaches_one_over_z_where_the_plain_sum_has_none(thesis
 @pytest.mark.xfail(strict=True, reason="issue 24 target not met: at N = 16 the one-element "
                    "correction has 0.53/Z to 0.76/Z in the two octaves above its cut, and the "
                    "1 kHz octave is 0.81/Z for every N from 32 to 256 "
-                   "(measured, docs/explanation/modal_convergence.md)")
+                   "(measured, docs/explanation/modal_convergence.md; the same plate simply "
+                   "supported meets it, test_band_mobility_of_a_simply_supported_plate_...)")
 def test_band_mobility_within_ten_percent_of_one_over_z(thesis16):
     Z = _z_inf(THESIS)
     assert np.all(np.abs(_band_means(thesis16, OCTAVES_HZ) * Z - 1.0) < 0.10)
@@ -273,3 +274,42 @@ def test_first_peak_is_the_contact_force_on_an_infinite_plate_plus_the_plates_ow
     assert sw["slope"] == pytest.approx(sw["force_slope"], rel=0.05)
     assert sw["slope"] > 1.2 * sw["bound"]
     assert sw["intercept"] == pytest.approx(sw["static"], rel=0.15)
+
+
+def _ssss_centre_series(plate: Plate, zeta: float, centres_hz: tuple[float, ...],
+                        m_max: int = 200, n_freq: int = 2001) -> np.ndarray:
+    """Band means of Re(Y) * Z at the centre of a simply supported plate from its closed-form
+    modes ``sin(m pi x / a) sin(n pi y / b)``, ``w_mn = sqrt(D/m'') ((m pi/a)^2 + (n pi/b)^2)``,
+    modal mass ``m'' a b / 4`` (every mode up to m, n = m_max: 1e4 modes to 3 MHz)."""
+    D = plate.E_pa * plate.h_p_m**3 / (12.0 * (1.0 - plate.nu**2))
+    m2 = plate.rho_kg_m3 * plate.h_p_m
+    m = np.arange(1, m_max + 1, 2)[:, None]      # even m or n: a node at the centre
+    n = np.arange(1, m_max + 1, 2)[None, :]
+    wk = (math.sqrt(D / m2) * ((m * math.pi / plate.a_m) ** 2 + (n * math.pi / plate.b_m) ** 2)).ravel()
+    b2 = 4.0 / (m2 * plate.a_m * plate.b_m)       # sin^2 = 1 at the centre for odd m, n
+    out = []
+    for fc in centres_hz:
+        w = 2.0 * math.pi * np.linspace(fc / math.sqrt(2.0), fc * math.sqrt(2.0), n_freq)
+        den = wk[:, None] ** 2 - w[None, :] ** 2 + 2j * zeta * wk[:, None] * w[None, :]
+        out.append(float(np.mean(np.sum(b2 * 1j * w[None, :] / den, axis=0).real)))
+    return np.array(out) * _z_inf(plate)
+
+
+def test_band_mobility_of_a_simply_supported_plate_matches_its_closed_form_series():
+    # Issue 24 ask 2a on a plate whose modes are known in closed form: the thesis plate's
+    # size and material, simply supported (SSSS), at its centre.  The exact modal series
+    # (every mode to 3 MHz) gives band means within 10 % of 1/Z in the octaves 1-8 kHz
+    # (1.061, 0.934, 0.966, 0.979 measured): the modal-density result holds there.  The
+    # model (Ritz modes, 64 excited, and the omitted modes' element) gives the series' band
+    # means within 4 % in the octaves 1-4 kHz (0.2, 1.0, 3.6 % measured; 1.063, 0.943,
+    # 1.001); the 8 kHz octave, at its last modes, is 11 % above at N = 64 and 3.5 % at
+    # N = 128 (docs/explanation/modal_convergence.md).  So the CFCF plate's 0.81/Z in the
+    # 1 kHz octave is not the model's: the same sum meets the target on this plate.
+    ssss = Plate(a_m=0.254, b_m=0.2286, h_p_m=1e-3, E_pa=7e10, nu=0.34, rho_kg_m3=2710.0,
+                 edges="SSSS")
+    s64 = plate_system(ssss, n_modes=64, skip_unexcited=True, omitted_modes=True, pressure_pa=0.0)
+    zeta = float(np.atleast_1d(s64.zeta)[0])
+    series = _ssss_centre_series(ssss, zeta, OCTAVES_HZ)
+    assert np.all(np.abs(series - 1.0) < 0.10), series
+    model = _band_means(s64, OCTAVES_HZ[:3]) * _z_inf(ssss)
+    np.testing.assert_allclose(model, series[:3], rtol=0.04)
