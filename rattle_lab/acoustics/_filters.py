@@ -24,7 +24,7 @@ class-1 stop-band limits and the A-weighting misses class 1 at 16-20 kHz
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Literal
 
 import numba
 import numpy as np
@@ -102,18 +102,10 @@ def apply_weightings(pressure_pa: np.ndarray, fs_hz: float,
             out.append(p.copy())
             continue
         if spec is None:
-            spec = _fft().rfft(p, n=n_fft)
-        out.append(_fft().irfft(spec * _response_on_bins(weighting, n_fft, float(fs_hz)),
+            spec = np.fft.rfft(p, n=n_fft)
+        out.append(np.fft.irfft(spec * _response_on_bins(weighting, n_fft, float(fs_hz)),
                                 n=n_fft)[: p.size])
     return out
-
-
-def _fft() -> Any:
-    """SciPy's FFT module: the same pocketfft as NumPy's, about twice as fast here on the
-    weightings' lengths and 1.7 times on the awkward lengths of episodes (Bluestein)."""
-    from scipy import fft
-
-    return fft
 
 
 def fast_length(n: int) -> int:
@@ -216,7 +208,7 @@ def band_mean_squares(x: np.ndarray, fs_hz: float) -> dict[str, float]:
     out: dict[str, float] = {}
     if n == 0:
         return out
-    spec = _fft().rfft(x)    # any length: the segment's own periodic spectrum
+    spec = np.fft.rfft(x)    # any length: the segment's own periodic spectrum
     spec2 = spec.real**2 + spec.imag**2
     fold = np.full(spec2.size, 2.0)
     fold[0] = 1.0
