@@ -386,6 +386,22 @@ def test_compiled_variable_projection_is_the_direct_least_squares():
         np.testing.assert_allclose(start.at(f_hz, sigma).rss(x[:, fixed:]), r @ r, rtol=1e-9)
 
 
+def _block_spanning_flights(rng: np.random.Generator) -> tuple:
+    """``fs, n, k_imp``, the segments and 5 sparse run-wide columns of a record whose flights
+    are longer than a block, with samples before the first impact and impacts off the grid."""
+    from rattle_lab.detect._flight_kernels import BLOCK
+    from rattle_lab.detect._flights import _segments
+
+    fs, n = 2000.0, 4200
+    k_imp = np.array([250.0, 400.3, 700.0, 2300.6, 2450.0, 2600.0, 2900.2, 3100.0, 3350.0,
+                      3500.0, 3700.0, 3850.0])
+    sg = _segments(n, k_imp, np.full(k_imp.size, 3.0), 2000)
+    assert np.diff(sg.starts).max() > 2 * BLOCK and sg.left[0] < 0
+    x = rng.normal(size=(sg.k.size, 5))
+    x[rng.random(x.shape) < 0.3] = 0.0
+    return fs, n, k_imp, sg, x
+
+
 def test_carried_ringing_sums_formed_as_they_go_are_those_of_the_columns():
     # the campaign's mode search never forms the carried ringing's columns: added_sums
     # generates each sample's tails on its way, block by block (a flight, at most BLOCK
@@ -396,17 +412,11 @@ def test_carried_ringing_sums_formed_as_they_go_are_those_of_the_columns():
     # relative; 1e-12 here); and the residual against the model extended by the columns and
     # solved directly (the update's cond^2 eps, as above: 1e-9), also to a model with dense
     # columns of its own
-    from rattle_lab.detect._flight_kernels import BLOCK, added_sums
-    from rattle_lab.detect._flights import _Model, _segments, _tail_columns, _tails
+    from rattle_lab.detect._flight_kernels import added_sums
+    from rattle_lab.detect._flights import _Model, _tail_columns, _tails
 
     rng = np.random.default_rng(7)
-    fs, n = 2000.0, 4200
-    k_imp = np.array([250.0, 400.3, 700.0, 2300.6, 2450.0, 2600.0, 2900.2, 3100.0, 3350.0,
-                      3500.0, 3700.0, 3850.0])
-    sg = _segments(n, k_imp, np.full(k_imp.size, 3.0), 2000)
-    assert np.diff(sg.starts).max() > 2 * BLOCK and sg.left[0] < 0
-    x = rng.normal(size=(sg.k.size, 5))
-    x[rng.random(x.shape) < 0.3] = 0.0
+    fs, n, k_imp, sg, x = _block_spanning_flights(rng)
     y = rng.normal(size=sg.k.size)
     dv = rng.uniform(0.05, 0.3, k_imp.size)
     f_hz, sigma = 37.0, 9.0
@@ -629,21 +639,15 @@ def test_solve_in_blocks_is_the_sample_by_sample_solution(path, monkeypatch):
     # flights longer than a block, a flight before the first impact, a block where X has
     # no nonzero column, and one, two and four dense columns (odd and even counts, the
     # pairs' last column alone): the same to rounding (~1e-15 relative; 1e-12 here)
-    from rattle_lab.detect._flight_kernels import BLOCK, REANCHOR, free_response, free_sums, \
+    from rattle_lab.detect._flight_kernels import REANCHOR, free_response, free_sums, \
         residual_ss
     from rattle_lab.detect import _flights
-    from rattle_lab.detect._flights import _anchors, _Model, _segments
+    from rattle_lab.detect._flights import _anchors, _Model
 
     if path == "rows":
         monkeypatch.setattr(_flights, "KEEP_BLOCKS_MAX", 0)
     rng = np.random.default_rng(5)
-    fs, n = 2000.0, 4200
-    k_imp = np.array([250.0, 400.3, 700.0, 2300.6, 2450.0, 2600.0, 2900.2, 3100.0, 3350.0,
-                      3500.0, 3700.0, 3850.0])
-    sg = _segments(n, k_imp, np.full(k_imp.size, 3.0), 2000)
-    assert np.diff(sg.starts).max() > 2 * BLOCK and sg.left[0] < 0
-    x = rng.normal(size=(sg.k.size, 5))
-    x[rng.random(x.shape) < 0.3] = 0.0
+    fs, n, k_imp, sg, x = _block_spanning_flights(rng)
     x[:sg.starts[1]] = 0.0              # the flight before the first impact: no X at all
     y = rng.normal(size=sg.k.size)
     f_hz, sigma = 37.0, 9.0

@@ -256,20 +256,10 @@ def test_first_peak_is_the_contact_force_on_an_infinite_plate_plus_the_plates_ow
     #   deceleration w1^2 q1 phi_1 summed over the plate (the benchmark starts its run at
     #   the gap, so that sound starts with the impact): within 15 % (8.7 % measured; the
     #   farthest elements' share arrives up to 140 us after the centre's).
-    import importlib.util
-    import sys
-    from pathlib import Path
+    from bench_module import benchmark_module
 
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / "modal_first_peak.py"
-    spec = importlib.util.spec_from_file_location("modal_first_peak_under_test", path)
-    assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = bench
-    try:
-        spec.loader.exec_module(bench)
+    with benchmark_module("modal_first_peak") as bench:
         sw = bench.sweep(16)
-    finally:
-        del sys.modules[spec.name]
     assert sw["fit_residual"] < 0.1
     assert sw["slope"] == pytest.approx(sw["force_slope"], rel=0.05)
     assert sw["slope"] > 1.2 * sw["bound"]

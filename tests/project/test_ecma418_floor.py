@@ -8,26 +8,17 @@ asserted.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 from scipy import signal
 
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "ecma418_floor.py"
+from bench_module import benchmark_module
 
 
 @pytest.fixture(scope="module")
 def floor():
-    spec = importlib.util.spec_from_file_location("ecma418_floor_under_test", BENCH)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    with benchmark_module("ecma418_floor") as module:
+        yield module
 
 
 def test_filter_bank_is_each_bands_recursive_filter(floor):

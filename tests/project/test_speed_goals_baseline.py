@@ -7,25 +7,20 @@ gives a reason instead of a baseline.
 
 from __future__ import annotations
 
-import importlib.util
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from bench_module import benchmark_module
 
 BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "speed_goals.py"
 
 
 @pytest.fixture(scope="module")
 def speed_goals():
-    spec = importlib.util.spec_from_file_location("speed_goals_under_test", BENCH)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    with benchmark_module("speed_goals") as module:
+        yield module
 
 
 def test_equal_labels_pass(speed_goals):
