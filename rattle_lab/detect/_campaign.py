@@ -1,4 +1,4 @@
-"""Lightly damped ringing found across a campaign's runs and taken out of each.
+"""The plate's ringing modes found across a campaign's runs and taken out of each.
 
 Moved from :mod:`rattle_lab.workflow.pipeline` (issue 29: detection in one room).  The
 search needs the runs detected again with other parameters; how they are detected (serially
@@ -24,16 +24,21 @@ Redetect = Callable[[list[int], DetectParams, str], Sequence[RunResult]]
 
 def campaign_ringing(results: Sequence[RunResult], detect: DetectParams,
                      redetect: Redetect) -> list[RunResult]:
-    """Lightly damped ringing, found across the campaign's runs and taken out of each.
+    """The plate's ringing modes, found across the campaign's runs and taken out of each.
 
-    Where runs ring after their impacts and no run's own flight model measured the
-    ringing's share of the velocity jumps (modes that ring on past the next impact), the
-    runs' flights are pooled to find the plate's ringing modes
+    Where runs ring after their impacts (their first detection ran the flight model) and
+    at least one of them measured no share of the velocity jumps (its own model found no
+    modes: they ring on past the next impact, or one run does not determine them), every
+    ringing run's flights are pooled to find the plate's ringing modes
     (:func:`~rattle_lab.detect.campaign_ring_modes`; the other shaker runs' flights join
     them, detected again with ``velocity_model = "flights"``: their own test for ringing
     sees the tails on both sides of an impact and can pass them by), and every shaker run
     with impacts is detected again with them (``ring_modes``: each impact's ringing carried
-    on, ``v_in`` and ``v_out`` from the flight model).  Both passes change the velocity model
+    on, ``v_in`` and ``v_out`` from the flight model), which supersedes the runs' shares.
+    (Before 29 Nov 2026 this was done only where no run measured a share; heavily damped
+    modes that one run's model finds in one run and not in another were then corrected by
+    that run's share alone.)  Where every ringing run measured a share, the shares stand.
+    Both passes change the velocity model
     only: ``redetect`` may start each run from its first pass's
     :attr:`~rattle_lab.detect.ImpactLog.recognition`.  Otherwise, where no mode is found,
     or where the modes give no run any velocities, the results are returned as they are
@@ -55,11 +60,11 @@ def campaign_ringing(results: Sequence[RunResult], detect: DetectParams,
     list of RunResult
     """
     logs = [r.impacts for r in results]
-    problems = [log.ringing_problem for log in logs if log is not None
-                and log.ringing_problem is not None]
-    shares = [log.ringing_share for log in logs if log is not None]
-    if (problems and not any(np.isfinite(s) for s in shares)
-            and detect.velocity_model != "local" and not detect.ring_modes):
+    ringing = [log for log in logs if log is not None and log.ringing_problem is not None]
+    problems = [p for p in (log.ringing_problem for log in ringing) if p is not None]
+    # a run whose own flight model found no modes: one run does not resolve them there
+    unresolved = any(not np.isfinite(log.ringing_share) for log in ringing)
+    if unresolved and detect.velocity_model != "local" and not detect.ring_modes:
         redo = [i for i, r in enumerate(results) if r.status == "ok"
                 and r.impacts is not None and r.impacts.n_impacts
                 and np.isfinite(r.freq_hz) and r.protocol != "transient"

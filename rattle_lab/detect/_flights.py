@@ -55,7 +55,8 @@ over several flights): their tails are in ``v_in`` as well as in the jump, no sh
 jump undoes that, and within one run the tails and the fundamental's free response trade
 off (the search above rejects a mode that lasts a flight).  Across a campaign's runs the
 modes are the same while the impacts come at other times: :func:`campaign_ring_modes`
-pools the runs (:class:`RingingProblem`, one per run whose own model measured no share)
+pools the runs (:class:`RingingProblem`, one per run whose flight model ran: since 29 Nov
+2026 also where that model measured a share, whose modes one run determines less well)
 and searches the modes with each impact's ringing carried on over every later flight
 (:func:`_tail_columns`, exact recursion over the impacts); each run is then fitted with
 the modes fixed (``flight_velocities(..., modes_given, carried=True)``) and ``v_in`` and

@@ -132,12 +132,14 @@ class ImpactParams:
         a flight give the ringing's share of each measured velocity jump
         (:attr:`ImpactLog.ringing_share`; ``v_in``/``v_out`` stay the local fits', and the
         fit pools the runs' shares and takes it off the ratios,
-        :func:`rattle_lab.fit.ratios_of_runs`).  Lightly damped modes that ring on past
-        the next impact have their tails in ``v_in`` too: no run's flight model then
-        measures a share, the run keeps its part of a campaign-wide search
-        (:attr:`ImpactLog.ringing_problem`), and ``rattle-lab fit`` finds the modes across
-        the runs and detects again with them (``ring_modes``); where none is found, the
-        fit names the bias (``e_ratio_ringing_uncorrected``).
+        :func:`rattle_lab.fit.ratios_of_runs`).  The run also keeps its part of a
+        campaign-wide search (:attr:`ImpactLog.ringing_problem`): ``rattle-lab fit`` finds
+        the modes across the runs, each impact's ringing carried on over the later
+        flights, and detects again with them (``ring_modes``), which supersedes the
+        runs' shares; lightly damped modes that ring on past the next impact have their
+        tails in ``v_in`` too, and only this finds them.  Where no mode is found, the
+        runs' shares stand, or, without any, the fit names the bias
+        (``e_ratio_ringing_uncorrected``).
         ``"auto"`` (default): the same where the local fits' residual after the impacts
         is at least :data:`RINGING_RESIDUAL_RATIO` times that before them (ringing is
         there), the local fits otherwise; ``"local"``: the local fits.
@@ -285,8 +287,8 @@ class ImpactLog:
         The ringing modes whose tails were carried on (``ImpactParams.ring_modes``):
         ``v_in`` and ``v_out`` are then the flight model's; empty otherwise.
     ringing_problem : RingingProblem or None
-        Where the run rings and its flight model measured no share: its part of the
-        campaign's search for ringing modes (not compared, not kept in caches).
+        Where the run's flight model ran: its part of the campaign's search for ringing
+        modes (not compared, not kept in caches).
     velocity_delay_s, velocity_delay_stderr_s : float
         The vibrometer's delay after the accelerometer measured from the impacts (median
         over them of the velocity step's centroid less the contact pulse's) and its
@@ -769,13 +771,13 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
                     jumps = (flights.v_out_m_s[m] - flights.v_in_m_s[m]) / (vout[keep][m]
                                                                              - vin[keep][m])
                 share = float(np.median(1.0 - jumps[np.isfinite(jumps)]))
-            else:
-                if not note:
-                    note = (f"no ringing share: {int(m.sum())} impacts from the flight model, "
-                            f"needs >= {MIN_SHARE_IMPACTS}")
-                # lightly damped modes?  the campaign's runs together may find them
-                problem = ringing_problem(v, fs_hz, excitation_freq_hz, k_keep, pad_keep,
-                                          vin[keep], vout[keep], searched=flights.searched)
+            elif not note:
+                note = (f"no ringing share: {int(m.sum())} impacts from the flight model, "
+                        f"needs >= {MIN_SHARE_IMPACTS}")
+            # the campaign's runs together find the modes better than one run alone (and
+            # find lightly damped ones, which ring on past the next impact, at all)
+            problem = ringing_problem(v, fs_hz, excitation_freq_hz, k_keep, pad_keep,
+                                      vin[keep], vout[keep], searched=flights.searched)
     return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,
                      onset_s=start_time_s + np.asarray(onsets, dtype=float)[keep] / fs_hz,
                      v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],

@@ -163,7 +163,7 @@ def test_lightly_damped_ringing_in_the_vibrometer_is_found_across_the_runs(tmp_p
     assert not {"e_ratio_ringing_uncorrected", "e_ratio_ring_modes_one_run"} & set(
         summary["data_quality"])
     ratio = summary["fits"]["restitution_ratio"]
-    (note,) = [n for n in ratio["notes"] if "ring on past the next impact" in n]
+    (note,) = [n for n in ratio["notes"] if "ringing carried on" in n]
     assert "found across 2 runs" in note
     found = [float(x) for x in re.findall(r"([0-9.]+) Hz \(decay", note)]
     assert len(found) == 3
@@ -172,6 +172,28 @@ def test_lightly_damped_ringing_in_the_vibrometer_is_found_across_the_runs(tmp_p
     assert abs(ratio["value"] / plant.e - 1) < 0.06, ratio
     assert abs(ratio["value"] - plant.e) <= 1.96 * ratio["stderr"], ratio
     assert ratio["n"] >= 80 and ratio["n_runs"] == 2
+
+def test_heavily_damped_ringing_that_one_run_misses_is_searched_across_the_runs(tmp_path):
+    """The same modes at 15 % of critical (decays 161, 276, 367 1/s: gone within two
+    flights).  One run's own flight model finds them (a share of 24 % of each jump), the
+    other's does not (the 171 Hz mode decays more slowly than that search allows), so a
+    share from one run was taken off every ratio: e +16 to +20 % over seeds 3-5, with
+    95 % intervals that missed.  Since 29 Nov 2026 a run whose model found no modes sends
+    every ringing run's flights to the campaign's search (tails carried on): e -2.1, -1.8,
+    -1.7 % over seeds 3-5, each interval covering.  Tolerance: 4 % (those figures; the
+    modes' decays come out low, 120-137 1/s for 161, as with light ringing, see
+    docs/explanation/chain_timing.md)."""
+    plant, _, _, summary = _campaign(tmp_path, Chain(ring_in_velocity=True,
+                                                     ring_zeta=(0.15,) * 3))
+    assert not [f for f in summary["data_quality"] if "ringing" in f], summary["data_quality"]
+    ratio = summary["fits"]["restitution_ratio"]
+    (note,) = [n for n in ratio["notes"] if "ringing carried on" in n]
+    assert "found across 2 runs" in note
+    found = sorted(float(x) for x in re.findall(r"([0-9.]+) Hz \(decay", note))
+    assert abs(found[0] / Chain().ring_hz[0] - 1) < 0.03, note
+    assert abs(ratio["value"] / plant.e - 1) < 0.04, ratio
+    assert abs(ratio["value"] - plant.e) <= 1.96 * ratio["stderr"], ratio
+
 
 def test_ringing_modes_from_one_run_are_flagged(tmp_path):
     """A record of one run: the modes are searched in it alone, where their tails and the
