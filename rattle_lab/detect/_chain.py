@@ -126,7 +126,8 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
     :func:`rattle_lab.detect._timing.delay_significant`): :data:`FLAG_DELAY_ESTIMATED`;
     declared and contradicted by the data beyond its uncertainty and a whole sample
     (:func:`rattle_lab.detect._timing.delay_contradicted`): :data:`FLAG_DELAY_CONTRADICTED`
-    (the declaration is still used).  Nothing where there was nothing to measure (one
+    (the declaration is still used, but for velocities read at the flights' own instants,
+    ``velocity_delay_method = "flights"``).  Nothing where there was nothing to measure (one
     channel, too few impacts), where an undeclared delay is indistinguishable from zero
     (its uncertainty still widens e's interval: :func:`delay_systematic`), where the
     plate's higher modes ring in the vibrometer (its step centroid is then not a measure
@@ -136,22 +137,27 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
     if not np.isfinite(d):
         return ()
     fs = log.fs_hz
+    flights = getattr(log, "velocity_delay_method", "steps") == "flights"
+    how = ("the instant where the flight model's displacements either side of the impact "
+           "meet" if flights else "velocity step centroid") + " less contact pulse centroid"
     what = (f"{1e6 * d:.2f} +- {1e6 * se:.2f} us ({d * fs:.3f} samples) from {n} impacts "
-            "(velocity step centroid less contact pulse centroid, median)")
+            f"({how}, median)")
     if not declared:
         if not log.velocity_delay_applied_s:
             return ()
         return (f"{FLAG_DELAY_ESTIMATED}: the velocity lags the plate accelerometer by {what}; "
                 "the velocities are read at the impact time plus it",)
-    if log.ringing_ratio >= RINGING_RESIDUAL_RATIO:
+    if log.ringing_ratio >= RINGING_RESIDUAL_RATIO and not flights:
         # the plate's higher modes ring in the vibrometer after each impact: they move the
         # velocity step's centroid (by up to 2 samples on the independent generator), so
-        # the data cannot check the declaration
+        # the steps cannot check the declaration (the flights' instants can)
         return ()
     if delay_contradicted(DelayEstimate(d * fs, se * fs, n)):
+        used = ("the velocities were read at the flights' instants" if flights
+                else "the declared delay is used")
         return (f"{FLAG_DELAY_CONTRADICTED}: after the declared delay (group_delay_s, or the "
                 f"declared filter's) the velocity "
-                f"still lags the plate accelerometer by {what}; the declared delay is used",)
+                f"still lags the plate accelerometer by {what}; {used}",)
     return ()
 
 

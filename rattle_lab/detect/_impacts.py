@@ -49,7 +49,7 @@ import numpy as np
 
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, n_samples_of
-from ._flights import RingingProblem, flight_velocities, ringing_problem
+from ._flights import FlightFit, RingingProblem, flight_velocities, ringing_problem
 from ._local_fits import _fit_rows, _fit_windows, _fits_at, _jump_fits_all, _JumpFits
 from ._offset import _reversed_at_ends, _reversed_by_samples, _reverses, velocity_offset
 from ._ringing import MIN_SHARE_IMPACTS, RINGING_RESIDUAL_RATIO, _ringing_residual_ratio
@@ -320,6 +320,15 @@ class ImpactLog:
         interval by it (:func:`rattle_lab.fit._chain.measurand_systematic`).
     e_measurand_alt_se : float
         The standard error of the absolute reading's median e there (NaN elsewhere).
+    velocity_delay_method : str
+        How ``velocity_delay_s`` was measured: ``"steps"`` (the velocity steps' centroids
+        against the contact pulses') or ``"flights"`` (with ringing modes carried on, the
+        instants where the flight model's displacements either side of each impact meet,
+        :func:`rattle_lab.detect._flights._continuity_lag`; the velocities were then read
+        there, and ``velocity_delay_applied_s`` is all of it).
+    velocity_delay_note : str
+        With ringing modes carried on, why the flights' instants were not applied (empty
+        where they were, or not tried).
     recognition : Recognition or None
         What the detector found before its velocity model, for a pass that changes only
         that (:func:`detect_impacts`' ``recognised``; not compared, not kept in caches).
@@ -350,6 +359,8 @@ class ImpactLog:
     e_window_change: float = 0.0
     e_measurand_diff: float = 0.0
     e_measurand_alt_se: float = float("nan")
+    velocity_delay_method: str = "steps"
+    velocity_delay_note: str = ""
     recognition: Recognition | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:   # (pairs come back from a cache as lists)
@@ -728,6 +739,8 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
     k_keep = np.asarray(t_idx, dtype=float)[keep] + d_use     # in the velocity's time
     pad_keep = np.asarray(pads, dtype=float)[keep] if v is not None else np.zeros(0)
     carried = False   # ImpactParams.ring_modes applied
+    timed: FlightFit | None = None   # the flights' own impact instants applied
+    lag_note = ""                     # why they were not
     if params.ring_modes and v is not None and excitation_freq_hz is not None:
         carried = True
         model = "local"
@@ -754,6 +767,9 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
             why = re.sub(r"^\d+ of \d+ impacts \((.*)\)$", r"\1", why)
             note = (f"no velocities for {n_out} of {int(keep.sum())} impacts, left out (their "
                     f"local fits read the ringing modes' tails): {why}")
+        if np.isfinite(flights.lag_samples):
+            timed = flights
+        lag_note = flights.lag_note
     elif model != "local" and v is not None and excitation_freq_hz is not None:
         ratio = ratio_of()
         if model == "auto":
@@ -778,6 +794,23 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
             # find lightly damped ones, which ring on past the next impact, at all)
             problem = ringing_problem(v, fs_hz, excitation_freq_hz, k_keep, pad_keep,
                                       vin[keep], vout[keep], searched=flights.searched)
+    delay_fields: dict[str, Any] = dict(
+        velocity_delay_s=delay.value / fs_hz if delay.n else float("nan"),
+        velocity_delay_stderr_s=math.hypot(delay.stderr, rec.method_err) / fs_hz
+        if delay.n else float("nan"),
+        velocity_delay_n=delay.n, velocity_delay_applied_s=(d_use + rec.lag) / fs_hz,
+        velocity_delay_window_s=abs(delay.value - rec.delay_first) / fs_hz
+        if delay.n else float("nan"),
+        e_per_delay_s=rec.e_slope, e_window_change=rec.e_window, velocity_delay_note=lag_note)
+    if timed is not None:
+        # the impacts' instants in the velocity's own record, from the flights: the delay
+        # is measured there, and the velocities were read there
+        total = (d_use + rec.lag + timed.lag_samples) / fs_hz
+        delay_fields = dict(
+            velocity_delay_s=total, velocity_delay_stderr_s=timed.lag_stderr_samples / fs_hz,
+            velocity_delay_n=timed.lag_n, velocity_delay_applied_s=total,
+            velocity_delay_window_s=0.0, e_per_delay_s=timed.e_per_lag * fs_hz,
+            e_window_change=0.0, velocity_delay_method="flights")
     return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,
                      onset_s=start_time_s + np.asarray(onsets, dtype=float)[keep] / fs_hz,
                      v_in_m_s=vin[keep], v_out_m_s=vout[keep], e=e[keep],
@@ -786,12 +819,5 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
                      velocity_note=note, velocity_offset_m_s=offset, ringing_share=share,
                      ringing_ratio=ratio, ring_modes=params.ring_modes if carried else (),
                      ringing_problem=problem,
-                     velocity_delay_s=delay.value / fs_hz if delay.n else float("nan"),
-                     velocity_delay_stderr_s=math.hypot(delay.stderr, rec.method_err) / fs_hz
-                     if delay.n else float("nan"),
-                     velocity_delay_n=delay.n, velocity_delay_applied_s=(d_use + rec.lag) / fs_hz,
-                     step_guard_s=rec.step_guard_s,
-                     velocity_delay_window_s=abs(delay.value - rec.delay_first) / fs_hz
-                     if delay.n else float("nan"),
-                     e_per_delay_s=rec.e_slope, e_window_change=rec.e_window,
+                     step_guard_s=rec.step_guard_s, **delay_fields,
                      recognition=rec)

@@ -305,6 +305,11 @@ def _impact_log(run: Any, by_q: Mapping[str, Any], vel: Any, acc: Any, detect: D
     return log, fs, t0, duration, flags
 
 
+#: Data-quality flag: with ringing modes carried on, the impacts' instants from the flights
+#: were not applied (the velocities are read at the accelerometer's, plus any delay).
+FLAG_FLIGHT_INSTANTS = "flight_instants_not_applied"
+
+
 def _with_log_flags(flags: tuple[str, ...], log: ImpactLog, delay_declared: bool,
                     measurand_flags: tuple[str, ...] | None) -> tuple[str, ...]:
     """The run's chain flags with those of its impact log: the vibrometer's delay
@@ -312,6 +317,8 @@ def _with_log_flags(flags: tuple[str, ...], log: ImpactLog, delay_declared: bool
     flags = flags + velocity_delay_flags(log, delay_declared)
     if measurand_flags is not None:
         flags = tuple(f for f in flags if f != FLAG_MEASURAND_UNDECLARED) + measurand_flags
+    if log.velocity_delay_note:   # the flights' own impact instants were not applied
+        flags = flags + (f"{FLAG_FLIGHT_INSTANTS}: {log.velocity_delay_note}",)
     if log.velocity_note:   # the flight model gave no ringing share, or used some impacts only
         what = "ringing_velocities_missing" if log.ring_modes else "ringing_share_missing"
         flags = flags + (f"{what}: {log.velocity_note}",)

@@ -80,8 +80,9 @@ if TYPE_CHECKING:
 #: gained velocity_offset_m_s, ringing_share and ringing_ratio.  5: ImpactLog gained
 #: ring_modes (and ringing_problem, never cached).  6: ImpactLog gained velocity_delay_* and
 #: step_guard_s, velocity_delay_window_s, e_per_delay_s, e_window_change (issue 28).  7: and
-#: e_measurand_diff (format 6 was briefly on main without it).
-CACHE_FORMAT = 7
+#: e_measurand_diff (format 6 was briefly on main without it).  8: and velocity_delay_method
+#: and velocity_delay_note.
+CACHE_FORMAT = 8
 
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
