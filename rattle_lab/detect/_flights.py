@@ -1105,6 +1105,8 @@ def _campaign_modes_at(ok: list[RingingProblem], start: tuple[tuple[float, float
             from scipy.optimize import minimize  # here: importing detect stays light
 
             p0 = _pack(list(start))
+            if not np.isfinite(objective(p0)):
+                return tuple(start)   # outside these runs' region (its edge moves with f_s)
             sol = minimize(objective, p0, method="Nelder-Mead",
                            options={"maxfev": 60 * len(start), "xatol": 1e-3, "fatol": 0.0,
                                     "initial_simplex": _simplex(p0, 0.02)})

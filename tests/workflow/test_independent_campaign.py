@@ -179,10 +179,12 @@ def test_heavily_damped_ringing_that_one_run_misses_is_searched_across_the_runs(
     other's does not (the 171 Hz mode decays more slowly than that search allows), so a
     share from one run was taken off every ratio: e +16 to +20 % over seeds 3-5, with
     95 % intervals that missed.  Since 29 Nov 2026 a run whose model found no modes sends
-    every ringing run's flights to the campaign's search (tails carried on): e -2.1, -1.8,
-    -1.7 % over seeds 3-5, each interval covering.  Tolerance: 4 % (those figures; the
-    modes' decays come out low, 120-137 1/s for 161, as with light ringing, see
-    docs/explanation/chain_timing.md)."""
+    every ringing run's flights to the campaign's search (tails carried on), which
+    alternates with the runs' fundamentals, and the velocities are read at the flights' own
+    impact instants: e +0.43, +0.27, +0.07 % over seeds 3-5 (-2.1 to -1.7 % with the
+    search alone), each interval covering (half-widths about 9 % of e).  Tolerance: 3 %,
+    the issue's (a tolerance in reach of the search-alone figures, so that this checks the
+    path, not the last refinement)."""
     plant, _, _, summary = _campaign(tmp_path, Chain(ring_in_velocity=True,
                                                      ring_zeta=(0.15,) * 3))
     assert not [f for f in summary["data_quality"] if "ringing" in f], summary["data_quality"]
@@ -191,7 +193,7 @@ def test_heavily_damped_ringing_that_one_run_misses_is_searched_across_the_runs(
     assert "found across 2 runs" in note
     found = sorted(float(x) for x in re.findall(r"([0-9.]+) Hz \(decay", note))
     assert abs(found[0] / Chain().ring_hz[0] - 1) < 0.03, note
-    assert abs(ratio["value"] / plant.e - 1) < 0.04, ratio
+    assert abs(ratio["value"] / plant.e - 1) < 0.03, ratio
     assert abs(ratio["value"] - plant.e) <= 1.96 * ratio["stderr"], ratio
 
 
