@@ -80,9 +80,10 @@ def test_band_mobility_approaches_one_over_z_where_the_plain_sum_has_none(thesis
 
 @pytest.mark.xfail(strict=True, reason="issue 24 target not met: at N = 16 the one-element "
                    "correction has 0.53/Z to 0.76/Z in the two octaves above its cut, and the "
-                   "1 kHz octave is 0.81/Z for every N from 32 to 256 "
-                   "(measured, docs/explanation/modal_convergence.md; the same plate simply "
-                   "supported meets it, test_band_mobility_of_a_simply_supported_plate_...)")
+                   "1 kHz octave is 0.81/Z for every N from 32 to 256, which is the plate's "
+                   "own value there (an independent Ritz solution gives 0.812/Z: "
+                   "tests/model/test_cfcf_mobility.py; the same plate simply supported meets "
+                   "it, test_band_mobility_of_a_simply_supported_plate_...)")
 def test_band_mobility_within_ten_percent_of_one_over_z(thesis16):
     Z = _z_inf(THESIS)
     assert np.all(np.abs(_band_means(thesis16, OCTAVES_HZ) * Z - 1.0) < 0.10)
