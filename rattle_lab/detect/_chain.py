@@ -126,8 +126,7 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
     :func:`rattle_lab.detect._timing.delay_significant`): :data:`FLAG_DELAY_ESTIMATED`;
     declared and contradicted by the data beyond its uncertainty and a whole sample
     (:func:`rattle_lab.detect._timing.delay_contradicted`): :data:`FLAG_DELAY_CONTRADICTED`
-    (the declaration is still used, but for velocities read at the flights' own instants,
-    ``velocity_delay_method = "flights"``).  Nothing where there was nothing to measure (one
+    (the declaration is still used).  Nothing where there was nothing to measure (one
     channel, too few impacts), where an undeclared delay is indistinguishable from zero
     (its uncertainty still widens e's interval: :func:`delay_systematic`), where the
     plate's higher modes ring in the vibrometer (its step centroid is then not a measure
@@ -153,8 +152,7 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
         # the steps cannot check the declaration (the flights' instants can)
         return ()
     if delay_contradicted(DelayEstimate(d * fs, se * fs, n)):
-        used = ("the velocities were read at the flights' instants" if flights
-                else "the declared delay is used")
+        used = "the declared delay is used"
         return (f"{FLAG_DELAY_CONTRADICTED}: after the declared delay (group_delay_s, or the "
                 f"declared filter's) the velocity "
                 f"still lags the plate accelerometer by {what}; {used}",)

@@ -106,10 +106,14 @@ FUNDAMENTAL_ROUNDS = 2
 FUNDAMENTAL_F_RTOL = 5e-4
 #: ... and no run's ``sigma`` by more than this.
 FUNDAMENTAL_S_RTOL = 0.02
-#: The impacts' instants from the flights (:func:`_continuity_lag`) are applied where the
+#: The impacts' instants from the flights (:func:`_continuity_lag`) are used where the
 #: estimate with twice the pads differs from it by less than this many of their combined
-#: standard errors (a decoder's step response unsettled at the pads' ends moves it).
+#: standard errors (a decoder's step response unsettled at the pads' ends, or the modes'
+#: tails off, move it).
 LAG_STABLE_SE = 3.0
+#: ... the estimate with twice the pads taken on the flights around at most this many
+#: impacts spread over the run.
+LAG_IMPACTS = 100
 #: A ringing mode is kept if it lowers the stacked residual by this many noise variances.
 RING_GAIN = 25.0
 
@@ -137,8 +141,10 @@ class FlightFit:
         With ringing carried on: the impacts' time in the velocity's own record less the
         ``k_imp`` given, from the continuity of the fundamental's displacement
         (:func:`_continuity_lag`; median over ``lag_n`` impacts, samples), and its
-        uncertainty.  Finite only where it was applied: ``v_in`` and ``v_out`` are then
-        read at ``k_imp + lag_samples``.
+        uncertainty.  Finite only where it held with twice the pads.
+    lag_applied : bool
+        ``v_in`` and ``v_out`` were read at ``k_imp + lag_samples`` (not where ``k_imp``
+        carries a declared delay: ``instants_given``).
     e_per_lag : float
         There, the median over the impacts of ``d e / d lag`` at the instant read, per sample.
     lag_note : str
@@ -159,6 +165,7 @@ class FlightFit:
     lag_n: int = 0
     e_per_lag: float = float("nan")
     lag_note: str = ""
+    lag_applied: bool = False
 
 
 @dataclass(frozen=True)
@@ -712,7 +719,7 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
 def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
                       pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray,
                       modes_given: list[tuple[float, float]] | None = None, *,
-                      carried: bool = False) -> FlightFit:
+                      carried: bool = False, instants_given: bool = False) -> FlightFit:
     """Each impact's ``v_in``, ``v_out`` from a whole-run flight model (see the module docstring).
 
     Parameters
@@ -734,6 +741,11 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     carried : bool
         Each impact's ringing carried on over every later flight (lightly damped modes:
         :func:`_tail_columns`) instead of within its own flight; with ``modes_given``.
+        Then the impacts' own instants in ``v`` are measured (:func:`_continuity_lag`) and,
+        where they hold with twice the pads, ``v_in`` and ``v_out`` are read there ...
+    instants_given : bool
+        ... unless ``k_imp`` carries a declared delay: the instants then only check it
+        (:attr:`FlightFit.lag_applied` False).
         The jumps may then differ from the local fits' by up to
         :data:`MAX_JUMP_CHANGE_CARRIED`.
 
@@ -802,23 +814,34 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
         # the impacts' instants in the velocity's own record: where the fundamental's
         # displacement before and after each impact meet
         lag, se, n_lag = _continuity_lag(model, f_s, sigma, k_imp)
+        # the same with twice the pads, on the flights either side of at most LAG_IMPACTS
+        # impacts spread over the run (a second whole-run model would double the memory)
         sg2 = _segments(v.size, k_imp, 2.0 * np.asarray(pad, float), int(round(1.5 * period)))
+        chosen = np.unique(np.linspace(0, n_imp - 1, min(n_imp, LAG_IMPACTS)).round()
+                           .astype(int))
+        sg2 = _subset(sg2, np.flatnonzero(np.isin(sg2.left, chosen) | np.isin(sg2.right, chosen)))
         model2 = _Model(y_all[sg2.k], sg2, fs_hz, _forced_rows(sg2.k / fs_hz, omega, t_total,
                                                                keep)).extended(
             ring(sg2.k / fs_hz, dv, modes))
         lag2, se2, n_lag2 = _continuity_lag(model2, f_s, sigma, k_imp)
+        # (with a declared delay the instants only check it: nothing to say where they
+        # cannot)
         if min(n_lag, n_lag2) < MIN_IMPACTS:
-            timing["lag_note"] = (f"{min(n_lag, n_lag2)} impacts with flights on both sides, "
-                                  f"the impacts' instants need >= {MIN_IMPACTS}")
+            if not instants_given:
+                timing["lag_note"] = (f"{min(n_lag, n_lag2)} impacts with flights on both "
+                                      f"sides, the impacts' instants need >= {MIN_IMPACTS}")
         elif not abs(lag2 - lag) < LAG_STABLE_SE * math.hypot(se, se2):
-            # the chain's step response has not settled at the pads' ends: it moves the
-            # flights' free responses, and their displacements with them
-            timing["lag_note"] = (f"the impacts' instants from the flights moved by "
-                                  f"{lag2 - lag:+.3f} samples with twice the pads (standard "
-                                  f"errors {se:.3f}, {se2:.3f}): not applied")
+            # the chain's step response has not settled at the pads' ends (or the modes'
+            # tails are off): it moves the flights' free responses, and their
+            # displacements with them
+            if not instants_given:
+                timing["lag_note"] = (f"the impacts' instants from the flights moved by "
+                                      f"{lag2 - lag:+.3f} samples with twice the pads "
+                                      f"(standard errors {se:.3f}, {se2:.3f}): not applied")
         else:
-            k_at = k_imp + lag2
-            vin, vout = _evaluate(model, f_s, sigma, keep, omega, t_total, k_at)
+            k_at = k_imp + lag2 if not instants_given else k_imp
+            if not instants_given:
+                vin, vout = _evaluate(model, f_s, sigma, keep, omega, t_total, k_at)
             slopes = []
             for h in (-0.25, 0.25):
                 a, b = _evaluate(model, f_s, sigma, keep, omega, t_total, k_at + h)
@@ -828,7 +851,8 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
             d_e = d_e[np.isfinite(d_e)]
             timing = dict(lag_samples=float(lag2), lag_stderr_samples=float(
                 math.hypot(se2, lag2 - lag)), lag_n=int(n_lag2),
-                e_per_lag=float(np.median(d_e)) if d_e.size else float("nan"))
+                e_per_lag=float(np.median(d_e)) if d_e.size else float("nan"),
+                lag_applied=not instants_given)
     # (the channel may be an absolute vibrometer: judge the jump, not the velocities' signs)
     jump_local = v_out_local - v_in_local
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -243,6 +243,7 @@ class Recognition:
     degree: int
     omega: float | None
     ratio: float | None = None        # the ringing test's ratio, once computed
+    declared: bool = False            # the velocity's delay was declared (taken off before)
 
 
 @dataclass(frozen=True)
@@ -325,7 +326,8 @@ class ImpactLog:
         against the contact pulses') or ``"flights"`` (with ringing modes carried on, the
         instants where the flight model's displacements either side of each impact meet,
         :func:`rattle_lab.detect._flights._continuity_lag`; the velocities were then read
-        there, and ``velocity_delay_applied_s`` is all of it).
+        there where the delay is not declared, and ``velocity_delay_applied_s`` is all of
+        it; a declared delay stands and is checked against it).
     velocity_delay_note : str
         With ringing modes carried on, why the flights' instants were not applied (empty
         where they were, or not tried).
@@ -710,7 +712,8 @@ def _recognise(fs_hz: float, velocity_m_s: object, accel_ms2: object, params: Im
         v_out=vout, e=e, offset=float(offset), d_use=float(d_use), delay=delay,
         delay_first=float(delay_first), method_err=float(method_err),
         step_guard_s=float(step_guard_s), e_slope=float(e_slope), e_window=float(e_window),
-        n_fit=int(n_fit), n_guard=int(n_guard), degree=int(degree), omega=omega), v
+        n_fit=int(n_fit), n_guard=int(n_guard), degree=int(degree), omega=omega,
+        declared=bool(velocity_delay_declared)), v
 
 
 def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
@@ -752,7 +755,8 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
         flights = flight_velocities(v, fs_hz, excitation_freq_hz,
                                     np.asarray(t_idx, dtype=float)[src] + d_use,
                                     np.asarray(pads, dtype=float)[src], vin[src], vout[src],
-                                    list(params.ring_modes), carried=True)
+                                    list(params.ring_modes), carried=True,
+                                    instants_given=rec.declared)
         got = np.zeros(vin.size, dtype=bool)
         got[src] = flights.from_flights
         vin, vout = np.full(vin.size, np.nan), np.full(vin.size, np.nan)
@@ -804,11 +808,13 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
         e_per_delay_s=rec.e_slope, e_window_change=rec.e_window, velocity_delay_note=lag_note)
     if timed is not None:
         # the impacts' instants in the velocity's own record, from the flights: the delay
-        # is measured there, and the velocities were read there
+        # is measured there, and (undeclared) the velocities were read there; a declared
+        # delay stands and is checked against them
         total = (d_use + rec.lag + timed.lag_samples) / fs_hz
         delay_fields = dict(
             velocity_delay_s=total, velocity_delay_stderr_s=timed.lag_stderr_samples / fs_hz,
-            velocity_delay_n=timed.lag_n, velocity_delay_applied_s=total,
+            velocity_delay_n=timed.lag_n,
+            velocity_delay_applied_s=total if timed.lag_applied else (d_use + rec.lag) / fs_hz,
             velocity_delay_window_s=0.0, e_per_delay_s=timed.e_per_lag * fs_hz,
             e_window_change=0.0, velocity_delay_method="flights")
     return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,

@@ -44,14 +44,28 @@ def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
       standard error ``s``); reading at zero errs by the true delay, whose root mean square
       is ``hypot(d, s)``, times the runs' median ``|d e / d delay|``.
 
-    Declared delays add nothing here (a contradiction is flagged instead).
+    * runs whose declared delay was checked against the flights' own impact instants
+      (``velocity_delay_method = "flights"``, nothing applied): the declaration stands,
+      and what the instants measure after it (pooled as above) is how far reading at it
+      may err, times the runs' median ``|d e / d delay|``.
+
+    Declared delays otherwise add nothing here (a contradiction is flagged instead).
     """
     vals, deltas = [], []
     d_u, s_u, slope_u, fs_u = [], [], [], []
+    d_c, s_c, slope_c, fs_c = [], [], [], []
     for log in logs:
         if log is None or not np.isfinite(log.e_per_delay_s):
             continue
-        if log.velocity_delay_applied_s:
+        checked = (getattr(log, "velocity_delay_method", "steps") == "flights"
+                   and not log.velocity_delay_applied_s)
+        if checked:
+            if np.isfinite(log.velocity_delay_s) and np.isfinite(log.velocity_delay_stderr_s):
+                d_c.append(log.velocity_delay_s)
+                s_c.append(max(log.velocity_delay_stderr_s, _POOL_FLOOR_SAMPLES / log.fs_hz))
+                slope_c.append(abs(log.e_per_delay_s))
+                fs_c.append(log.fs_hz)
+        elif log.velocity_delay_applied_s:
             sd = float(np.hypot(np.nan_to_num(log.velocity_delay_stderr_s),
                                 np.nan_to_num(log.velocity_delay_window_s)))
             vals.append(float(np.hypot(abs(log.e_per_delay_s) * sd,
@@ -85,7 +99,20 @@ def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
                      "sampling does not resolve, or the plate's higher modes ringing in the "
                      f"vibrometer); reading at zero moves e by up to {se_u:.4f} (root mean "
                      "square), added to the standard error")
-    return float(np.hypot(se_a, se_u)), notes
+    se_c = 0.0
+    if d_c:
+        w = 1.0 / np.asarray(s_c) ** 2
+        d_bar = float(np.sum(w * np.asarray(d_c)) / np.sum(w))
+        s_bar = float(1.0 / np.sqrt(np.sum(w)))
+        se_c = float(np.median(slope_c)) * float(np.hypot(d_bar, s_bar))
+        fs = float(np.median(fs_c))
+        notes.append(f"the declared delay is used; the impacts' own instants in the velocity "
+                     f"(where the flight model's displacements either side meet, {len(d_c)} "
+                     f"runs) lie {1e6 * d_bar:.2f} +- {1e6 * s_bar:.2f} us ({d_bar * fs:.3f} "
+                     f"samples) after it; reading at the declared delay may err by that: e "
+                     f"moves by up to {se_c:.4f} (root mean square), added to the standard "
+                     "error")
+    return float(np.sqrt(se_a**2 + se_u**2 + se_c**2)), notes
 
 
 #: The runs' readings of e disagree where their chi-square about the weighted mean has a

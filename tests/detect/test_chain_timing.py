@@ -306,6 +306,30 @@ def test_delay_left_at_zero_still_widens_e_by_its_pooled_uncertainty():
     assert delay_systematic([_Log([0.6] * 10)]) == (0.0, [])
 
 
+def test_a_declared_delay_the_flights_instants_disagree_with_widens_e():
+    # A declared delay stands; with ringing carried on, the flights' own impact instants
+    # measure what is left after it (velocity_delay_method "flights", nothing applied).
+    # Pooled over the runs like an undeclared delay left at zero, and with its own note:
+    # 0.05 +- 0.02 / sqrt(3) samples, e moving 0.13 per sample.
+    from rattle_lab.fit._chain import delay_systematic
+
+    fs = 25600.0
+    logs = []
+    for _ in range(3):
+        log = _Log([0.55] * 10, d=0.05 / fs, se=0.02 / fs, slope=0.13 * fs)
+        log.velocity_delay_method = "flights"
+        logs.append(log)
+    se, notes = delay_systematic(logs)
+    assert se == pytest.approx(0.13 * math.hypot(0.05, 0.02 / math.sqrt(3)), rel=1e-9)
+    assert len(notes) == 1 and notes[0].startswith("the declared delay is used")
+    # applied (undeclared, read at the instants): the applied runs' term instead
+    for log in logs:
+        log.velocity_delay_applied_s = 1.0 / fs
+    se_a, notes_a = delay_systematic(logs)
+    assert se_a == pytest.approx(0.13 * 0.02, rel=1e-9)
+    assert "applied in 3 runs" in notes_a[0]
+
+
 def test_undetermined_measurand_widens_or_is_established_across_runs():
     from rattle_lab.fit._chain import measurand_systematic
 

@@ -45,7 +45,7 @@ Frequencies
 
 Mobility (band means of Re(Y) * Z over the octaves 1-8 kHz, the damping ratio of the model,
 zeta = 0.05; 2001 frequencies per band for the reference, as ``_ssss_centre_series`` of
-test_modal_convergence.py, 20001 for the model, as its ``_band_means``)
+test_modal_convergence.py, 20001 for the model, as ``band_means`` of tests/plate_mobility.py)
 
     ================================ ======= ======= ======= =======
     octave                           1 kHz   2 kHz   4 kHz   8 kHz
@@ -84,6 +84,7 @@ from scipy.optimize import brentq
 
 from rattle_lab.model.modal import ModalSystem, plate_system
 from rattle_lab.model.plate import Plate
+from plate_mobility import band_means, z_inf
 
 # eigensolvers through BLAS (tests/conftest.py marks the files of NUMERICS_MODULES so)
 pytestmark = pytest.mark.numerics
@@ -99,20 +100,6 @@ _U, _WQ = legendre.leggauss(400)
 
 def _d_and_mass(plate: Plate) -> tuple[float, float]:
     return plate.E_pa * plate.h_p_m**3 / (12.0 * (1.0 - plate.nu**2)), plate.rho_kg_m3 * plate.h_p_m
-
-
-def _z_inf(plate: Plate) -> float:
-    D, m2 = _d_and_mass(plate)
-    return 8.0 * math.sqrt(D * m2)
-
-
-def _band_means(system: ModalSystem, centres_hz: tuple[float, ...]) -> np.ndarray:
-    """As test_modal_convergence.py: mean of Re(Y) on 20001 frequencies across each octave."""
-    out = []
-    for fc in centres_hz:
-        f = np.linspace(fc / math.sqrt(2.0), fc * math.sqrt(2.0), 20001)
-        out.append(float(np.mean(system.point_mobility(2.0 * math.pi * f).real)))
-    return np.array(out)
 
 
 # ---------------------------------------------------------------- the independent Ritz solution
@@ -283,7 +270,7 @@ def test_reference_has_converged(reference):
     omega2, wc2 = _thesis_reference(40, 32)
     assert np.sum(omega < 2.0 * math.pi * 12e3) == 60
     np.testing.assert_allclose(omega2[:60], omega[:60], rtol=1e-4)
-    Z = _z_inf(THESIS)
+    Z = z_inf(THESIS)
     np.testing.assert_allclose(_series(omega2, wc2**2, 0.05, Z), _series(omega, wc**2, 0.05, Z), rtol=2e-3)
     # All 720 modes of the basis are summed; those above 40 kHz (its 194th on) add 0.0012/Z to
     # the 8 kHz octave and < 4e-4/Z below: their frequencies need no accuracy.
@@ -299,7 +286,7 @@ def test_one_khz_octave_is_the_plates_own(reference, model64):
     zeta = float(np.atleast_1d(model64.zeta)[0])
     assert zeta == 0.05
     omega, wc = reference
-    ref = _series(omega, wc**2, zeta, _z_inf(THESIS))
+    ref = _series(omega, wc**2, zeta, z_inf(THESIS))
     assert ref[0] < 0.9, ref
     assert np.all(np.abs(ref[1:] - 1.0) < 0.10), ref
     # Few modes: three that move the centre in the octave 0.71-1.41 kHz (1.047, 1.215 and
@@ -311,7 +298,7 @@ def test_one_khz_octave_is_the_plates_own(reference, model64):
 
 def test_model_modes_and_band_mobility_match_the_reference(reference, model64, model128):
     omega, wc = reference
-    Z = _z_inf(THESIS)
+    Z = z_inf(THESIS)
     zeta = float(np.atleast_1d(model64.zeta)[0])
     ref = _series(omega, wc**2, zeta, Z)
     # The model's excited modes are the reference's doubly symmetric ones: frequencies within
@@ -324,13 +311,13 @@ def test_model_modes_and_band_mobility_match_the_reference(reference, model64, m
     # of the reference in the octaves 1-4 kHz (measured -0.05, -0.08, -0.42 %: the modes
     # above 12.9 kHz that it lacks).
     plain = model64.replace(local_impedance_n_s_m=0.0, residual_compliance_m_n=0.0)
-    np.testing.assert_allclose(_band_means(plain, OCTAVES_HZ[:3]) * Z, ref[:3], rtol=0.01)
+    np.testing.assert_allclose(band_means(plain, OCTAVES_HZ[:3]) * Z, ref[:3], rtol=0.01)
     # The whole model, in the octaves well below the element's cut (omega_c / 2 pi = 13.0 kHz
     # at N = 64, 26.1 kHz at N = 128): within 2 %.  Measured +0.29, +0.98 % (N = 64, 1-2 kHz)
     # and +0.06, +0.25, +1.07 % (N = 128, 1-4 kHz): the element's real part there,
     # ~ (4/pi^2) (omega/omega_c)^2 / Z (1.1 % in the 2 kHz octave at N = 64), and the 2 %
     # leaves the 1 kHz octave's 19 % from 1/Z far outside.
-    np.testing.assert_allclose(_band_means(model64, OCTAVES_HZ[:2]) * Z, ref[:2], rtol=0.02)
-    np.testing.assert_allclose(_band_means(model128, OCTAVES_HZ[:3]) * Z, ref[:3], rtol=0.02)
+    np.testing.assert_allclose(band_means(model64, OCTAVES_HZ[:2]) * Z, ref[:2], rtol=0.02)
+    np.testing.assert_allclose(band_means(model128, OCTAVES_HZ[:3]) * Z, ref[:3], rtol=0.02)
     # Not asserted (module docstring): nearer the cut the element's real part exceeds the
     # omitted modes' (+4.1 and +12.2 % over the reference at 4 and 8 kHz for N = 64).

@@ -23,13 +23,9 @@ from rattle_lab.exceptions import ParameterError
 from rattle_lab.model.modal import (HertzContact, KelvinVoigtContact, ModalState, ModalSystem, RigidContact,
                                     plate_system, predicted_spl_slope, simulate_modal)
 from rattle_lab.model.plate import Plate
+from plate_mobility import band_means, z_inf
 
 THESIS = Plate(a_m=0.254, b_m=0.2286, h_p_m=1e-3, E_pa=7e10, nu=0.34, rho_kg_m3=2710.0, edges="CFCF")
-
-
-def _z_inf(plate: Plate) -> float:
-    D = plate.E_pa * plate.h_p_m**3 / (12.0 * (1.0 - plate.nu**2))
-    return 8.0 * math.sqrt(D * plate.rho_kg_m3 * plate.h_p_m)
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +34,7 @@ def thesis16() -> ModalSystem:
 
 
 def test_element_has_the_infinite_plate_impedance_and_the_residual_flexibility(thesis16):
-    Z = _z_inf(THESIS)
+    Z = z_inf(THESIS)
     assert thesis16.local_impedance_n_s_m == pytest.approx(Z, rel=1e-12)
     assert Z == pytest.approx(33.8, abs=0.05)
     # Far above the cut the element is the dashpot (1/Z), far below it the static
@@ -55,14 +51,6 @@ def test_element_has_the_infinite_plate_impedance_and_the_residual_flexibility(t
     assert s32.residual_compliance_m_n < 0.6 * thesis16.residual_compliance_m_n
 
 
-def _band_means(system: ModalSystem, centres_hz: tuple[float, ...]) -> np.ndarray:
-    out = []
-    for fc in centres_hz:
-        f = np.linspace(fc / math.sqrt(2.0), fc * math.sqrt(2.0), 20001)
-        out.append(float(np.mean(system.point_mobility(2.0 * math.pi * f).real)))
-    return np.array(out)
-
-
 OCTAVES_HZ = (1000.0, 2000.0, 4000.0, 8000.0)
 
 
@@ -70,10 +58,10 @@ def test_band_mobility_approaches_one_over_z_where_the_plain_sum_has_none(thesis
     # Octave bands 1-8 kHz (edges 707 Hz .. 11.3 kHz) at the plate centre, N = 16 excited
     # modes (the last at 2.75 kHz).  The plain truncated sum has almost no real mobility
     # above its last mode; with the element every band carries between 0.5/Z and 1.2/Z.
-    Z = _z_inf(THESIS)
+    Z = z_inf(THESIS)
     plain = thesis16.replace(local_impedance_n_s_m=0.0, residual_compliance_m_n=0.0)
-    with_el = _band_means(thesis16, OCTAVES_HZ) * Z
-    without = _band_means(plain, OCTAVES_HZ) * Z
+    with_el = band_means(thesis16, OCTAVES_HZ) * Z
+    without = band_means(plain, OCTAVES_HZ) * Z
     assert np.all(without[2:] < 0.1)
     assert np.all((with_el > 0.5) & (with_el < 1.2)), with_el
 
@@ -85,8 +73,8 @@ def test_band_mobility_approaches_one_over_z_where_the_plain_sum_has_none(thesis
                    "tests/model/test_cfcf_mobility.py; the same plate simply supported meets "
                    "it, test_band_mobility_of_a_simply_supported_plate_...)")
 def test_band_mobility_within_ten_percent_of_one_over_z(thesis16):
-    Z = _z_inf(THESIS)
-    assert np.all(np.abs(_band_means(thesis16, OCTAVES_HZ) * Z - 1.0) < 0.10)
+    Z = z_inf(THESIS)
+    assert np.all(np.abs(band_means(thesis16, OCTAVES_HZ) * Z - 1.0) < 0.10)
 
 
 def test_band_mobility_of_64_modes_from_2_to_8_khz_is_one_over_z():
@@ -97,8 +85,8 @@ def test_band_mobility_of_64_modes_from_2_to_8_khz_is_one_over_z():
     # 32 to 256, the few modes of this finite plate seen at its centre there.
     s64 = plate_system(THESIS, n_modes=64, skip_unexcited=True, omitted_modes=True,
                        pressure_pa=0.0)
-    Z = _z_inf(THESIS)
-    assert np.all(np.abs(_band_means(s64, OCTAVES_HZ[1:]) * Z - 1.0) < 0.10)
+    Z = z_inf(THESIS)
+    assert np.all(np.abs(band_means(s64, OCTAVES_HZ[1:]) * Z - 1.0) < 0.10)
 
 
 def _zener_e(m: float, k_h: float, Z: float, v0: float) -> float:
@@ -143,7 +131,7 @@ def test_sphere_on_a_large_plate_restitution_is_zeners():
                          episode_gap_s=1e-4)
     assert len(res.contacts) == 1
     e_model = -res.state.v[0] / math.sqrt(m)
-    e_zener = _zener_e(m, k_h, _z_inf(plate), 1.0)
+    e_zener = _zener_e(m, k_h, z_inf(plate), 1.0)
     assert 0.3 < e_zener < 0.8
     assert e_model == pytest.approx(e_zener, rel=0.05)
     # Without the element the truncated plate cannot take the energy: nearly elastic.
@@ -283,7 +271,7 @@ def _ssss_centre_series(plate: Plate, zeta: float, centres_hz: tuple[float, ...]
         w = 2.0 * math.pi * np.linspace(fc / math.sqrt(2.0), fc * math.sqrt(2.0), n_freq)
         den = wk[:, None] ** 2 - w[None, :] ** 2 + 2j * zeta * wk[:, None] * w[None, :]
         out.append(float(np.mean(np.sum(b2 * 1j * w[None, :] / den, axis=0).real)))
-    return np.array(out) * _z_inf(plate)
+    return np.array(out) * z_inf(plate)
 
 
 def test_band_mobility_of_a_simply_supported_plate_matches_its_closed_form_series():
@@ -302,5 +290,5 @@ def test_band_mobility_of_a_simply_supported_plate_matches_its_closed_form_serie
     zeta = float(np.atleast_1d(s64.zeta)[0])
     series = _ssss_centre_series(ssss, zeta, OCTAVES_HZ)
     assert np.all(np.abs(series - 1.0) < 0.10), series
-    model = _band_means(s64, OCTAVES_HZ[:3]) * _z_inf(ssss)
+    model = band_means(s64, OCTAVES_HZ[:3]) * z_inf(ssss)
     np.testing.assert_allclose(model, series[:3], rtol=0.04)
