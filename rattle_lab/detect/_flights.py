@@ -148,7 +148,8 @@ class FlightFit:
     e_per_lag : float
         There, the median over the impacts of ``d e / d lag`` at the instant read, per sample.
     lag_note : str
-        Why the lag was not applied (empty where it was, or not tried).
+        Why the lag was not applied (empty where it was, where it was not tried, and where
+        ``k_imp`` carries a declared delay).
     """
 
     v_in_m_s: np.ndarray
@@ -741,13 +742,13 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     carried : bool
         Each impact's ringing carried on over every later flight (lightly damped modes:
         :func:`_tail_columns`) instead of within its own flight; with ``modes_given``.
-        Then the impacts' own instants in ``v`` are measured (:func:`_continuity_lag`) and,
-        where they hold with twice the pads, ``v_in`` and ``v_out`` are read there ...
+        The jumps may then differ from the local fits' by up to
+        :data:`MAX_JUMP_CHANGE_CARRIED`.  The impacts' own instants in ``v`` are measured
+        (:func:`_continuity_lag`) and, where they hold with twice the pads, ``v_in`` and
+        ``v_out`` are read there ...
     instants_given : bool
         ... unless ``k_imp`` carries a declared delay: the instants then only check it
         (:attr:`FlightFit.lag_applied` False).
-        The jumps may then differ from the local fits' by up to
-        :data:`MAX_JUMP_CHANGE_CARRIED`.
 
     Returns
     -------
@@ -892,35 +893,18 @@ def _continuity_lag(model: _Model, f_s: float, sigma: float, k_imp: np.ndarray
     vibrometer's delay after the times ``k_imp`` come from is measured without the
     velocity step itself, which a decoder smooths and ringing modes move.
     """
-    _, _, gamma = model.solve(f_s, sigma)
-    sg, fs = model.sg, model.fs
-    w = 2.0 * np.pi * f_s
-    den = sigma * sigma + w * w
-    c = (-sigma * gamma[:, 0] - w * gamma[:, 1]) / den
-    d = (w * gamma[:, 0] - sigma * gamma[:, 1]) / den
-    n_imp = k_imp.size
-    before = np.full(n_imp, -1)
-    after = np.full(n_imp, -1)
-    seg = np.arange(sg.left.size)
-    before[sg.right[sg.right >= 0]] = seg[sg.right >= 0]
-    after[sg.left[sg.left >= 0]] = seg[sg.left >= 0]
+    free = _FreeResponses(model, f_s, sigma)
+    before, after = free.sides(k_imp.size)
     ok = (before >= 0) & (after >= 0)
     if not ok.any():
         return float("nan"), float("nan"), 0
     b, a = before[ok], after[ok]
     k = np.asarray(k_imp, float)[ok].copy()
-
-    def free(s_: np.ndarray, k_: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        tau = (k_ - sg.ref[s_]) / fs
-        env = np.exp(-sigma * tau)
-        cw, sw = np.cos(w * tau), np.sin(w * tau)
-        return env * (c[s_] * cw + d[s_] * sw), env * (gamma[s_, 0] * cw + gamma[s_, 1] * sw)
-
     for _ in range(4):
-        xb, vb = free(b, k)
-        xa, va = free(a, k)
+        xb, vb = free.at(b, k)
+        xa, va = free.at(a, k)
         with np.errstate(invalid="ignore", divide="ignore"):
-            k = k - (xb - xa) / ((vb - va) / fs)
+            k = k - (xb - xa) / ((vb - va) / free.fs)
     lag = k - np.asarray(k_imp, float)[ok]
     lag = lag[np.isfinite(lag)]
     if lag.size == 0:
@@ -1056,19 +1040,45 @@ def _free_jumps(model: _Model, f_s: float, sigma: float, k_imp: np.ndarray) -> n
     """Each impact's velocity jump of the fundamental (free response after less that
     before; the forced response is the same on both sides), NaN where the model lacks the
     flight on a side."""
-    _, _, gamma = model.solve(f_s, sigma)
-    sg, fs = model.sg, model.fs
-    w = 2.0 * np.pi * f_s
+    free = _FreeResponses(model, f_s, sigma)
     out = np.full(k_imp.size, np.nan)
-    side = [np.full(k_imp.size, np.nan), np.full(k_imp.size, np.nan)]
-    for j, imp in enumerate((sg.left, sg.right)):    # flights after, before each impact
-        ok = imp >= 0
-        i = imp[ok]
-        tau = (k_imp[i] - sg.ref[ok]) / fs
-        env = np.exp(-sigma * tau)
-        side[j][i] = env * (gamma[ok, 0] * np.cos(w * tau) + gamma[ok, 1] * np.sin(w * tau))
-    out[:] = side[0] - side[1]
+    before, after = free.sides(k_imp.size)
+    ok = (before >= 0) & (after >= 0)
+    k = np.asarray(k_imp, float)[ok]
+    out[ok] = free.at(after[ok], k)[1] - free.at(before[ok], k)[1]
     return out
+
+
+class _FreeResponses:
+    """The fundamental's free response of each flight of a solved model: its velocity
+    ``e^(-sigma tau) (g0 cos + g1 sin)(w tau)`` and the displacement that goes with it,
+    ``e^(-sigma tau) (C cos + D sin)(w tau)`` with ``(-sigma C + w D, -w C - sigma D) =
+    (g0, g1)`` (a free response has no constant)."""
+
+    def __init__(self, model: _Model, f_s: float, sigma: float):
+        _, _, self.gamma = model.solve(f_s, sigma)
+        self.sg, self.fs, self.sigma = model.sg, model.fs, sigma
+        self.w = w = 2.0 * np.pi * f_s
+        den = sigma * sigma + w * w
+        g = self.gamma
+        self.c = (-sigma * g[:, 0] - w * g[:, 1]) / den
+        self.d = (w * g[:, 0] - sigma * g[:, 1]) / den
+
+    def sides(self, n_imp: int) -> tuple[np.ndarray, np.ndarray]:
+        """Per impact, the flight before it and the one after it (-1: not in the model)."""
+        before, after = np.full(n_imp, -1), np.full(n_imp, -1)
+        seg = np.arange(self.sg.left.size)
+        before[self.sg.right[self.sg.right >= 0]] = seg[self.sg.right >= 0]
+        after[self.sg.left[self.sg.left >= 0]] = seg[self.sg.left >= 0]
+        return before, after
+
+    def at(self, s_: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Displacement and velocity of flights ``s_`` at samples ``k``."""
+        tau = (k - self.sg.ref[s_]) / self.fs
+        env = np.exp(-self.sigma * tau)
+        cw, sw = np.cos(self.w * tau), np.sin(self.w * tau)
+        return (env * (self.c[s_] * cw + self.d[s_] * sw),
+                env * (self.gamma[s_, 0] * cw + self.gamma[s_, 1] * sw))
 
 
 def _campaign_modes_at(ok: list[RingingProblem], start: tuple[tuple[float, float], ...] = ()

@@ -27,6 +27,17 @@ from rattle_lab.detect.thresholds import Threshold, crossing_level_ms2
 _POOL_FLOOR_SAMPLES = 1e-3
 
 
+def _pooled_rms(d: list[float], s: list[float], slope: list[float]
+                ) -> tuple[float, float, float]:
+    """One chain's delay pooled over runs: the inverse-variance mean ``d_bar`` of ``d``
+    (errors ``s``), its standard error ``s_bar``, and what reading at zero errs in e, the
+    runs' median ``|d e / d delay|`` times ``hypot(d_bar, s_bar)``."""
+    w = 1.0 / np.asarray(s) ** 2
+    d_bar = float(np.sum(w * np.asarray(d)) / np.sum(w))
+    s_bar = float(1.0 / np.sqrt(np.sum(w)))
+    return d_bar, s_bar, float(np.median(slope)) * float(np.hypot(d_bar, s_bar))
+
+
 def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
     """The error of e from the runs' vibrometer delays, and notes (0 and none if none).
 
@@ -86,11 +97,7 @@ def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
                      f"decoder's step response read by the velocity fits move e by {se_a:.4f} "
                      "(median of the runs), added to the standard error")
     if d_u:
-        w = 1.0 / np.asarray(s_u) ** 2
-        d_bar = float(np.sum(w * np.asarray(d_u)) / np.sum(w))
-        s_bar = float(1.0 / np.sqrt(np.sum(w)))
-        rms = float(np.hypot(d_bar, s_bar))
-        se_u = float(np.median(slope_u)) * rms
+        d_bar, s_bar, se_u = _pooled_rms(d_u, s_u, slope_u)
         fs = float(np.median(fs_u))
         notes.append(f"the vibrometer's delay is not declared; measured from the impacts in "
                      f"{len(d_u)} runs it is {1e6 * d_bar:.2f} +- {1e6 * s_bar:.2f} us "
@@ -101,10 +108,7 @@ def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
                      "square), added to the standard error")
     se_c = 0.0
     if d_c:
-        w = 1.0 / np.asarray(s_c) ** 2
-        d_bar = float(np.sum(w * np.asarray(d_c)) / np.sum(w))
-        s_bar = float(1.0 / np.sqrt(np.sum(w)))
-        se_c = float(np.median(slope_c)) * float(np.hypot(d_bar, s_bar))
+        d_bar, s_bar, se_c = _pooled_rms(d_c, s_c, slope_c)
         fs = float(np.median(fs_c))
         notes.append(f"the declared delay is used; the impacts' own instants in the velocity "
                      f"(where the flight model's displacements either side meet, {len(d_c)} "
