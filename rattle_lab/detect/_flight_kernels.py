@@ -26,8 +26,9 @@ import numba
 import numpy as np
 
 
-#: Rows between exact evaluations in the rotations of :func:`free_response` and
-#: :func:`tail_columns` (each rotation adds a rounding error of ~1e-16 relative).
+#: Rows between exact evaluations in the rotations of :func:`free_response` and of the
+#: carried ringing's tails (:func:`tail_runs`; each rotation adds a rounding error of
+#: ~1e-16 relative).
 REANCHOR = 64
 
 
@@ -460,7 +461,7 @@ BLOCK = 512
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def added_sums(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int, bounds: np.ndarray,
                xptr: np.ndarray, xcols: np.ndarray, xoff: np.ndarray, xvals: np.ndarray,
-               n_x: int, r: np.ndarray, last: np.ndarray, dt: np.ndarray, next_: np.ndarray,
+               n_x: int, r: np.ndarray, last: np.ndarray, dt: np.ndarray, k_run: np.ndarray,
                dt_step: float, d: np.ndarray, gaps: np.ndarray, f_hz: np.ndarray, s: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
     """What new dense columns ``R`` add to a model whose other parts are fixed, in one pass
@@ -468,11 +469,11 @@ def added_sums(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int, bounds
 
     ``R`` is the columns ``r`` given followed by two columns (real, imaginary) per ringing
     mode ``(f_hz[j], s[j])``, :func:`tail_columns`'s, generated here and never stored whole:
-    the same recursion over the impacts and the same rows evaluated exactly (where a sample
-    is not its predecessor's next after the same impact, and every :data:`REANCHOR`
-    rotations); a row ``k`` rotations after one is that row's value times ``step^k``, from
-    a table of the powers formed by the same repeated products (rows independent of each
-    other, at the same rounding error).  The samples go in blocks within one flight
+    the same recursion over the impacts and the same rows evaluated exactly (``k_run``,
+    :func:`tail_runs`); a row ``k`` rotations after one is that row's value times
+    ``step^k``, from a table of the powers formed by the same repeated products (rows
+    independent of each other, at the same rounding error; a run of them is one vectorised
+    loop).  The samples go in blocks within one flight
     (:data:`BLOCK`).  ``X`` (the model's run-wide columns) comes block by block, only its
     columns that are nonzero in the block, each as a contiguous row of the block's values;
     a block's new columns are formed into rows alike, and every sum is a dot product of two
@@ -500,7 +501,7 @@ def added_sums(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int, bounds
         The number of columns of ``X``.
     r : ndarray
         The new columns given (``n x m_r``, may be ``n x 0``).
-    last, dt, next_, dt_step, d, gaps : ndarray, ndarray, ndarray, float, ndarray, ndarray
+    last, dt, k_run, dt_step, d, gaps : ndarray, ndarray, ndarray, float, ndarray, ndarray
         Where the samples lie after the impacts, and the impacts' amplitudes, as
         :func:`tail_columns` takes them (unused without modes).
     f_hz, s : ndarray
@@ -536,11 +537,18 @@ def added_sums(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int, bounds
                 acc = complex(d[0], 0.0)
             c[j, k] = acc
     e = np.zeros(n_modes, dtype=np.complex128)
-    pw = np.empty((n_modes, REANCHOR + 1), dtype=np.complex128)
+    # the powers' table, real and imaginary parts apart (the rows' products in real
+    # arithmetic, (a + ib)(c + id) = (ac - bd) + i(ad + bc) as numba's complex product)
+    pw_re = np.empty((n_modes, REANCHOR + 1))
+    pw_im = np.empty((n_modes, REANCHOR + 1))
     for j in range(n_modes):
-        pw[j, 0] = 1.0
+        acc = 1.0 + 0j
+        pw_re[j, 0] = 1.0
+        pw_im[j, 0] = 0.0
         for k in range(1, REANCHOR + 1):
-            pw[j, k] = pw[j, k - 1] * steps[j]
+            acc = acc * steps[j]
+            pw_re[j, k] = acc.real
+            pw_im[j, k] = acc.imag
     rr = np.zeros((m, m))
     rx = np.zeros((m, n_x))
     ry = np.zeros(m)
@@ -551,8 +559,6 @@ def added_sums(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int, bounds
     buf = np.empty((m, longest))       # the block's new columns, one a row
     z0 = np.empty(longest)
     z1 = np.empty(longest)
-    k_run = np.empty(longest, dtype=np.int64)
-    run = REANCHOR
     for b in range(bounds.size - 1):
         lo, hi = bounds[b], bounds[b + 1]
         size = hi - lo
@@ -562,35 +568,45 @@ def added_sums(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int, bounds
             z1[u] = z[i].imag
             for a in range(m_r):
                 buf[a, u] = r[i, a]
-        if n_modes:
-            # the rotations' count since the last exact evaluation (-1: before any impact)
-            for u in range(size):
+        for j in range(n_modes):
+            # runs of rotations after one exact evaluation: each row the run's start
+            # times a power from the table (rows independent of each other: vectorised)
+            row_re = buf[m_r + 2 * j]
+            row_im = buf[m_r + 2 * j + 1]
+            ea = e[j]
+            u = 0
+            while u < size:
+                k = k_run[lo + u]
+                if k < 0:
+                    row_re[u] = 0.0
+                    row_im[u] = 0.0
+                    u += 1
+                    continue
                 i = lo + u
-                li = last[i]
-                if li < 0:
-                    run = REANCHOR
-                    k_run[u] = -1
-                elif next_[i] and li == last[i - 1] and run < REANCHOR:
-                    run += 1
-                    k_run[u] = run
-                else:
-                    run = 0
-                    k_run[u] = 0
-            for j in range(n_modes):
-                ea = e[j]
-                for u in range(size):
-                    k = k_run[u]
-                    if k < 0:
-                        buf[m_r + 2 * j, u] = 0.0
-                        buf[m_r + 2 * j + 1, u] = 0.0
-                        continue
-                    i = lo + u
-                    if k == 0:
-                        ea = np.exp(poles[j] * dt[i])
-                    t = c[j, last[i]] * (ea * pw[j, k])
-                    buf[m_r + 2 * j, u] = t.real
-                    buf[m_r + 2 * j + 1, u] = t.imag
-                e[j] = ea
+                if k == 0:
+                    ea = np.exp(poles[j] * dt[i])
+                v = u + 1
+                while v < size and k_run[lo + v] == k + (v - u):
+                    v += 1
+                cc = c[j, last[i]]
+                c_re = cc.real
+                c_im = cc.imag
+                e_re = ea.real
+                e_im = ea.imag
+                n_run = v - u
+                p_re = pw_re[j, k:k + n_run]
+                p_im = pw_im[j, k:k + n_run]
+                o_re = row_re[u:v]
+                o_im = row_im[u:v]
+                for q in range(n_run):
+                    a_re = p_re[q]
+                    a_im = p_im[q]
+                    t_re = e_re * a_re - e_im * a_im
+                    t_im = e_re * a_im + e_im * a_re
+                    o_re[q] = c_re * t_re - c_im * t_im
+                    o_im[q] = c_re * t_im + c_im * t_re
+                u = v
+            e[j] = ea
         sg = seg[lo]
         yb = y[lo:hi]
         a = 0
@@ -673,7 +689,7 @@ def eliminate_free(rr: np.ndarray, rx: np.ndarray, ry: np.ndarray, zr: np.ndarra
 def carried_gains(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int,
                   bounds: np.ndarray, xptr: np.ndarray, xcols: np.ndarray, xoff: np.ndarray,
                   xvals: np.ndarray, n_x: int, r: np.ndarray, last: np.ndarray, dt: np.ndarray,
-                  next_: np.ndarray, dt_step: float, d: np.ndarray, gaps: np.ndarray,
+                  k_run: np.ndarray, dt_step: float, d: np.ndarray, gaps: np.ndarray,
                   f_hz: np.ndarray, s: np.ndarray, h: np.ndarray, gx: np.ndarray,
                   gy: np.ndarray, beta: np.ndarray, a_inv: np.ndarray
                   ) -> np.ndarray:  # pragma: no cover - compiled
@@ -688,7 +704,7 @@ def carried_gains(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int,
 
     Parameters
     ----------
-    y, z, seg, n_seg, bounds, xptr, xcols, xoff, xvals, n_x, r, last, dt, next_, dt_step, d, gaps
+    y, z, seg, n_seg, bounds, xptr, xcols, xoff, xvals, n_x, r, last, dt, k_run, dt_step, d, gaps
         As :func:`added_sums` takes them.
     f_hz, s : ndarray
         The candidates' modes, one candidate a row (``n_cand x n_modes``, C order).
@@ -709,7 +725,7 @@ def carried_gains(y: np.ndarray, z: np.ndarray, seg: np.ndarray, n_seg: int,
     out = np.empty(n_cand)
     for c in range(n_cand):
         rr, rx, ry, zr = added_sums(y, z, seg, n_seg, bounds, xptr, xcols, xoff, xvals, n_x,
-                                    r, last, dt, next_, dt_step, d, gaps,
+                                    r, last, dt, k_run, dt_step, d, gaps,
                                     np.ascontiguousarray(f_hz[c]), np.ascontiguousarray(s[c]))
         a_rr, a_rx, b_r = eliminate_free(rr, rx, ry, zr, h, gx, gy)
         cc = b_r - np.dot(a_rx, beta)
@@ -734,13 +750,36 @@ def sparse_cross(indptr: np.ndarray, indices: np.ndarray, values: np.ndarray, p:
 
 
 @numba.njit(cache=True, nogil=True)
-def tail_columns(last: np.ndarray, dt: np.ndarray, next_: np.ndarray, dt_step: float,
+def tail_runs(last: np.ndarray, next_: np.ndarray) -> np.ndarray:  # pragma: no cover
+    """Per sample, how many rotations the carried tails take from their last exact
+    evaluation: 0 where a sample is evaluated exactly (it is not its predecessor's next
+    sample after the same impact, or :data:`REANCHOR` rotations have passed), -1
+    before any impact.  It depends on the samples and the impacts only, not on the modes:
+    formed once per model, it is what :func:`tail_columns` and :func:`added_sums` follow."""
+    k_run = np.empty(last.size, dtype=np.int64)
+    run = REANCHOR
+    for i in range(last.size):
+        li = last[i]
+        if li < 0:
+            run = REANCHOR
+            k_run[i] = -1
+        elif i > 0 and next_[i] and li == last[i - 1] and run < REANCHOR:
+            run += 1
+            k_run[i] = run
+        else:
+            run = 0
+            k_run[i] = 0
+    return k_run
+
+
+@numba.njit(cache=True, nogil=True)
+def tail_columns(last: np.ndarray, dt: np.ndarray, k_run: np.ndarray, dt_step: float,
                  d: np.ndarray, gaps: np.ndarray, f_hz: float, s: float
                  ) -> np.ndarray:  # pragma: no cover - compiled
     """``sum_{i <= last} d_i exp(p (t - t_i))``, ``p = -s + 2 pi i f``, as (real, imaginary)
     columns: ``C_k = C_{k-1} exp(p gap_k) + d_k`` over the impacts, then each sample
-    ``C_last exp(p dt)`` (rotated from its predecessor where it is the next sample after
-    the same impact, as in :func:`free_response`); zero before the first impact."""
+    ``C_last exp(p dt)`` (rotated from its predecessor where :func:`tail_runs` says so, as
+    in :func:`free_response`); zero before the first impact."""
     pole = complex(-s, 2.0 * math.pi * f_hz)
     c = np.empty(d.size, dtype=np.complex128)
     acc = 0j
@@ -752,18 +791,15 @@ def tail_columns(last: np.ndarray, dt: np.ndarray, next_: np.ndarray, dt_step: f
         c[k] = acc
     out = np.zeros((last.size, 2))
     step = np.exp(pole * dt_step)
-    run = REANCHOR
     e = 0j
     for i in range(last.size):
-        if last[i] < 0:
-            run = REANCHOR
+        k = k_run[i]
+        if k < 0:
             continue
-        if next_[i] and last[i] == last[i - 1] and run < REANCHOR:
+        if k > 0:
             e = e * step
-            run += 1
         else:
             e = np.exp(pole * dt[i])
-            run = 0
         z = c[last[i]] * e
         out[i, 0] = z.real
         out[i, 1] = z.imag

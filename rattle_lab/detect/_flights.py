@@ -303,9 +303,9 @@ class _Tails:
     last: np.ndarray      # the last impact before each sample (-1: none)
     dt: np.ndarray        # time since it, s
     t_imp: np.ndarray     # impact times, s
-    next_: np.ndarray     # each sample is its predecessor's next one (dt larger by dt_step)
     dt_step: float        # the sampling interval, s (NaN: samples not on a grid)
     gaps: np.ndarray      # between consecutive impacts, s
+    k_run: np.ndarray     # rotations since each sample's last exact evaluation (tail_runs)
 
 
 def _tails(t_s: np.ndarray, t_imp_s: np.ndarray, fs_hz: float | None = None) -> _Tails:
@@ -318,9 +318,13 @@ def _tails(t_s: np.ndarray, t_imp_s: np.ndarray, fs_hz: float | None = None) -> 
     if fs_hz is not None and t_s.size > 1:
         steps = np.diff(t_s) * fs_hz
         next_[1:] = np.abs(steps - 1.0) < 1e-6
+    from ._flight_kernels import tail_runs
+
     t_imp_s = np.asarray(t_imp_s, float)
-    return _Tails(np.ascontiguousarray(last, np.int64), dt, t_imp_s, next_,
-                  float("nan") if fs_hz is None else 1.0 / fs_hz, np.diff(t_imp_s))
+    last = np.ascontiguousarray(last, np.int64)
+    # (next_: each sample is its predecessor's next one, dt larger by dt_step)
+    return _Tails(last, dt, t_imp_s, float("nan") if fs_hz is None else 1.0 / fs_hz,
+                  np.diff(t_imp_s), tail_runs(last, next_))
 
 
 def _tail_columns(tails: _Tails, dv: np.ndarray, modes: list[tuple[float, float]]
@@ -336,7 +340,7 @@ def _tail_columns(tails: _Tails, dv: np.ndarray, modes: list[tuple[float, float]
     cols = np.zeros((tails.last.size, 2 * len(modes)))
     d = np.ascontiguousarray(np.nan_to_num(dv), float)
     for j, (f_hz, s) in enumerate(modes):
-        cols[:, 2 * j:2 * j + 2] = tail_columns(tails.last, tails.dt, tails.next_,
+        cols[:, 2 * j:2 * j + 2] = tail_columns(tails.last, tails.dt, tails.k_run,
                                                 tails.dt_step, d, tails.gaps, float(f_hz),
                                                 float(s))
     return cols
@@ -551,7 +555,7 @@ class _Fixed:
 
         m, x = self.m, self._x
         gains = carried_gains(m.y, self.z, m.seg, m.n_seg, x.bounds, x.ptr, x.cols, x.off,
-                              x.vals, x.n_cols, self._none, tails.last, tails.dt, tails.next_,
+                              x.vals, x.n_cols, self._none, tails.last, tails.dt, tails.k_run,
                               tails.dt_step, d, tails.gaps,
                               np.ascontiguousarray(f_hz, float), np.ascontiguousarray(s, float),
                               self.h, self.gx, self.gy, np.ascontiguousarray(self.beta),
@@ -564,7 +568,7 @@ class _Fixed:
 
         m, x = self.m, self._x
         sums = added_sums(m.y, self.z, m.seg, m.n_seg, x.bounds, x.ptr, x.cols, x.off, x.vals,
-                          x.n_cols, r, tails.last, tails.dt, tails.next_, tails.dt_step, d,
+                          x.n_cols, r, tails.last, tails.dt, tails.k_run, tails.dt_step, d,
                           tails.gaps, np.array([f for f, _ in modes], float),
                           np.array([s for _, s in modes], float))
         a_rr, a_rx, b_r = eliminate_free(*sums, self.h, self.gx, self.gy)
@@ -802,8 +806,9 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
                        note="local fits kept: no ringing found after the impacts")
     if modes_given is None:
         model = forced_sub.extended(ring(sub.k / fs_hz, dv, modes))
-    # (else the model searched above already has these modes' columns, the same dv)
-    f_s, sigma = model.search(f_s, sigma, grid=False)
+        f_s, sigma = model.search(f_s, sigma, grid=False)
+    # (else the model searched above already has these modes' columns, the same dv: a
+    # second search from its own optimum only moved it within the search's tolerance)
     vin, vout = v_in_local, v_out_local
     forced_all = _Model(y_all[sg.k], sg, fs_hz, _forced_rows(sg.k / fs_hz, omega, t_total, keep))
     for _ in range(2):   # then with the impacts' own velocity changes weighting the ringing
@@ -1117,9 +1122,21 @@ def _campaign_modes_at(ok: list[RingingProblem], start: tuple[tuple[float, float
 
     pool = ThreadPoolExecutor(max_workers=max(1, min(len(ok), os.cpu_count() or 1)))
 
+    # the runs in one group per core, balanced by their samples (a task per run costs a
+    # thread hand-over per run and evaluation)
+    groups: list[list[int]] = [[] for _ in range(min(len(ok), os.cpu_count() or 1))]
+    load = [0] * len(groups)
+    for i in sorted(range(len(ok)), key=lambda i: -ok[i].y.size):
+        g = int(np.argmin(load))
+        groups[g].append(i)
+        load[g] += ok[i].y.size
+
     def rss(modes: list[tuple[float, float]]) -> np.ndarray:
-        return np.array(list(pool.map(
-            lambda i: fixed[i].carried_rss(tails[i], dvs[i], modes), range(len(ok)))))
+        out = np.empty(len(ok))
+        for g, got in zip(groups, pool.map(
+                lambda g: [fixed[i].carried_rss(tails[i], dvs[i], modes) for i in g], groups)):
+            out[g] = got
+        return out
 
     def objective(par: np.ndarray) -> float:
         modes = _unpack(par)

@@ -428,7 +428,7 @@ def test_carried_ringing_sums_formed_as_they_go_are_those_of_the_columns():
     given = np.ascontiguousarray(rng.normal(size=(sg.k.size, 1)))
     b = fixed._x
     sums = added_sums(fixed.m.y, fixed.z, fixed.m.seg, fixed.m.n_seg, b.bounds, b.ptr, b.cols,
-                      b.off, b.vals, b.n_cols, given, tails.last, tails.dt, tails.next_,
+                      b.off, b.vals, b.n_cols, given, tails.last, tails.dt, tails.k_run,
                       tails.dt_step, dv, tails.gaps, np.array([171.0, 390.0]),
                       np.array([21.5, 2.0]))
     r = np.hstack([given, cols])
