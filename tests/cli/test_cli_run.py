@@ -105,12 +105,39 @@ def _demo_checks(text: str, out_dir: Path) -> None:
     assert abs(float(corrected["gap"][0]) / 1.3e-3 - 1) < 0.005
 
 
+_ROW = re.compile(r"^(.*?)\s+(\S+)\s+(\S+)\s+(\S+)\s+([+-]?\d+\.\d+) %\s+(\S+)$")
+
+
+def _fitted_rows(text: str) -> dict[str, tuple[float, float]]:
+    """``quantity: (fitted, std. error)`` of a demo table (the lines after "quantity")."""
+    lines = text.splitlines()
+    head = next(i for i, line in enumerate(lines) if line.strip().startswith("quantity"))
+    rows = {}
+    for line in lines[head + 1:]:
+        m = _ROW.match(line.strip())
+        if not m:
+            break
+        rows[m.group(1)] = (float(m.group(2)), float(m.group(3)))
+    return rows
+
+
 @pytest.mark.slow  # > 8 s (measured under load)
 def test_demo_piped_prints_the_table_and_the_pdf_path_last(tmp_path):
     out = run("demo", "--out", str(tmp_path / "demo"))
     _demo_checks(out.stdout, tmp_path / "demo")
     assert "[4/4] report" in out.stderr
     assert "%|" not in out.stderr  # no progress bars when not on a terminal
+    # README shows this table: its numbers are the demo's (printed to 5 significant digits:
+    # 1e-4 relative for the values, 1e-2 for the standard errors, which other BLAS or libm
+    # may move in their last printed digit).  It had gone stale by the fifteenth session
+    # (e's standard error 0.00083 printed, 0.00214 made)
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    block = readme[readme.index("fitted values against the rig's truth:"):]
+    want, got = _fitted_rows(block), _fitted_rows(out.stdout)
+    assert len(want) >= 9 and set(want) == set(got), (sorted(want), sorted(got))
+    for name, (value, stderr) in want.items():
+        assert got[name][0] == pytest.approx(value, rel=1e-4), name
+        assert got[name][1] == pytest.approx(stderr, rel=1e-2), name
 
 
 def test_demo_with_a_missing_scene_is_one_line_exit_2_and_writes_nothing(tmp_path):
