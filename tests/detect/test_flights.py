@@ -445,6 +445,39 @@ def test_carried_ringing_sums_formed_as_they_go_are_those_of_the_columns():
         assert abs(rss - fixed.rss(cols)) < 1e-12 * fixed.rss0
 
 
+def test_the_tails_rotation_counts_follow_the_rule_written_out():
+    # tail_runs: per sample the rotations since its tail's last exact evaluation, formed
+    # once per model and followed by tail_columns and added_sums.  Against the rule written
+    # out in Python on samples with gaps and impacts: -1 before the first impact; 0 (exact)
+    # at the first sample after an impact, after a gap in the grid, and once REANCHOR
+    # rotations have passed; else one more than the sample before
+    from rattle_lab.detect._flight_kernels import REANCHOR, tail_runs
+    from rattle_lab.detect._flights import _tails
+
+    rng = np.random.default_rng(11)
+    fs = 1000.0
+    k = np.cumsum(rng.choice([1, 3], p=[0.99, 0.01], size=4000))
+    t_imp = np.sort(rng.uniform(k[20], k[-1], 25)) / fs
+    tails = _tails(k / fs, t_imp, fs)
+    want = np.empty(k.size, dtype=np.int64)
+    run = REANCHOR
+    for i in range(k.size):
+        if tails.last[i] < 0:
+            want[i], run = -1, REANCHOR
+        elif i > 0 and k[i] == k[i - 1] + 1 and tails.last[i] == tails.last[i - 1] \
+                and run < REANCHOR:
+            run += 1
+            want[i] = run
+        else:
+            want[i], run = 0, 0
+    np.testing.assert_array_equal(tails.k_run, want)
+    assert want.max() == REANCHOR and (want == -1).sum() >= 20 and (want == 0).sum() > 25
+    # off the grid (no rate): every sample after an impact is evaluated exactly
+    off = _tails(k / fs, t_imp)
+    np.testing.assert_array_equal(off.k_run, np.where(off.last < 0, -1, 0))
+    np.testing.assert_array_equal(tail_runs(tails.last, np.zeros(k.size, bool)), off.k_run)
+
+
 def test_carried_rss_of_many_candidates_in_one_call_is_each_ones_alone():
     # the campaign's scan evaluates a run's candidate modes in one compiled call
     # (carried_gains): each candidate's residual is, bit for bit, carried_rss's for it alone
