@@ -127,17 +127,19 @@ def test_demo_piped_prints_the_table_and_the_pdf_path_last(tmp_path):
     _demo_checks(out.stdout, tmp_path / "demo")
     assert "[4/4] report" in out.stderr
     assert "%|" not in out.stderr  # no progress bars when not on a terminal
-    # README shows this table: its numbers are the demo's (printed to 5 significant digits:
-    # 1e-4 relative for the values, 1e-2 for the standard errors, which other BLAS or libm
-    # may move in their last printed digit).  It had gone stale by the fifteenth session
-    # (e's standard error 0.00083 printed, 0.00214 made)
+    # README shows this table: its numbers are the demo's, each value within half its
+    # standard error and each standard error within 10 %.  Other rounding moves them less:
+    # with OpenBLAS's Nehalem kernels and numba for a generic CPU, e 0.59993 +- 0.00208
+    # against 0.59979 +- 0.00214 (0.07 of a standard error) and the SPL slope 5.0510 against
+    # 5.0517 (0.21), the standard errors by up to 2.8 %.  It had gone stale by the fifteenth
+    # session: e's standard error 0.00083 printed, 0.00214 made
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     block = readme[readme.index("fitted values against the rig's truth:"):]
     want, got = _fitted_rows(block), _fitted_rows(out.stdout)
     assert len(want) >= 9 and set(want) == set(got), (sorted(want), sorted(got))
     for name, (value, stderr) in want.items():
-        assert got[name][0] == pytest.approx(value, rel=1e-4), name
-        assert got[name][1] == pytest.approx(stderr, rel=1e-2), name
+        assert abs(got[name][0] - value) <= 0.5 * stderr, (name, got[name], value, stderr)
+        assert got[name][1] == pytest.approx(stderr, rel=0.10), (name, got[name], stderr)
 
 
 def test_demo_with_a_missing_scene_is_one_line_exit_2_and_writes_nothing(tmp_path):
