@@ -20,7 +20,8 @@ if TYPE_CHECKING:
     from ._run import (RunResult, SegmentImpacts, SegmentSound, analyse_run, assemble_segments,
                        merge_segment_impacts, reused_result, run_segments, segment_impacts,
                        segment_sound)
-    from ._flights import RingingProblem, campaign_ring_modes
+    from ._flights import (CampaignRinging, RingingProblem, campaign_ring_modes,
+                           campaign_ringing_model)
     from ._impacts import ImpactLog, ImpactParams, Recognition, detect_impacts
     from ._ringing import RINGING_RESIDUAL_RATIO
     from ._trigger import trigger_onsets
@@ -54,6 +55,8 @@ _LAZY: dict[str, str] = {
     "robust_sigma": "_common",
     "RingingProblem": "_flights",
     "campaign_ring_modes": "_flights",
+    "CampaignRinging": "_flights",
+    "campaign_ringing_model": "_flights",
     "ImpactLog": "_impacts",
     "ImpactParams": "_impacts",
     "Recognition": "_impacts",
@@ -86,6 +89,7 @@ __all__ = [
     "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "Recognition", "RingingProblem",
     "SoundPeaks",
     "a_weight", "a_weighting_db", "campaign_ring_modes", "cross_correlation_delay", "detect_impacts", "impact_pattern",
+    "CampaignRinging", "campaign_ringing_model",
     "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
     "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle",
     "RINGING_RESIDUAL_RATIO", "base_velocity_at", "onto_grid", "detect_shock",

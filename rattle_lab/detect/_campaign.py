@@ -13,7 +13,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ._flights import campaign_ring_modes
+from ._flights import campaign_ringing_model
 from ._params import DetectParams
 from ._run import RunResult
 
@@ -30,11 +30,13 @@ def campaign_ringing(results: Sequence[RunResult], detect: DetectParams,
     at least one of them measured no share of the velocity jumps (its own model found no
     modes: they ring on past the next impact, or one run does not determine them), every
     ringing run's flights are pooled to find the plate's ringing modes
-    (:func:`~rattle_lab.detect.campaign_ring_modes`; the other shaker runs' flights join
+    (:func:`~rattle_lab.detect.campaign_ringing_model`; the other shaker runs' flights join
     them, detected again with ``velocity_model = "flights"``: their own test for ringing
     sees the tails on both sides of an impact and can pass them by), and every shaker run
     with impacts is detected again with them (``ring_modes``: each impact's ringing carried
-    on, ``v_in`` and ``v_out`` from the flight model), which supersedes the runs' shares.
+    on, ``v_in`` and ``v_out`` from the flight model; ``ring_fundamental``: the plate's
+    fundamental found with them on all the runs together), which supersedes the runs'
+    shares.
     (Before 29 Nov 2026 this was done only where no run measured a share; heavily damped
     modes that one run's model finds in one run and not in another were then corrected by
     that run's share alone.)  Where every ringing run measured a share, the shares stand.
@@ -81,10 +83,12 @@ def campaign_ringing(results: Sequence[RunResult], detect: DetectParams,
         # one BLAS thread, as the per-run detection's (a result must not depend on where
         # it was computed)
         with threadpool_limits(limits=1, user_api="blas"):
-            modes = campaign_ring_modes(problems)
+            found = campaign_ringing_model(problems)
+        modes = found.modes
         if modes:
             again = redetect(redo, dataclasses.replace(
-                detect, ring_modes=[list(m) for m in modes], ring_modes_runs=len(problems)),
+                detect, ring_modes=[list(m) for m in modes], ring_modes_runs=len(problems),
+                ring_fundamental=list(found.fundamental or ())),
                 "detect (ringing modes)")
             if any(np.isfinite(r.impacts.v_in_m_s).any() for r in again
                    if r.impacts is not None):

@@ -58,9 +58,11 @@ modes are the same while the impacts come at other times: :func:`campaign_ring_m
 pools the runs (:class:`RingingProblem`, one per run whose flight model ran: since 29 Nov
 2026 also where that model measured a share, whose modes one run determines less well)
 and searches the modes with each impact's ringing carried on over every later flight
-(:func:`_tail_columns`, exact recursion over the impacts); each run is then fitted with
-the modes fixed (``flight_velocities(..., modes_given, carried=True)``) and ``v_in`` and
-``v_out`` are the model's (``benchmarks/slow_ringing.py``).
+(:func:`_tail_columns`, exact recursion over the impacts), and the plate's fundamental
+with them on all the runs together (a run in periodic motion does not determine it); each
+run is then fitted with the modes and the fundamental fixed (``flight_velocities(...,
+modes_given, carried=True, fundamental_given=...)``) and ``v_in`` and ``v_out`` are the
+model's (``benchmarks/slow_ringing.py``).
 """
 
 from __future__ import annotations
@@ -727,7 +729,8 @@ def _search_modes(y: np.ndarray, sub: _Segments, fs_hz: float, xf: np.ndarray,
 def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
                       pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray,
                       modes_given: list[tuple[float, float]] | None = None, *,
-                      carried: bool = False, instants_given: bool = False) -> FlightFit:
+                      carried: bool = False, instants_given: bool = False,
+                      fundamental_given: tuple[float, float] | None = None) -> FlightFit:
     """Each impact's ``v_in``, ``v_out`` from a whole-run flight model (see the module docstring).
 
     Parameters
@@ -756,6 +759,12 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     instants_given : bool
         ... unless ``k_imp`` carries a declared delay: the instants then only check it
         (:attr:`FlightFit.lag_applied` False).
+    fundamental_given : (f_s_hz, sigma_1_s), optional
+        The plate's fundamental found across the campaign's runs
+        (:attr:`CampaignRinging.fundamental`), with ``modes_given``: used instead of this
+        run's own search.  The run's flights must still determine the free response there
+        (:func:`_determined`): in steady motion its share of each flight is not resolved,
+        whatever the fundamental.
 
     Returns
     -------
@@ -788,7 +797,10 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     forced_sub = _Model(y_all[sub.k], sub, fs_hz, xf_sub)
     model = forced_sub if modes_given is None else forced_sub.extended(
         ring(sub.k / fs_hz, dv, list(modes_given)))
-    f_s, sigma = model.search(f_hz, 0.02 * omega, grid=True)
+    if fundamental_given is not None and modes_given is not None:
+        f_s, sigma = (float(x) for x in fundamental_given)
+    else:
+        f_s, sigma = model.search(f_hz, 0.02 * omega, grid=True)
     if modes_given is None:
         fallback = replace(fallback, searched=(f_s, sigma))
     if not _determined(model, f_s, sigma, f_hz):
@@ -1005,9 +1017,34 @@ def ringing_problem(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
                           f_s, sigma)
 
 
+@dataclass(frozen=True)
+class CampaignRinging:
+    """What :func:`campaign_ringing_model` finds across a campaign's runs: the ringing
+    modes ``(f_hz, s_1_s)`` and the plate's fundamental, its frequency ``f_s_hz`` and decay
+    rate ``sigma_1_s`` (NaN where no mode was found)."""
+
+    modes: tuple[tuple[float, float], ...]
+    f_s_hz: float = float("nan")
+    sigma_1_s: float = float("nan")
+
+    @property
+    def fundamental(self) -> tuple[float, float] | None:
+        """``(f_s_hz, sigma_1_s)``, or None where not found."""
+        if np.isfinite(self.f_s_hz) and np.isfinite(self.sigma_1_s):
+            return self.f_s_hz, self.sigma_1_s
+        return None
+
+
 def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, float], ...]:
+    """Ringing modes ``(f_hz, s_1_s)`` shared by a campaign's runs (the modes of
+    :func:`campaign_ringing_model`)."""
+    return campaign_ringing_model(problems).modes
+
+
+def campaign_ringing_model(problems: list[RingingProblem]) -> CampaignRinging:
     """Ringing modes ``(f_hz, s_1_s)`` shared by a campaign's runs, tails carried on, each
-    run's fundamental searched again with them.
+    run's fundamental searched again with them, then the plate's fundamental searched on
+    all the runs together.
 
     Each run's ``(f_s, sigma)`` was found without the ringing, which pulls it (heavily
     damped modes of the independent generator: 93.7 Hz and 1.2 1/s for 96.0 and 6.0), and
@@ -1021,11 +1058,20 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
     388.4 / 372 for 171 / 161, 293 / 276 and 390 / 367 (174 / 127, 262 / 58 and 317 / 597
     without the rounds); light ringing decays of 21.3, 33.3 and 46.9 1/s for 21.5, 36.8
     and 49.0 (20.5, 31.2 and 41.0 without).
+
+    The fundamental is the plate's, the same in every run, as the modes are
+    (:func:`_pooled_fundamental`).  One run does not always determine it: a run that
+    settles into periodic motion repeats one flight, where the free and the forced
+    response nearly trade off.  On the independent generator's 99 Hz dwell (period-1
+    impacts after ten periods, light ringing) that run's own search gave 94.4-95.0 Hz
+    decaying at 11.5-12.2 1/s, for 96.0 and 6.03, and its ``e`` came out 5-15 % high; the
+    two runs together give 96.00-96.07 Hz and 5.6-5.9 1/s.  The runs' fits with the modes
+    (``flight_velocities(..., fundamental_given=...)``) then use it.
     """
     ok = [p for p in problems if p is not None]
     modes = _campaign_modes_at(ok)
     if not modes:
-        return modes
+        return CampaignRinging(modes)
     import os
     from concurrent.futures import ThreadPoolExecutor
 
@@ -1040,7 +1086,35 @@ def campaign_ring_modes(problems: list[RingingProblem]) -> tuple[tuple[float, fl
                 break
             ok = again
             modes = _campaign_modes_at(ok, modes)
-    return modes
+        f_s, sigma = _pooled_fundamental(ok, modes, pool)
+    return CampaignRinging(modes, f_s, sigma)
+
+
+def _pooled_fundamental(ok: list[RingingProblem], modes: tuple[tuple[float, float], ...],
+                        pool: Any) -> tuple[float, float]:
+    """The plate's fundamental ``(f_s, sigma)`` from all the runs together, the modes'
+    tails carried on with each run's weights: the maximum of the pooled likelihood, each
+    run with its own noise (``sum_r n_r log rss_r``; every run's amplitudes eliminated
+    exactly).  A run whose flights hardly determine the fundamental (periodic motion) has
+    a flat residual there and hardly moves it.  Nelder-Mead from the runs' median."""
+    models = [_Model(p.y, p.segments, p.fs_hz, p.forced).extended(
+        _tail_columns(_tails(p.segments.k / p.fs_hz, p.t_imp_s, p.fs_hz), p.dv, list(modes)))
+        for p in ok]
+    sizes = np.array([m.y.size for m in models], float)
+    f0 = float(np.median([p.f_s_hz for p in ok]))
+    s0 = max(float(np.median([p.sigma_1_s for p in ok])), 1e-3 * 2.0 * np.pi * f0)
+
+    def objective(par: np.ndarray) -> float:
+        f, s = float(par[0]), abs(float(par[1]))
+        rss = np.array(list(pool.map(lambda m: m.solve(f, s)[0], models)))
+        return float(np.sum(sizes * np.log(rss)))
+
+    from scipy.optimize import minimize  # here: importing detect stays light
+
+    res = minimize(objective, np.array([f0, s0]), method="Nelder-Mead",
+                   options={"xatol": 1e-4, "fatol": 0.0, "maxfev": 80,
+                            "initial_simplex": [[f0, s0], [f0 * 1.01, s0], [f0, s0 * 1.5]]})
+    return float(res.x[0]), abs(float(res.x[1]))
 
 
 def _fundamental_with(p: RingingProblem, modes: tuple[tuple[float, float], ...]
@@ -1283,5 +1357,5 @@ def _evaluate(model: _Model, f_s: float, sigma: float, keep: np.ndarray, omega: 
     return vin, vout
 
 
-__all__ = ["FlightFit", "RingingProblem", "campaign_ring_modes", "flight_velocities",
-           "ringing_problem"]
+__all__ = ["CampaignRinging", "FlightFit", "RingingProblem", "campaign_ring_modes",
+           "campaign_ringing_model", "flight_velocities", "ringing_problem"]

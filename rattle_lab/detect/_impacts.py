@@ -156,6 +156,12 @@ class ImpactParams:
     ring_modes_runs : int
         How many runs ``ring_modes`` were found from (0: given; the fit names a search
         that had one run only).
+    ring_fundamental : (f_hz, s_1_s) or empty
+        With ``ring_modes``: the plate's fundamental mode (frequency, Hz, and decay rate,
+        1/s) that the campaign's search found with them
+        (:func:`rattle_lab.detect.campaign_ringing_model`: all the runs together, where one
+        run in periodic motion does not determine it); the flight model then uses it
+        instead of searching each run's own.  Empty (default): each run's own.
     """
 
     on: float = 12.0
@@ -174,6 +180,7 @@ class ImpactParams:
     velocity_model: Literal["auto", "local", "flights"] = "auto"
     ring_modes: tuple[tuple[float, float], ...] = ()
     ring_modes_runs: int = 0
+    ring_fundamental: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         if isinstance(self.ring_modes_runs, bool) or not (
@@ -189,6 +196,14 @@ class ImpactParams:
             raise ParameterError(f"`ring_modes`: each frequency and decay rate must be > 0, "
                                  f"was {self.ring_modes!r}")
         object.__setattr__(self, "ring_modes", modes)
+        try:
+            fund = tuple(float(x) for x in self.ring_fundamental)
+        except (TypeError, ValueError):
+            fund = (float("nan"),)
+        if fund and not (len(fund) == 2 and all(np.isfinite(x) and x > 0 for x in fund)):
+            raise ParameterError("`ring_fundamental` must be empty or [frequency_hz, "
+                                 f"decay_1_s], each > 0, was {self.ring_fundamental!r}")
+        object.__setattr__(self, "ring_fundamental", fund)
         if not (np.isfinite(self.off) and self.off > 0):
             raise ParameterError(f"`off` must be > 0, was {self.off}")
         if not (np.isfinite(self.on) and self.on > self.off):
@@ -456,14 +471,16 @@ def _recognition_key(fs_hz: float, velocity_m_s: object, accel_ms2: object,
                      velocity_delay_declared: bool) -> tuple[object, ...]:
     """What a :class:`Recognition` depends on: the channels' presence and length, the rate,
     the excitation frequency, the declared delay and the parameters but for the velocity
-    model's (``velocity_model``, ``ring_modes``, ``ring_modes_runs``)."""
+    model's (``velocity_model``, ``ring_modes``, ``ring_modes_runs``,
+    ``ring_fundamental``)."""
     def size(x: Any) -> int | None:
         return None if x is None else int(np.size(x))
 
     return (float(fs_hz), size(velocity_m_s), size(accel_ms2),
             None if excitation_freq_hz is None else float(excitation_freq_hz),
             bool(velocity_delay_declared),
-            replace(params, velocity_model="auto", ring_modes=(), ring_modes_runs=0))
+            replace(params, velocity_model="auto", ring_modes=(), ring_modes_runs=0,
+                    ring_fundamental=()))
 
 
 def _recognise(fs_hz: float, velocity_m_s: object, accel_ms2: object, params: ImpactParams,
@@ -756,7 +773,10 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
                                     np.asarray(t_idx, dtype=float)[src] + d_use,
                                     np.asarray(pads, dtype=float)[src], vin[src], vout[src],
                                     list(params.ring_modes), carried=True,
-                                    instants_given=rec.declared)
+                                    instants_given=rec.declared,
+                                    fundamental_given=(
+                                        (params.ring_fundamental[0], params.ring_fundamental[1])
+                                        if params.ring_fundamental else None))
         got = np.zeros(vin.size, dtype=bool)
         got[src] = flights.from_flights
         vin, vout = np.full(vin.size, np.nan), np.full(vin.size, np.nan)

@@ -339,9 +339,13 @@ def summarise_fits(runs: list[RunResult], curve: Any, fit: Mapping[str, Any], *,
         where = (f"found across {n_src} runs" if n_src > 1 else "found in one run"
                  if n_src == 1 else "given")
         n_with = sum(1 for log in carried if np.isfinite(log.v_in_m_s).any())
+        fund = carried[0].params.ring_fundamental
         notes.append("the plate's higher modes ring after each impact: modes "
                      + ", ".join(f"{f:.1f} Hz (decay {s:.1f} 1/s)" for f, s in modes)
-                     + f" {where}; in {n_with} runs v_in and v_out are the flight model's "
+                     + f" {where}"
+                     + (f", with the fundamental: {fund[0]:.2f} Hz decaying at {fund[1]:.2f} "
+                        "1/s, from all those runs together" if fund else "")
+                     + f"; in {n_with} runs v_in and v_out are the flight model's "
                      "with each impact's ringing carried on over the later flights (impacts "
                      "it gives no velocities are left out)")
         if n_src == 1:

@@ -81,8 +81,8 @@ if TYPE_CHECKING:
 #: ring_modes (and ringing_problem, never cached).  6: ImpactLog gained velocity_delay_* and
 #: step_guard_s, velocity_delay_window_s, e_per_delay_s, e_window_change (issue 28).  7: and
 #: e_measurand_diff (format 6 was briefly on main without it).  8: and velocity_delay_method
-#: and velocity_delay_note.
-CACHE_FORMAT = 8
+#: and velocity_delay_note.  9: ImpactParams (in ImpactLog.params) gained ring_fundamental.
+CACHE_FORMAT = 9
 
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
@@ -405,7 +405,7 @@ def _detect_runs(store: str | os.PathLike[str], detect: DetectParams | Mapping[s
     results = _map_runs(jobs, params, fit, scheduler=scheduler, quiet=quiet, desc="detect",
                         weights=weights)
 
-    velocity_fields = ("velocity_model", "ring_modes", "ring_modes_runs")
+    velocity_fields = ("velocity_model", "ring_modes", "ring_modes_runs", "ring_fundamental")
 
     def redetect(indices: list[int], again: DetectParams, label: str) -> list[Any]:
         # the passes change the velocity model only: the impacts come out at the same times,

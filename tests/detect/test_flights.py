@@ -549,6 +549,11 @@ def test_ring_modes_are_checked():
             ImpactParams(ring_modes=bad)
     with pytest.raises(ParameterError, match="ring_modes_runs"):
         ImpactParams(ring_modes_runs=-1)
+    assert ImpactParams(ring_fundamental=[96, 6.0]).ring_fundamental == (96.0, 6.0)
+    assert ImpactParams().ring_fundamental == ()
+    for bad in ([96.0], [96.0, 0.0], [96.0, 6.0, 1.0], "x", [float("inf"), 6.0], 3.0):
+        with pytest.raises(ParameterError, match="ring_fundamental"):
+            ImpactParams(ring_fundamental=bad)
 
 
 def test_ringing_runs_without_a_share_or_modes_are_named_unmeasured():

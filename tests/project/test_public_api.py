@@ -84,7 +84,7 @@ PACKAGES: dict[str, list[str]] = {
         "ImpactLog", "ImpactParams", "P_REF_PA", "PatternResult", "Recognition", "RingingProblem",
         "SoundPeaks",
         "a_weight", "a_weighting_db", "campaign_ring_modes", "cross_correlation_delay",
-        "detect_impacts", "impact_pattern",
+        "detect_impacts", "impact_pattern", "CampaignRinging", "campaign_ringing_model",
         "impulse_train", "n_samples_of", "parabolic_peak", "rms_spl_db", "robust_sigma",
         "sound_peaks", "spl_db", "trigger_onsets", "impacts_per_cycle",
         # issue 25: what the fit imports from detect
