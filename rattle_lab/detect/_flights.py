@@ -79,8 +79,16 @@ RING_DECAY_FACTOR = 5.0
 MIN_IMPACTS = 8
 #: Fewest samples of a flight's window (after the contacts are left out).
 MIN_FLIGHT_SAMPLES = 12
-#: Knot spacing of the run-wide forced amplitude, s.
+#: Knot spacing of the run-wide forced amplitude, s ...
 KNOT_S = 1.0
+#: ... and where the run holds its excitation level (a sine dwell): one amplitude for a run
+#: up to this long, hats this far apart in a longer one (a controller's slow drift).  A
+#: dwell that settles into periodic impacts repeats one flight, and its forced and free
+#: responses nearly trade off: there a forced amplitude free to change linearly over the
+#: run moved the free responses with it (the independent generator's 99 Hz dwell: v_in
+#: drifting from -1 % to -3.5 % over the run, e -0.6 %, against v_in -0.9 % and e +0.04 %
+#: with one amplitude; ``chain_timing.py --n 50``: 43 of 50 within 3 % against 40).
+HELD_KNOT_S = 10.0
 #: Largest change of the median velocity jump from the local fits' that ringing explains.
 MAX_JUMP_CHANGE = 0.25
 #: The same with tails carried on (lightly damped modes: each jump reads its own ringing
@@ -219,10 +227,20 @@ def _segments(n: int, k_imp: np.ndarray, pad: np.ndarray, max_len: int) -> _Segm
                      np.array([p[3] for p in pieces]), np.array([p[4] for p in pieces]))
 
 
-def _forced_columns(t_s: np.ndarray, omega: float, t_total_s: float) -> np.ndarray:
-    """``1`` and ``h_i(t) cos wt``, ``h_i(t) sin wt`` (linear hat functions ``h_i``)."""
-    n_knots = max(2, int(np.ceil(t_total_s / KNOT_S)) + 1)
-    knots = np.linspace(0.0, t_total_s, n_knots)
+def _knots(t_total_s: float, held: bool = False) -> np.ndarray:
+    """The forced amplitude's knots over a run of ``t_total_s``: :data:`KNOT_S` apart, or,
+    where the run holds its level (``held``), one knot up to :data:`HELD_KNOT_S` and
+    :data:`HELD_KNOT_S` apart beyond."""
+    if held and t_total_s <= HELD_KNOT_S:
+        return np.zeros(1)
+    step = HELD_KNOT_S if held else KNOT_S
+    return np.linspace(0.0, t_total_s, max(2, int(np.ceil(t_total_s / step)) + 1))
+
+
+def _forced_columns(t_s: np.ndarray, omega: float, knots: np.ndarray) -> np.ndarray:
+    """``1`` and ``h_i(t) cos wt``, ``h_i(t) sin wt`` (linear hat functions ``h_i`` on
+    ``knots``; one knot: ``h = 1``)."""
+    n_knots = knots.size
     c, s = np.cos(omega * t_s), np.sin(omega * t_s)
     cols = [np.ones_like(t_s)]
     for i in range(n_knots):
@@ -248,14 +266,15 @@ class _Rows:
                    np.nonzero(nz)[1].astype(np.int64), np.ascontiguousarray(x[nz]), x.shape[1])
 
 
-def _forced_rows(t_s: np.ndarray, omega: float, t_total_s: float, keep: np.ndarray) -> _Rows:
-    """``_Rows.from_dense(_forced_columns(t_s, omega, t_total_s)[:, keep])``, bit for bit,
+def _forced_rows(t_s: np.ndarray, omega: float, knots: np.ndarray, keep: np.ndarray) -> _Rows:
+    """``_Rows.from_dense(_forced_columns(t_s, omega, knots)[:, keep])``, bit for bit,
     without the dense matrix: a sample lies between two knots, so at most five of its
     ``1 + 2 n_knots`` columns are nonzero (the dense matrix of a 50 s run at 25.6 kHz was
     about 1 GB).  Each hat's value is computed as :func:`numpy.interp` computes it."""
     t_s = np.ascontiguousarray(t_s, float)
-    n_knots = max(2, int(np.ceil(t_total_s / KNOT_S)) + 1)
-    knots = np.linspace(0.0, t_total_s, n_knots)
+    if knots.size == 1:   # one amplitude: three columns
+        return _Rows.from_dense(_forced_columns(t_s, omega, knots)[:, np.asarray(keep, bool)])
+    n_knots = knots.size
     j = np.clip(np.searchsorted(knots, t_s, side="right") - 1, 0, n_knots - 2).astype(np.int64)
     c, s = np.cos(omega * t_s), np.sin(omega * t_s)
     keep = np.asarray(keep, bool)
@@ -730,7 +749,8 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
                       pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray,
                       modes_given: list[tuple[float, float]] | None = None, *,
                       carried: bool = False, instants_given: bool = False,
-                      fundamental_given: tuple[float, float] | None = None) -> FlightFit:
+                      fundamental_given: tuple[float, float] | None = None,
+                      held: bool = False) -> FlightFit:
     """Each impact's ``v_in``, ``v_out`` from a whole-run flight model (see the module docstring).
 
     Parameters
@@ -765,6 +785,9 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
         run's own search.  The run's flights must still determine the free response there
         (:func:`_determined`): in steady motion its share of each flight is not resolved,
         whatever the fundamental.
+    held : bool
+        The run holds its excitation level (a sine dwell): the forced amplitude is one
+        over up to :data:`HELD_KNOT_S` (:func:`_knots`).
 
     Returns
     -------
@@ -777,13 +800,12 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     v_in_local = np.asarray(v_in_local, float)
     v_out_local = np.asarray(v_out_local, float)
     fallback = FlightFit(v_in_local.copy(), v_out_local.copy(), np.zeros(n_imp, dtype=bool))
-    setup = _setup(v, fs_hz, f_hz, k_imp, pad)
+    setup = _setup(v, fs_hz, f_hz, k_imp, pad, held)
     if isinstance(setup, str):
         return replace(fallback, note=setup)
-    sg, sub, xf_sub, keep = setup
+    sg, sub, xf_sub, keep, knots = setup
     omega = 2.0 * np.pi * f_hz
     period = fs_hz / f_hz
-    t_total = v.size / fs_hz
     y_all = np.asarray(v, float)
     t_imp = k_imp / fs_hz
     reach = 4.0 * period / fs_hz
@@ -822,11 +844,11 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
     # (else the model searched above already has these modes' columns, the same dv: a
     # second search from its own optimum only moved it within the search's tolerance)
     vin, vout = v_in_local, v_out_local
-    forced_all = _Model(y_all[sg.k], sg, fs_hz, _forced_rows(sg.k / fs_hz, omega, t_total, keep))
+    forced_all = _Model(y_all[sg.k], sg, fs_hz, _forced_rows(sg.k / fs_hz, omega, knots, keep))
     for _ in range(2):   # then with the impacts' own velocity changes weighting the ringing
         dv = np.where(np.isfinite(vout - vin), vout - vin, np.nan_to_num(dv))
         model = forced_all.extended(ring(sg.k / fs_hz, dv, modes))
-        vin, vout = _evaluate(model, f_s, sigma, keep, omega, t_total, k_imp)
+        vin, vout = _evaluate(model, f_s, sigma, keep, omega, knots, k_imp)
     timing: dict[str, Any] = {}
     if carried:
         # the impacts' instants in the velocity's own record: where the fundamental's
@@ -838,7 +860,7 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
         chosen = np.unique(np.linspace(0, n_imp - 1, min(n_imp, LAG_IMPACTS)).round()
                            .astype(int))
         sg2 = _subset(sg2, np.flatnonzero(np.isin(sg2.left, chosen) | np.isin(sg2.right, chosen)))
-        model2 = _Model(y_all[sg2.k], sg2, fs_hz, _forced_rows(sg2.k / fs_hz, omega, t_total,
+        model2 = _Model(y_all[sg2.k], sg2, fs_hz, _forced_rows(sg2.k / fs_hz, omega, knots,
                                                                keep)).extended(
             ring(sg2.k / fs_hz, dv, modes))
         lag2, se2, n_lag2 = _continuity_lag(model2, f_s, sigma, k_imp)
@@ -859,10 +881,10 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
         else:
             k_at = k_imp + lag2 if not instants_given else k_imp
             if not instants_given:
-                vin, vout = _evaluate(model, f_s, sigma, keep, omega, t_total, k_at)
+                vin, vout = _evaluate(model, f_s, sigma, keep, omega, knots, k_at)
             slopes = []
             for h in (-0.25, 0.25):
-                a, b = _evaluate(model, f_s, sigma, keep, omega, t_total, k_at + h)
+                a, b = _evaluate(model, f_s, sigma, keep, omega, knots, k_at + h)
                 slopes.append(-b / a)
             with np.errstate(invalid="ignore", divide="ignore"):
                 d_e = (slopes[1] - slopes[0]) / 0.5
@@ -941,9 +963,11 @@ def _continuity_lag(model: _Model, f_s: float, sigma: float, k_imp: np.ndarray
     return med, se, int(lag.size)
 
 
-def _setup(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray, pad: np.ndarray
-           ) -> tuple[_Segments, _Segments, np.ndarray, np.ndarray] | str:
-    """The run's flights, the searches' subset of them and its forced columns; or why not."""
+def _setup(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray, pad: np.ndarray,
+           held: bool = False
+           ) -> tuple[_Segments, _Segments, np.ndarray, np.ndarray, np.ndarray] | str:
+    """The run's flights, the searches' subset of them, its forced columns, which of them
+    are kept and the forced amplitude's knots (:func:`_knots`); or why not."""
     n_imp = k_imp.size
     if n_imp < MIN_IMPACTS:
         return f"local fits kept: {n_imp} impacts, a flight model needs >= {MIN_IMPACTS}"
@@ -958,8 +982,9 @@ def _setup(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray, pad: np.
     pick = np.unique(np.linspace(0, sg.starts.size - 1,
                                  min(sg.starts.size, SEARCH_SEGMENTS)).round().astype(int))
     sub = _subset(sg, pick)
-    xf_sub, keep = _forced(sub.k / fs_hz, 2.0 * np.pi * f_hz, v.size / fs_hz, None)
-    return sg, sub, xf_sub, keep
+    knots = _knots(v.size / fs_hz, held)
+    xf_sub, keep = _forced(sub.k / fs_hz, 2.0 * np.pi * f_hz, knots, None)
+    return sg, sub, xf_sub, keep, knots
 
 
 @dataclass(frozen=True)
@@ -984,7 +1009,8 @@ class RingingProblem:
 
 def ringing_problem(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
                     pad: np.ndarray, v_in_local: np.ndarray, v_out_local: np.ndarray,
-                    searched: tuple[float, float] | None = None) -> RingingProblem | None:
+                    searched: tuple[float, float] | None = None, held: bool = False
+                    ) -> RingingProblem | None:
     """One run's part of the campaign's search for ringing modes (None where too short, or
     where the fundamental found is outside :data:`FUNDAMENTAL_RANGE` times the excitation
     frequency: a run in steady motion repeats the same flight, its forced and free
@@ -999,10 +1025,10 @@ def ringing_problem(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarray,
     the same arguments (:attr:`FlightFit.searched`: the same model and the same search, its
     start ``sigma`` equal to rounding); searched here where it is not given or NaN.
     """
-    setup = _setup(v, fs_hz, f_hz, k_imp, pad)
+    setup = _setup(v, fs_hz, f_hz, k_imp, pad, held)
     if isinstance(setup, str):
         return None
-    _, sub, xf_sub, _ = setup
+    _, sub, xf_sub, _, _ = setup
     y = np.asarray(v, float)[sub.k]
     model = _Model(y, sub, fs_hz, xf_sub)
     if searched is not None and np.all(np.isfinite(searched)):
@@ -1326,10 +1352,10 @@ def _subset(sg: _Segments, pick: np.ndarray) -> _Segments:
                      sg.right[pick])
 
 
-def _forced(t_s: np.ndarray, omega: float, t_total_s: float, keep: np.ndarray | None
+def _forced(t_s: np.ndarray, omega: float, knots: np.ndarray, keep: np.ndarray | None
             ) -> tuple[np.ndarray, np.ndarray]:
     """Forced-response columns; without ``keep``, those of knots with samples near them."""
-    xf = _forced_columns(t_s, omega, t_total_s)
+    xf = _forced_columns(t_s, omega, knots)
     if keep is None:
         norm = np.sqrt(np.sum(xf * xf, axis=0))
         keep = norm > 1e-3 * norm.max()
@@ -1337,14 +1363,14 @@ def _forced(t_s: np.ndarray, omega: float, t_total_s: float, keep: np.ndarray | 
 
 
 def _evaluate(model: _Model, f_s: float, sigma: float, keep: np.ndarray, omega: float,
-              t_total_s: float, k_imp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+              knots: np.ndarray, k_imp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Forced + free response (no offset, no ringing) at each impact from its two flights."""
     _, beta, gamma = model.solve(f_s, sigma)
     sg, fs = model.sg, model.fs
     n_imp = k_imp.size
     forced_beta = beta[:int(keep.sum())].copy()
     forced_beta[0] = 0.0
-    forced = _forced_columns(k_imp / fs, omega, t_total_s)[:, keep] @ forced_beta
+    forced = _forced_columns(k_imp / fs, omega, knots)[:, keep] @ forced_beta
     vin, vout = np.full(n_imp, np.nan), np.full(n_imp, np.nan)
     wf = 2.0 * np.pi * f_s
     for imp, out in ((sg.left, vout), (sg.right, vin)):

@@ -394,7 +394,8 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
                    params: ImpactParams | None = None, start_time_s: float = 0.0,
                    excitation_freq_hz: float | None = None,
                    velocity_delay_declared: bool = False,
-                   recognised: Recognition | None = None) -> ImpactLog:
+                   recognised: Recognition | None = None, level_held: bool = False
+                   ) -> ImpactLog:
     """Find impacts in a vibrometer velocity and/or plate acceleration record.
 
     Parameters
@@ -430,6 +431,10 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
         ``ring_modes_runs``), steps 1-7 are taken from it and only the velocity model is
         applied (the same log as without it, bit for bit; the caller's to ensure that it
         was made from the same samples).  Otherwise it is ignored.
+    level_held : bool
+        The run holds its excitation level (a sine dwell): the flight model's forced
+        amplitude is then one over up to 10 s (:data:`rattle_lab.detect._flights.HELD_KNOT_S`),
+        not free to change every second.
 
     Returns
     -------
@@ -463,7 +468,8 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     else:
         rec, v = _recognise(fs_hz, velocity_m_s, accel_ms2, params, excitation_freq_hz,
                             velocity_delay_declared, key)
-    return _with_velocity_model(rec, v, fs_hz, params, start_time_s, excitation_freq_hz)
+    return _with_velocity_model(rec, v, fs_hz, params, start_time_s, excitation_freq_hz,
+                                level_held)
 
 
 def _recognition_key(fs_hz: float, velocity_m_s: object, accel_ms2: object,
@@ -735,7 +741,8 @@ def _recognise(fs_hz: float, velocity_m_s: object, accel_ms2: object, params: Im
 
 def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
                          params: ImpactParams, start_time_s: float,
-                         excitation_freq_hz: float | None) -> ImpactLog:
+                         excitation_freq_hz: float | None, level_held: bool = False
+                         ) -> ImpactLog:
     """The last step of :func:`detect_impacts`: the velocity model (``velocity_model``,
     ``ring_modes``) applied to a recognition, and the log."""
     t_idx, onsets, strength, pads = rec.t_idx, rec.onsets, rec.strength, rec.pads
@@ -776,7 +783,8 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
                                     instants_given=rec.declared,
                                     fundamental_given=(
                                         (params.ring_fundamental[0], params.ring_fundamental[1])
-                                        if params.ring_fundamental else None))
+                                        if params.ring_fundamental else None),
+                                    held=level_held)
         got = np.zeros(vin.size, dtype=bool)
         got[src] = flights.from_flights
         vin, vout = np.full(vin.size, np.nan), np.full(vin.size, np.nan)
@@ -803,7 +811,7 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
             note = "no ringing share: the flight model needs a constant excitation frequency"
         else:
             flights = flight_velocities(v, fs_hz, excitation_freq_hz, k_keep, pad_keep,
-                                        vin[keep], vout[keep])
+                                        vin[keep], vout[keep], held=level_held)
             note = flights.note
             m = flights.from_flights
             if m.sum() >= MIN_SHARE_IMPACTS:
@@ -817,7 +825,8 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
             # the campaign's runs together find the modes better than one run alone (and
             # find lightly damped ones, which ring on past the next impact, at all)
             problem = ringing_problem(v, fs_hz, excitation_freq_hz, k_keep, pad_keep,
-                                      vin[keep], vout[keep], searched=flights.searched)
+                                      vin[keep], vout[keep], searched=flights.searched,
+                                      held=level_held)
     delay_fields: dict[str, Any] = dict(
         velocity_delay_s=delay.value / fs_hz if delay.n else float("nan"),
         velocity_delay_stderr_s=math.hypot(delay.stderr, rec.method_err) / fs_hz

@@ -291,7 +291,8 @@ def _impact_log(run: Any, by_q: Mapping[str, Any], vel: Any, acc: Any, detect: D
     fs, t0, v_si, a_si = paired_plate_channels(run, vel, acc)
     log = detect_impacts(fs, velocity_m_s=v_si, accel_ms2=a_si, params=detect.impact_params(),
                          start_time_s=t0, excitation_freq_hz=f_fit,
-                         velocity_delay_declared=delay_declared, recognised=recognised)
+                         velocity_delay_declared=delay_declared, recognised=recognised,
+                         level_held=run.protocol == "sine_dwell")
     flags: tuple[str, ...] | None = None
     # issue 28: the vibrometer's measurand, when the record does not say, inferred from
     # the data

@@ -513,24 +513,36 @@ def test_forced_rows_without_the_dense_matrix_are_the_dense_columns_bit_for_bit(
     # unchanged; and against the hat functions written out here, max(0, 1 - |t - t_i| / d),
     # to 1e-15 absolute: each formula computes 1 - x for x in [0, 1] with two or three
     # roundings, each within half an ulp of 1 (1.1e-16), whatever the size of the result
-    from rattle_lab.detect._flights import KNOT_S, _forced_columns, _forced_rows, _Rows
+    # A run that holds its level (a sine dwell) has one amplitude up to HELD_KNOT_S (its
+    # hat is 1) and hats HELD_KNOT_S apart beyond.
+    from rattle_lab.detect._flights import (HELD_KNOT_S, KNOT_S, _forced_columns,
+                                            _forced_rows, _knots, _Rows)
 
     rng = np.random.default_rng(3)
     fs, omega = 25600.0, 2 * np.pi * 95.0
-    for total_s in (0.3, 2.0, 7.3):
+    for total_s, held in ((0.3, False), (2.0, False), (7.3, False), (7.3, True), (23.0, True)):
         n = int(total_s * fs)
         k = np.unique(np.r_[rng.choice(n, 5000, replace=False), 0, n // 2, n - 1])
         t = k / fs
-        dense = _forced_columns(t, omega, total_s)
+        knots_used = _knots(total_s, held)
+        dense = _forced_columns(t, omega, knots_used)
         keep = rng.random(dense.shape[1]) > 0.3
-        a, b = _Rows.from_dense(dense[:, keep]), _forced_rows(t, omega, total_s, keep)
+        keep[:3] = True
+        a, b = _Rows.from_dense(dense[:, keep]), _forced_rows(t, omega, knots_used, keep)
         assert a.p == b.p == keep.sum()
         for name in ("indptr", "indices"):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
         np.testing.assert_array_equal(a.values.view(np.int64), b.values.view(np.int64))
-        n_knots = max(2, int(np.ceil(total_s / KNOT_S)) + 1)
-        knots = np.linspace(0.0, total_s, n_knots)
-        hats = np.maximum(0.0, 1.0 - np.abs(t[:, None] - knots[None, :]) / np.diff(knots)[0])
+        step = HELD_KNOT_S if held else KNOT_S
+        if held and total_s <= HELD_KNOT_S:
+            assert knots_used.size == 1
+            hats = np.ones((t.size, 1))
+        else:
+            n_knots = max(2, int(np.ceil(total_s / step)) + 1)
+            knots = np.linspace(0.0, total_s, n_knots)
+            np.testing.assert_array_equal(knots, knots_used)
+            hats = np.maximum(0.0, 1.0 - np.abs(t[:, None] - knots[None, :])
+                              / np.diff(knots)[0])
         mine = np.column_stack([np.ones_like(t)] + [
             h * f(omega * t) for h in hats.T for f in (np.cos, np.sin)])[:, keep]
         rebuilt = np.zeros((t.size, b.p))
