@@ -9,14 +9,14 @@ from typing import TYPE_CHECKING
 from rattle_lab._lazy import lazy_names
 
 if TYPE_CHECKING:
-    from ._campaign import campaign_ringing
+    from ._campaign import campaign_measurand, campaign_ringing
     from ._chain import (CAUSE_QUANTITIES, FLAG_DELAY_CONTRADICTED, FLAG_DELAY_ESTIMATED,
                          FLAG_MEASURAND_INFERRED, FLAG_MEASURAND_UNDETERMINED, SHOCK_QUANTITIES,
                          infer_measurand, median_and_error, paired_plate_channels,
                          relative_to_striker, run_chain_flags, transient_shocks,
                          velocity_delay_flags)
     from ._common import n_samples_of, parabolic_peak, robust_sigma
-    from ._params import SEGMENT_KEYS, SOUND_KEYS, DetectParams
+    from ._params import MEASURAND_KEYS, SEGMENT_KEYS, SOUND_KEYS, DetectParams
     from ._run import (RunResult, SegmentImpacts, SegmentSound, analyse_run, assemble_segments,
                        merge_segment_impacts, reused_result, run_segments, segment_impacts,
                        segment_sound)
@@ -37,6 +37,7 @@ if TYPE_CHECKING:
 #: flight model and the trigger only when detection runs)
 _LAZY: dict[str, str] = {
     "campaign_ringing": "_campaign",
+    "campaign_measurand": "_campaign",
     **dict.fromkeys(("CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
                      "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED",
                      "SHOCK_QUANTITIES", "infer_measurand", "median_and_error",
@@ -45,6 +46,7 @@ _LAZY: dict[str, str] = {
     "DetectParams": "_params",
     "SOUND_KEYS": "_params",
     "SEGMENT_KEYS": "_params",
+    "MEASURAND_KEYS": "_params",
     "RunResult": "_run",
     "analyse_run": "_run",
     **dict.fromkeys(("SegmentImpacts", "SegmentSound", "assemble_segments",
@@ -97,6 +99,7 @@ __all__ = [
     # issue 29: detection in one room (the [detect] parameters, the per-run analysis, the
     # measurement chain of a run, the campaign's ringing search)
     "DetectParams", "SEGMENT_KEYS", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
+    "campaign_measurand", "MEASURAND_KEYS",
     "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
     "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
     "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",

@@ -105,4 +105,50 @@ def campaign_ringing(results: Sequence[RunResult], detect: DetectParams,
             for r in results]
 
 
-__all__ = ["campaign_ringing"]
+
+
+def campaign_measurand(results: Sequence[RunResult], detect: DetectParams, redetect: Redetect
+                       ) -> tuple[list[RunResult], DetectParams]:
+    """An undeclared vibrometer's measurand, where some runs establish it and others cannot.
+
+    The measurand is the chain's, the same in every run.  A run whose impacts come at one
+    phase of the base motion (a dwell in periodic motion) cannot tell relative from
+    absolute (:func:`~rattle_lab.detect.infer_measurand`: ``measurand_undetermined``, the
+    relative reading kept and e's interval widened), while a run whose impacts spread over
+    the phases can.  Where runs of the campaign establish one measurand and none the other,
+    the undetermined runs are detected again with it (``measurand_if_undetermined``), and
+    the parameters returned carry it for the passes that follow.  (On the independent
+    generator's absolute vibrometers, seeds 27 and 36 of ``benchmarks/chain_timing.py``:
+    the 93 Hz dwell established ``panel_absolute``, the steady 99 Hz dwell could not, and e
+    came out +14.5 and +19.9 % with the relative reading.)  Where the user gave
+    ``measurand_if_undetermined``, or the runs disagree, nothing changes.
+
+    Returns
+    -------
+    (list of RunResult, DetectParams)
+    """
+    from ._chain import (CAMPAIGN_MEASURAND_NOTE, FLAG_MEASURAND_INFERRED,
+                         FLAG_MEASURAND_UNDETERMINED)
+
+    results = list(results)
+    if detect.measurand_if_undetermined:
+        return results, detect
+    found: set[str] = set()
+    open_: list[int] = []
+    for i, r in enumerate(results):
+        for f in getattr(r, "chain_flags", ()) or ():
+            if f.startswith(f"{FLAG_MEASURAND_INFERRED}: ") and CAMPAIGN_MEASURAND_NOTE not in f:
+                found.add("panel_absolute" if f.startswith(
+                    f"{FLAG_MEASURAND_INFERRED}: panel_absolute") else "panel_relative_to_striker")
+            elif (f.startswith(f"{FLAG_MEASURAND_UNDETERMINED}: ")
+                  and r.impacts is not None and r.impacts.e_measurand_diff != 0.0):
+                open_.append(i)
+    if len(found) != 1 or not open_:
+        return results, detect
+    again = dataclasses.replace(detect, measurand_if_undetermined=found.pop())
+    for i, r in zip(open_, redetect(open_, again, "detect (measurand)")):
+        results[i] = r
+    return results, again
+
+
+__all__ = ["campaign_measurand", "campaign_ringing"]

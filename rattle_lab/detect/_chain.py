@@ -117,6 +117,8 @@ FLAG_DELAY_CONTRADICTED = "channel_delay_contradicted"
 FLAG_MEASURAND_INFERRED = "measurand_inferred"
 #: Data-quality flag: the measurand was not declared and the data cannot tell (e withheld).
 FLAG_MEASURAND_UNDETERMINED = "measurand_undetermined"
+#: How a measurand taken from the campaign's other runs is noted (``measurand_if_undetermined``).
+CAMPAIGN_MEASURAND_NOTE = "as established by the campaign's other runs or given"
 
 
 def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
@@ -160,7 +162,8 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
 
 
 def infer_measurand(run: Any, log: Any, v_si: np.ndarray, fs: float, t0: float, base: Any,
-                    freq_hz: float | None) -> tuple[Any, tuple[str, ...]]:
+                    freq_hz: float | None, if_undetermined: str = ""
+                    ) -> tuple[Any, tuple[str, ...]]:
     """An undeclared vibrometer's measurand from the data; the log made relative if absolute.
 
     The integrated velocity at the impacts against the base displacement there
@@ -174,6 +177,11 @@ def infer_measurand(run: Any, log: Any, v_si: np.ndarray, fs: float, t0: float, 
     :data:`FLAG_MEASURAND_UNDECLARED` where the two readings agree within their noise).
     Only where no absolute reading can be formed (no base accelerometer, no constant
     excitation frequency) are the run's ratios withheld, with the reason.
+
+    ``if_undetermined`` (``[detect] measurand_if_undetermined``): where it names a measurand
+    and this run's data do not establish one (:data:`FLAG_MEASURAND_UNDETERMINED`), that
+    reading is taken and flagged :data:`FLAG_MEASURAND_INFERRED`, with this run's evidence
+    (the campaign's other runs established it: :func:`campaign_measurand`).
     """
     if log.n_impacts == 0:
         return log, (FLAG_MEASURAND_UNDECLARED,)
@@ -191,7 +199,18 @@ def infer_measurand(run: Any, log: Any, v_si: np.ndarray, fs: float, t0: float, 
     if share.verdict == "absolute":
         return (relative_to_striker(run, log, base, freq_hz),
                 (f"{FLAG_MEASURAND_INFERRED}: panel_absolute, made relative with the base: {ev}",))
-    return _undetermined(run, log, base, freq_hz, f"the data cannot tell: {ev}")
+    out, flags = _undetermined(run, log, base, freq_hz, f"the data cannot tell: {ev}")
+    if (if_undetermined and any(f.startswith(FLAG_MEASURAND_UNDETERMINED) for f in flags)
+            and float(getattr(out, "e_measurand_diff", 0.0) or 0.0) != 0.0):
+        # (both readings physical and apart: the one named is taken; where a run's ratios
+        # are withheld, neither reading is)
+        why = (f"{CAMPAIGN_MEASURAND_NOTE}; this run's data cannot tell: {ev}")
+        if if_undetermined == "panel_absolute":
+            return (relative_to_striker(run, log, base, freq_hz),
+                    (f"{FLAG_MEASURAND_INFERRED}: panel_absolute, made relative with the base: "
+                     f"{why}",))
+        return log, (f"{FLAG_MEASURAND_INFERRED}: relative to the striker: {why}",)
+    return out, flags
 
 
 #: A reading of e is not physical where its median over the run's impacts lies beyond 1 (or

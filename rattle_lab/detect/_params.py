@@ -32,6 +32,16 @@ SOUND_KEYS: dict[str, Any] = {"window_s": 5e-3, "first_fraction": 0.5, "max_lag_
 #: 25.6 kHz, 20 s at 51.2 kHz), each read with ``segment_margin_s`` of the record either side.
 SEGMENT_KEYS: dict[str, Any] = {"segment_samples": 1 << 20, "segment_margin_s": 1.0}
 
+#: The default of ``measurand_if_undetermined``: how an undeclared vibrometer is read in a
+#: run whose own data cannot tell its measurand (:func:`~rattle_lab.detect.infer_measurand`).
+#: ``""``: the relative reading, with the absolute one's difference in e's error;
+#: ``"panel_relative_to_striker"`` or ``"panel_absolute"``: that reading (the campaign's
+#: other runs established it, :func:`~rattle_lab.detect.campaign_measurand`, or the user
+#: knows it).
+MEASURAND_KEYS: dict[str, Any] = {"measurand_if_undetermined": ""}
+#: Its values.
+MEASURANDS = ("", "panel_relative_to_striker", "panel_absolute")
+
 _IMPACT_FIELDS = tuple(f.name for f in dataclasses.fields(ImpactParams))
 
 
@@ -60,6 +70,13 @@ velocity_model, ring_modes, ring_modes_runs, ring_fundamental
         :mod:`rattle_lab.detect._segments`).
     segment_margin_s : float
         Record read on either side of a segment, s (the detector's context at its edges).
+    measurand_if_undetermined : str
+        How an undeclared vibrometer is read in a run whose own data cannot tell its
+        measurand (:data:`MEASURAND_KEYS`): ``""`` (default) the relative reading, the
+        absolute one's difference in e's error; ``"panel_relative_to_striker"`` or
+        ``"panel_absolute"`` that reading, flagged ``measurand_inferred``.  ``rattle-lab
+        fit`` sets it where the campaign's other runs establish the measurand
+        (:func:`~rattle_lab.detect.campaign_measurand`).
     given : tuple of str
         The keys the mapping gave, in its order (:meth:`to_dict`).
 
@@ -90,6 +107,7 @@ velocity_model, ring_modes, ring_modes_runs, ring_fundamental
     channel: str | None = SOUND_KEYS["channel"]
     segment_samples: int = SEGMENT_KEYS["segment_samples"]
     segment_margin_s: float = SEGMENT_KEYS["segment_margin_s"]
+    measurand_if_undetermined: str = MEASURAND_KEYS["measurand_if_undetermined"]
     given: tuple[str, ...] = field(default=(), repr=False)
 
     def __post_init__(self) -> None:
@@ -108,6 +126,10 @@ velocity_model, ring_modes, ring_modes_runs, ring_fundamental
         if isinstance(m, bool) or not isinstance(m, (int, float, np.number)) \
                 or not (np.isfinite(m) and m > 0):
             raise ParameterError(f"`segment_margin_s` must be a number > 0, was {m!r}")
+        if self.measurand_if_undetermined not in MEASURANDS:
+            raise ParameterError("`measurand_if_undetermined` must be one of "
+                                 f"{', '.join(repr(m) for m in MEASURANDS)}, was "
+                                 f"{self.measurand_if_undetermined!r}")
         if self.channel is not None and not isinstance(self.channel, str):
             raise ParameterError(f"`channel` must be a channel name, was {self.channel!r}")
         unknown = sorted(set(self.given) - set(keys()))
@@ -166,7 +188,7 @@ def _changed(value: Any, default: Any) -> bool:
 
 def keys() -> tuple[str, ...]:
     """Every key of ``[detect]``."""
-    return _IMPACT_FIELDS + tuple(SOUND_KEYS) + tuple(SEGMENT_KEYS)
+    return _IMPACT_FIELDS + tuple(SOUND_KEYS) + tuple(SEGMENT_KEYS) + tuple(MEASURAND_KEYS)
 
 
-__all__ = ["DetectParams", "SEGMENT_KEYS", "SOUND_KEYS"]
+__all__ = ["DetectParams", "MEASURAND_KEYS", "SEGMENT_KEYS", "SOUND_KEYS"]

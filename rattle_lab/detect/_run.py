@@ -299,7 +299,7 @@ def _impact_log(run: Any, by_q: Mapping[str, Any], vel: Any, acc: Any, detect: D
     measurand = getattr(vel, "measurand", None) if vel is not None else None
     if vel is not None and measurand is None and v_si is not None:
         log, flags = infer_measurand(run, log, v_si, fs, t0, by_q.get("base_acceleration"),
-                                     f_fit)
+                                     f_fit, if_undetermined=detect.measurand_if_undetermined)
     if vel is not None and measurand == "panel_absolute":
         log = relative_to_striker(run, log, by_q.get("base_acceleration"), f_fit)
     duration = (v_si if v_si is not None else a_si).size / fs  # type: ignore[union-attr]

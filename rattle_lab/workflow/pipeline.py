@@ -399,13 +399,14 @@ def _detect_runs(store: str | os.PathLike[str], detect: DetectParams | Mapping[s
     for k, r, n in zip(channels["input_key"], channels["run_id"], channels["n_samples"]):
         samples[(str(k), str(r))] = samples.get((str(k), str(r)), 0) + int(n)
     weights = [samples.get((k, r), 0) for _, k, r in jobs]
-    from rattle_lab.detect import DetectParams, campaign_ringing
+    from rattle_lab.detect import DetectParams, campaign_measurand, campaign_ringing
 
     params = DetectParams.from_mapping(detect)
     results = _map_runs(jobs, params, fit, scheduler=scheduler, quiet=quiet, desc="detect",
                         weights=weights)
 
-    velocity_fields = ("velocity_model", "ring_modes", "ring_modes_runs", "ring_fundamental")
+    velocity_fields = ("velocity_model", "ring_modes", "ring_modes_runs", "ring_fundamental",
+                       "measurand_if_undetermined")
 
     def redetect(indices: list[int], again: DetectParams, label: str) -> list[Any]:
         # the passes change the velocity model only: the impacts come out at the same times,
@@ -422,7 +423,10 @@ def _detect_runs(store: str | os.PathLike[str], detect: DetectParams | Mapping[s
                         reuse=[_recognisable(results[i]) for i in indices])
         return [_restored(results[i], r) for i, r in zip(indices, out)]
 
-    return campaign_ringing(results, params, redetect)
+    # an undeclared vibrometer's measurand where some runs establish it and others cannot,
+    # then the ringing passes with it
+    results, measured = campaign_measurand(results, params, redetect)
+    return campaign_ringing(results, measured, redetect)
 
 
 def _recognisable(first: Any) -> Any:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from rattle_lab.detect import SEGMENT_KEYS, SOUND_KEYS, DetectParams, ImpactParams
+from rattle_lab.detect import MEASURAND_KEYS, SEGMENT_KEYS, SOUND_KEYS, DetectParams, ImpactParams
 from rattle_lab.exceptions import ParameterError
 from rattle_lab.fit import load_pipeline
 from rattle_lab.workflow.pipeline import parse_pipeline
@@ -26,12 +26,13 @@ PIPELINES = Path(__file__).resolve().parents[2] / "pipelines"
 def test_every_detect_key_is_a_field() -> None:
     fields = {f.name for f in dataclasses.fields(DetectParams)} - {"given"}
     assert fields == ({f.name for f in dataclasses.fields(ImpactParams)} | set(SOUND_KEYS)
-                      | set(SEGMENT_KEYS))
-    # the defaults are ImpactParams', SOUND_KEYS' and SEGMENT_KEYS'
+                      | set(SEGMENT_KEYS) | set(MEASURAND_KEYS))
+    # the defaults are ImpactParams', SOUND_KEYS', SEGMENT_KEYS' and MEASURAND_KEYS'
     d = DetectParams()
     assert d.impact_params() == ImpactParams()
     assert {k: getattr(d, k) for k in SOUND_KEYS} == SOUND_KEYS
     assert {k: getattr(d, k) for k in SEGMENT_KEYS} == SEGMENT_KEYS
+    assert {k: getattr(d, k) for k in MEASURAND_KEYS} == MEASURAND_KEYS
 
 
 def test_to_dict_is_the_table_as_given() -> None:

@@ -93,6 +93,7 @@ PACKAGES: dict[str, list[str]] = {
         "DelayEstimate", "delay_contradicted", "measurand_share",
         # issue 29: detection in one room
         "DetectParams", "SEGMENT_KEYS", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
+        "campaign_measurand", "MEASURAND_KEYS",
         "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
         "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
         "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",
