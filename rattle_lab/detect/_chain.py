@@ -189,8 +189,13 @@ def infer_measurand(run: Any, log: Any, v_si: np.ndarray, fs: float, t0: float, 
         why = "no base accelerometer" if base is None else "no constant excitation frequency"
         return _undetermined(run, log, base, freq_hz, why)
     t_v = log.t_s + log.velocity_delay_applied_s
+    # (impacts without both velocities are left out: their jump, the part of the step the
+    # integral ends in, is not known.  Taken as 0 before 29 Nov 2026, seventeenth session,
+    # a trigger in a record's last samples, kept as an impact with v_out NaN, put the
+    # coefficient at 6-11 for an absolute vibrometer, 1.1-1.2 without it)
     share = measurand_share(v_si, fs, t0, t_v, base.read(), _fs_of(run, base), _t0_of(run, base),
-                            freq_hz, jumps_m_s=np.nan_to_num(log.v_out_m_s - log.v_in_m_s))
+                            freq_hz, jumps_m_s=log.v_out_m_s - log.v_in_m_s,
+                            ring_modes=tuple(getattr(log, "ring_modes", ()) or ()))
     ev = (f"coefficient of the base displacement in the integrated velocity at {share.n} "
           f"impacts {share.value:.3f} +- {share.stderr:.3f} (0: relative, 1: absolute; base "
           f"displacement spread {1e6 * share.spread_m:.1f} um)")
