@@ -1123,9 +1123,7 @@ def _pooled_fundamental(ok: list[RingingProblem], modes: tuple[tuple[float, floa
     run with its own noise (``sum_r n_r log rss_r``; every run's amplitudes eliminated
     exactly).  A run whose flights hardly determine the fundamental (periodic motion) has
     a flat residual there and hardly moves it.  Nelder-Mead from the runs' median."""
-    models = [_Model(p.y, p.segments, p.fs_hz, p.forced).extended(
-        _tail_columns(_tails(p.segments.k / p.fs_hz, p.t_imp_s, p.fs_hz), p.dv, list(modes)))
-        for p in ok]
+    models = [_carried_model(p, modes) for p in ok]
     sizes = np.array([m.y.size for m in models], float)
     f0 = float(np.median([p.f_s_hz for p in ok]))
     s0 = max(float(np.median([p.sigma_1_s for p in ok])), 1e-3 * 2.0 * np.pi * f0)
@@ -1149,9 +1147,7 @@ def _fundamental_with(p: RingingProblem, modes: tuple[tuple[float, float], ...]
     the tails' weights, the impacts' velocity jumps, taken from that model where it has
     the flights on both sides of an impact (elsewhere the local fits' jumps, scaled by the
     median ratio of the two)."""
-    tails = _tails(p.segments.k / p.fs_hz, p.t_imp_s, p.fs_hz)
-    model = _Model(p.y, p.segments, p.fs_hz, p.forced).extended(
-        _tail_columns(tails, p.dv, list(modes)))
+    model = _carried_model(p, modes)
     f_s, sigma = model.search(p.f_s_hz, p.sigma_1_s, grid=False)
     jump = _free_jumps(model, f_s, sigma, p.t_imp_s * p.fs_hz)
     both = np.isfinite(jump) & (p.dv != 0)
@@ -1160,6 +1156,13 @@ def _fundamental_with(p: RingingProblem, modes: tuple[tuple[float, float], ...]
         dv[both] = jump[both]
         return replace(p, f_s_hz=f_s, sigma_1_s=sigma, dv=dv)
     return replace(p, f_s_hz=f_s, sigma_1_s=sigma)
+
+
+def _carried_model(p: RingingProblem, modes: tuple[tuple[float, float], ...]) -> _Model:
+    """A run's search model with the modes' tails carried on, weighted by ``p.dv``."""
+    tails = _tails(p.segments.k / p.fs_hz, p.t_imp_s, p.fs_hz)
+    return _Model(p.y, p.segments, p.fs_hz, p.forced).extended(
+        _tail_columns(tails, p.dv, list(modes)))
 
 
 def _free_jumps(model: _Model, f_s: float, sigma: float, k_imp: np.ndarray) -> np.ndarray:

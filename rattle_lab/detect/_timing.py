@@ -281,6 +281,17 @@ class MeasurandShare:
     verdict: str
 
 
+def _integrated_tails(t: np.ndarray, jump: np.ndarray, p: complex) -> np.ndarray:
+    """``sum_{j<i} jump_j (exp(p (t_i - t_j)) - 1) / p`` for each ``i`` (``t`` sorted): the
+    tails ``S_i = sum_{j<i} jump_j exp(p (t_i - t_j))`` by ``S_i = exp(p (t_i - t_{i-1}))
+    (S_{i-1} + jump_{i-1})``, which never forms a growing exponential."""
+    tails = np.zeros(t.size, dtype=complex)
+    for i in range(1, t.size):
+        tails[i] = np.exp(p * (t[i] - t[i - 1])) * (tails[i - 1] + jump[i - 1])
+    before = np.concatenate([[0.0], np.cumsum(jump[:-1])])
+    return (tails - before) / p
+
+
 def measurand_share(v_m_s: np.ndarray, fs_hz: float, t0_s: float, t_imp_s: np.ndarray,
                     base_ms2: np.ndarray, fs_base_hz: float, t0_base_s: float,
                     freq_hz: float, jumps_m_s: np.ndarray | None = None,
@@ -352,12 +363,9 @@ def measurand_share(v_m_s: np.ndarray, fs_hz: float, t0_s: float, t_imp_s: np.nd
                 continue
             # the mode's ringing after each earlier impact, integrated up to this one:
             # sum_{j<i} jump_j (exp(p (t_i - t_j)) - 1) / p, p = -s + i w (its amplitude and
-            # phase, the same at every impact, are the regression's)
-            p_m = complex(-s_m, 2.0 * math.pi * f_m)
-            dt_ij = t[:, None] - t[None, :]
-            past = dt_ij > 0
-            c_m = np.sum(np.where(past, jump[None, :] * (np.exp(p_m * np.where(past, dt_ij, 0.0))
-                                                           - 1.0) / p_m, 0.0), axis=1)
+            # phase, the same at every impact, are the regression's), by recursion over the
+            # impacts (linear in their number: thousands in a long run)
+            c_m = _integrated_tails(t, jump, complex(-s_m, 2.0 * math.pi * f_m))
             cols += [c_m.real, c_m.imag]
     design = np.column_stack(cols)
     coef, *_ = np.linalg.lstsq(design, d, rcond=None)
