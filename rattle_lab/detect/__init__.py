@@ -11,7 +11,7 @@ from rattle_lab._lazy import lazy_names
 if TYPE_CHECKING:
     from ._campaign import campaign_measurand, campaign_ringing
     from ._chain import (CAUSE_QUANTITIES, FLAG_DELAY_CONTRADICTED, FLAG_DELAY_ESTIMATED,
-                         FLAG_MEASURAND_INFERRED, FLAG_MEASURAND_UNDETERMINED, SHOCK_QUANTITIES,
+                         FLAG_FILTER_IDENTIFIED, FLAG_MEASURAND_INFERRED, FLAG_MEASURAND_UNDETERMINED, SHOCK_QUANTITIES,
                          infer_measurand, median_and_error, paired_plate_channels,
                          relative_to_striker, run_chain_flags, transient_shocks,
                          velocity_delay_flags)
@@ -39,7 +39,7 @@ _LAZY: dict[str, str] = {
     "campaign_ringing": "_campaign",
     "campaign_measurand": "_campaign",
     **dict.fromkeys(("CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
-                     "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED",
+                     "FLAG_FILTER_IDENTIFIED", "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED",
                      "SHOCK_QUANTITIES", "infer_measurand", "median_and_error",
                      "paired_plate_channels", "relative_to_striker", "run_chain_flags",
                      "transient_shocks", "velocity_delay_flags"), "_chain"),
@@ -100,7 +100,7 @@ __all__ = [
     # measurement chain of a run, the campaign's ringing search)
     "DetectParams", "SEGMENT_KEYS", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
     "campaign_measurand", "MEASURAND_KEYS",
-    "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
+    "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED", "FLAG_FILTER_IDENTIFIED",
     "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
     "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",
     "run_chain_flags", "transient_shocks", "velocity_delay_flags",

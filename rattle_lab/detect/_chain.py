@@ -111,6 +111,9 @@ def relative_to_striker(run: Any, log: Any, base: Any, freq_hz: float | None) ->
 
 #: Data-quality flag: the vibrometer's delay was not declared and was measured from the impacts.
 FLAG_DELAY_ESTIMATED = "channel_delay_estimated"
+#: Data-quality flag: the vibrometer's decoder was identified from the impacts' velocity steps
+#: and equalised (:mod:`rattle_lab.detect._decoder`).
+FLAG_FILTER_IDENTIFIED = "channel_filter_identified"
 #: Data-quality flag: the declared delay is contradicted by the impacts (the declared is used).
 FLAG_DELAY_CONTRADICTED = "channel_delay_contradicted"
 #: Data-quality flag: the measurand was not declared and was inferred from the data.
@@ -143,6 +146,16 @@ def velocity_delay_flags(log: Any, declared: bool) -> tuple[str, ...]:
            "meet" if flights else "velocity step centroid") + " less contact pulse centroid"
     what = (f"{1e6 * d:.2f} +- {1e6 * se:.2f} us ({d * fs:.3f} samples) from {n} impacts "
             f"({how}, median)")
+    decoder = getattr(log, "decoder", "")
+    if decoder and not declared:
+        # the identified decoder's delay, equalised away; what the impacts measure after it
+        # checks it (its error is e's, :func:`rattle_lab.fit._chain.delay_systematic`)
+        rest = d - log.velocity_delay_applied_s
+        return (f"{FLAG_FILTER_IDENTIFIED}: the vibrometer's decoder reads as {decoder}",
+                f"{FLAG_DELAY_ESTIMATED}: the velocity lags the plate accelerometer by "
+                f"{1e6 * log.velocity_delay_applied_s:.2f} us "
+                f"({log.velocity_delay_applied_s * fs:.3f} samples), the identified decoder's "
+                f"delay; after it the {how} is {rest * fs:+.3f} +- {se * fs:.3f} samples")
     if not declared:
         if not log.velocity_delay_applied_s:
             return ()
@@ -364,6 +377,7 @@ def transient_shocks(run: Any, *, on: float = 12.0, channel: str | None = None
 
 
 __all__ = ["CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
+           "FLAG_FILTER_IDENTIFIED",
            "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SAME_CLOCK_RTOL",
            "SHOCK_QUANTITIES", "infer_measurand",
            "median_and_error", "paired_plate_channels", "relative_to_striker",

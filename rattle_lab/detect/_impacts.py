@@ -49,10 +49,12 @@ import numpy as np
 
 from rattle_lab.exceptions import ParameterError
 from ._common import as_signal, n_samples_of
+from ._decoder import DecoderFit, equalise, identify_decoder
 from ._flights import FlightFit, RingingProblem, flight_velocities, ringing_problem
 from ._local_fits import _fit_rows, _fit_windows, _fits_at, _jump_fits_all, _JumpFits
 from ._offset import _reversed_at_ends, _reversed_by_samples, _reverses, velocity_offset
-from ._ringing import MIN_SHARE_IMPACTS, RINGING_RESIDUAL_RATIO, _ringing_residual_ratio
+from ._ringing import (MIN_SHARE_IMPACTS, QUIET_LEVEL, RINGING_RESIDUAL_RATIO, _residual_level,
+                       _ringing_residual_ratio)
 from ._trigger import _centroid, _half_region, characteristic, trigger_onsets
 from ._timing import (MAX_COARSE_LAG_S, MAX_EXTRA_GUARD_S, DelayEstimate, channel_delay,
                       coarse_lag, delay_significant, settled_span, shift_earlier, step_error)
@@ -156,6 +158,13 @@ class ImpactParams:
     ring_modes_runs : int
         How many runs ``ring_modes`` were found from (0: given; the fit names a search
         that had one run only).
+    identify_decoder : bool
+        With a velocity and a plate acceleration and no delay declared: identify the
+        vibrometer's decoder from the impacts' velocity steps (Butterworth or Bessel
+        low-pass, order, cut-off, extra delay; :func:`rattle_lab.detect._decoder.identify_decoder`)
+        and, where one explains them, replace it by a zero-phase, non-ringing low-pass
+        before the velocities are read (:func:`rattle_lab.detect._decoder.equalise`;
+        :attr:`ImpactLog.decoder`).  Default True.
     ring_fundamental : (f_hz, s_1_s) or empty
         With ``ring_modes``: the plate's fundamental mode (frequency, Hz, and decay rate,
         1/s) that the campaign's search found with them
@@ -181,8 +190,12 @@ class ImpactParams:
     ring_modes: tuple[tuple[float, float], ...] = ()
     ring_modes_runs: int = 0
     ring_fundamental: tuple[float, ...] = ()
+    identify_decoder: bool = True
 
     def __post_init__(self) -> None:
+        if not isinstance(self.identify_decoder, (bool, np.bool_)):
+            raise ParameterError(f"`identify_decoder` must be true or false, was "
+                                 f"{self.identify_decoder!r}")
         if isinstance(self.ring_modes_runs, bool) or not (
                 isinstance(self.ring_modes_runs, (int, np.integer)) and self.ring_modes_runs >= 0):
             raise ParameterError(f"`ring_modes_runs` must be an integer >= 0, was "
@@ -259,6 +272,10 @@ class Recognition:
     omega: float | None
     ratio: float | None = None        # the ringing test's ratio, once computed
     declared: bool = False            # the velocity's delay was declared (taken off before)
+    decoder: DecoderFit | None = None  # the decoder identified and equalised (the velocity
+    # the rest of the recognition read is the equalised one)
+    decoder_shaped: bool = True       # replaced by a non-ringing low-pass (else only advanced
+    # by its delay: for the flight model)
 
 
 @dataclass(frozen=True)
@@ -346,6 +363,10 @@ class ImpactLog:
     velocity_delay_note : str
         With ringing modes carried on, why the flights' instants were not applied (empty
         where they were, or not tried).
+    decoder : str
+        The vibrometer's decoder identified from the impacts and equalised before the
+        velocities were read (``identify_decoder``; empty where none was).  Its delay is
+        included in ``velocity_delay_s`` and ``velocity_delay_applied_s``.
     recognition : Recognition or None
         What the detector found before its velocity model, for a pass that changes only
         that (:func:`detect_impacts`' ``recognised``; not compared, not kept in caches).
@@ -378,6 +399,7 @@ class ImpactLog:
     e_measurand_alt_se: float = float("nan")
     velocity_delay_method: str = "steps"
     velocity_delay_note: str = ""
+    decoder: str = ""
     recognition: Recognition | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:   # (pairs come back from a cache as lists)
@@ -457,19 +479,89 @@ def detect_impacts(fs_hz: float, *, velocity_m_s: object = None, accel_ms2: obje
     params = params if params is not None else ImpactParams()
     key = _recognition_key(fs_hz, velocity_m_s, accel_ms2, params, excitation_freq_hz,
                            velocity_delay_declared)
-    if recognised is not None and recognised.key == key:
+    if recognised is not None and recognised.key == key and not (
+            recognised.decoder is not None and recognised.decoder_shaped and params.ring_modes):
         # the same record and recognition parameters: only the velocity model is applied
         # (the campaign's ringing passes, issue 29)
         rec, v = recognised, None
         if velocity_m_s is not None:
             v = as_signal(velocity_m_s, "velocity_m_s")
+            if rec.decoder is not None:
+                v = equalise(v, fs_hz, rec.decoder, shape=rec.decoder_shaped)
             if rec.lag:
                 v = shift_earlier(v, rec.lag)
+    elif recognised is not None and recognised.key == key:
+        # an equalised run the campaign found ringing modes in: found again for the flight
+        # model (:func:`_for_flights`)
+        assert recognised.decoder is not None
+        rec, v = _for_flights(recognised.decoder, fs_hz, velocity_m_s, accel_ms2, params,
+                              excitation_freq_hz, key)
     else:
         rec, v = _recognise(fs_hz, velocity_m_s, accel_ms2, params, excitation_freq_hz,
                             velocity_delay_declared, key)
+        if (params.identify_decoder and velocity_m_s is not None and accel_ms2 is not None
+                and not velocity_delay_declared and rec.delay.n):
+            # issue 28: the decoder is identified from the impacts' steps and, where one of
+            # the families searched explains them, replaced by a zero-phase,
+            # non-ringing low-pass, and the impacts are found again in the equalised
+            # velocity.  Where the plate's higher modes ring in the vibrometer the flight
+            # model reads another version (:func:`_for_flights`)
+            raw = as_signal(velocity_m_s, "velocity_m_s")
+            at = np.asarray(rec.t_idx, dtype=float)[rec.keep]
+            fit = identify_decoder(raw, at[np.isfinite(at)], fs_hz, float(rec.delay.value))
+            if fit is not None:
+                # its delay, which the equaliser takes off, stands as if declared: the step
+                # centroids only check it (the plate's higher modes ringing in the
+                # vibrometer move them)
+                first = rec, v
+                rec, v = _recognise(fs_hz, equalise(raw, fs_hz, fit), accel_ms2, params,
+                                    excitation_freq_hz, True, key, identified=True)
+                ratio = level = None
+                if params.velocity_model != "local" and excitation_freq_hz is not None \
+                        and v is not None:
+                    spans = [(a, b, c, d) for a, b, c, d in rec.spans.tolist()]
+                    ratio = _ringing_residual_ratio(v, spans, rec.keep, rec.n_fit, rec.n_guard,
+                                                    rec.degree, rec.omega)
+                    level = _residual_level(v, spans, rec.keep, rec.v_out - rec.v_in, rec.n_fit,
+                                            rec.n_guard, rec.degree, rec.omega)
+                rec = replace(rec, decoder=fit, ratio=ratio)
+                ringing = ratio is not None and level is not None and (
+                    ratio >= RINGING_RESIDUAL_RATIO or level >= QUIET_LEVEL)
+                if params.ring_modes or ringing:
+                    # the plate's higher modes ring in the vibrometer (after each impact, or,
+                    # lightly damped, through every flight alike): the flight model's record
+                    rec, v = _for_flights(fit, fs_hz, raw, accel_ms2, params,
+                                          excitation_freq_hz, key, first)
     return _with_velocity_model(rec, v, fs_hz, params, start_time_s, excitation_freq_hz,
                                 level_held)
+
+
+def _for_flights(fit: DecoderFit, fs_hz: float, velocity_m_s: object, accel_ms2: object,
+                 params: ImpactParams, excitation_freq_hz: float | None, key: tuple[object, ...],
+                 first: tuple[Recognition, np.ndarray | None] | None = None
+                 ) -> tuple[Recognition, np.ndarray | None]:
+    """The recognition the flight model reads where the plate's higher modes ring in the
+    vibrometer and its decoder was identified.
+
+    The flight model was built on records as the decoder gives them; on the equalised ones
+    7 of the 14 undeclared light-ringing campaigns of ``benchmarks/chain_timing.py`` moved
+    by 2-8 % (their steady dwells' velocities rest on a nearly flat direction of the
+    model).  So: a decoder whose step settles within
+    :data:`~rattle_lab.detect._timing.MAX_EXTRA_GUARD_S`, which the first pass's guards
+    handle, the record as it is and its delay measured as without the identification
+    (``first``, else found again); a slower one, the record only advanced by the
+    identified delay, as a declared delay is taken off (its own guards would leave the
+    decoder's ringing in the fits: -57 % on one campaign).
+    """
+    if fit.settle_samples <= MAX_EXTRA_GUARD_S * fs_hz:
+        if first is not None:
+            return first
+        return _recognise(fs_hz, velocity_m_s, accel_ms2, params, excitation_freq_hz, False,
+                          key)
+    raw = as_signal(velocity_m_s, "velocity_m_s")
+    rec, v = _recognise(fs_hz, equalise(raw, fs_hz, fit, shape=False), accel_ms2, params,
+                        excitation_freq_hz, True, key, identified=True)
+    return replace(rec, decoder=fit, decoder_shaped=False), v
 
 
 def _recognition_key(fs_hz: float, velocity_m_s: object, accel_ms2: object,
@@ -491,9 +583,12 @@ def _recognition_key(fs_hz: float, velocity_m_s: object, accel_ms2: object,
 
 def _recognise(fs_hz: float, velocity_m_s: object, accel_ms2: object, params: ImpactParams,
                excitation_freq_hz: float | None, velocity_delay_declared: bool,
-               key: tuple[object, ...]) -> tuple[Recognition, np.ndarray | None]:
+               key: tuple[object, ...], identified: bool = False
+               ) -> tuple[Recognition, np.ndarray | None]:
     """Steps 1-7 of :func:`detect_impacts` (everything but the velocity model): the
-    recognition, and the velocity shifted by the coarse lag (None without one)."""
+    recognition, and the velocity shifted by the coarse lag (None without one).
+    ``identified``: the velocity was equalised after its decoder was identified; its delay
+    stands as declared, and e's dependence on it is measured as for a measured one."""
     if velocity_m_s is None and accel_ms2 is None:
         raise ParameterError("detect_impacts needs `velocity_m_s` or `accel_ms2` (got neither)")
     n_detrend = n_samples_of(params.detrend_window_s, fs_hz, name="detrend_window_s")
@@ -665,7 +760,7 @@ def _recognise(fs_hz: float, velocity_m_s: object, accel_ms2: object, params: Im
                 method_err = 0.0   # its change from the first is the window term
                 rows = _fit_rows(jfits)
         t_ev = np.array([t_eval_of(jf) for jf in jfits])
-        if measured:
+        if measured or identified:
             # how much e moves per sample of delay: the fits read a quarter sample either
             # side of the instant used (the median over the impacts)
             v1, v0 = _fits_at(rows, t_ev + 0.25), _fits_at(rows, t_ev - 0.25)
@@ -827,11 +922,14 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
             problem = ringing_problem(v, fs_hz, excitation_freq_hz, k_keep, pad_keep,
                                       vin[keep], vout[keep], searched=flights.searched,
                                       held=level_held)
+    # an equalised decoder's delay was taken off the velocity before the rest: it is the
+    # vibrometer's delay too
+    d_dec = rec.decoder.delay_samples if rec.decoder is not None else 0.0
     delay_fields: dict[str, Any] = dict(
-        velocity_delay_s=delay.value / fs_hz if delay.n else float("nan"),
+        velocity_delay_s=(delay.value + d_dec) / fs_hz if delay.n else float("nan"),
         velocity_delay_stderr_s=math.hypot(delay.stderr, rec.method_err) / fs_hz
         if delay.n else float("nan"),
-        velocity_delay_n=delay.n, velocity_delay_applied_s=(d_use + rec.lag) / fs_hz,
+        velocity_delay_n=delay.n, velocity_delay_applied_s=(d_use + rec.lag + d_dec) / fs_hz,
         velocity_delay_window_s=abs(delay.value - rec.delay_first) / fs_hz
         if delay.n else float("nan"),
         e_per_delay_s=rec.e_slope, e_window_change=rec.e_window, velocity_delay_note=lag_note)
@@ -839,11 +937,12 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
         # the impacts' instants in the velocity's own record, from the flights: the delay
         # is measured there, and (undeclared) the velocities were read there; a declared
         # delay stands and is checked against them
-        total = (d_use + rec.lag + timed.lag_samples) / fs_hz
+        total = (d_use + rec.lag + d_dec + timed.lag_samples) / fs_hz
         delay_fields = dict(
             velocity_delay_s=total, velocity_delay_stderr_s=timed.lag_stderr_samples / fs_hz,
             velocity_delay_n=timed.lag_n,
-            velocity_delay_applied_s=total if timed.lag_applied else (d_use + rec.lag) / fs_hz,
+            velocity_delay_applied_s=total if timed.lag_applied
+            else (d_use + rec.lag + d_dec) / fs_hz,
             velocity_delay_window_s=0.0, e_per_delay_s=timed.e_per_lag * fs_hz,
             e_window_change=0.0, velocity_delay_method="flights")
     return ImpactLog(t_s=start_time_s + np.asarray(t_idx, dtype=float)[keep] / fs_hz,
@@ -855,4 +954,9 @@ def _with_velocity_model(rec: Recognition, v: np.ndarray | None, fs_hz: float,
                      ringing_ratio=ratio, ring_modes=params.ring_modes if carried else (),
                      ringing_problem=problem,
                      step_guard_s=rec.step_guard_s, **delay_fields,
+                     decoder="" if rec.decoder is None else rec.decoder.describe(fs_hz) + (
+                         "; replaced by a zero-phase low-pass without overshoot"
+                         if rec.decoder_shaped else "; its delay taken off (the plate's higher "
+                         "modes ring in the vibrometer: the flight model reads the decoder's "
+                         "own step)"),
                      recognition=rec)

@@ -53,7 +53,7 @@ class DetectParams:
     ----------
     on, off, min_separation_s, detrend_window_s, fit_window_s, guard_s, poly_degree, \
 sigma_floor_rel, fit_basis, sine_window_s, sine_degree, sine_guard_s, min_reversal, \
-velocity_model, ring_modes, ring_modes_runs, ring_fundamental
+velocity_model, ring_modes, ring_modes_runs, ring_fundamental, identify_decoder
         Those of :class:`ImpactParams` (same defaults, same checks).
     window_s : float
         Length of the window after each impact the sound peaks are read in, s.
@@ -101,6 +101,7 @@ velocity_model, ring_modes, ring_modes_runs, ring_fundamental
     ring_modes: Sequence[Sequence[float]] = ImpactParams.ring_modes
     ring_modes_runs: int = ImpactParams.ring_modes_runs
     ring_fundamental: Sequence[float] = ImpactParams.ring_fundamental
+    identify_decoder: bool = ImpactParams.identify_decoder
     window_s: float = SOUND_KEYS["window_s"]
     first_fraction: float = SOUND_KEYS["first_fraction"]
     max_lag_s: float = SOUND_KEYS["max_lag_s"]

@@ -266,7 +266,8 @@ def merge_logs(parts: list[tuple[Span, Any]], sep_s: float) -> tuple[Any, list[n
         e_window_change=max(x.e_window_change for x in logs),
         e_measurand_diff=_weighted([x.e_measurand_diff for x in logs], n) if sum(n) else 0.0,
         e_measurand_alt_se=float(1.0 / np.sqrt(np.sum(1.0 / alt ** 2))) if alt.size
-        else float("nan"))
+        else float("nan"),
+        decoder=merged_notes([getattr(x, "decoder", "") for x in logs]))
     return merged, keep
 
 

@@ -41,7 +41,7 @@ def _pooled_rms(d: list[float], s: list[float], slope: list[float]
 def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
     """The error of e from the runs' vibrometer delays, and notes (0 and none if none).
 
-    Two parts, in quadrature:
+    In quadrature:
 
     * runs whose undeclared delay was measured and applied: ``|d e / d delay|`` times the
       delay's uncertainty, its standard error and the change of the estimate when the fits
@@ -60,6 +60,11 @@ def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
       and what the instants measure after it (pooled as above) is how far reading at it
       may err, times the runs' median ``|d e / d delay|``.
 
+    * runs whose decoder was identified and equalised (:attr:`~rattle_lab.detect.ImpactLog.decoder`):
+      its delay stands, and what the impacts measure after it (the steps' centroids, or the
+      flights' instants), in quadrature with its standard error, is how far it may be off,
+      times ``|d e / d delay|`` (the median over the runs, with the first part).
+
     Declared delays otherwise add nothing here (a contradiction is flagged instead).
     """
     vals, deltas = [], []
@@ -70,7 +75,14 @@ def delay_systematic(logs: list[Any]) -> tuple[float, list[str]]:
             continue
         checked = (getattr(log, "velocity_delay_method", "steps") == "flights"
                    and not log.velocity_delay_applied_s)
-        if checked:
+        if getattr(log, "decoder", ""):
+            # an identified and equalised decoder: its delay stands, and what the steps
+            # measure after it (with its standard error) is how far it may be off
+            rest = log.velocity_delay_s - log.velocity_delay_applied_s
+            sd = float(np.hypot(np.nan_to_num(rest), np.nan_to_num(log.velocity_delay_stderr_s)))
+            vals.append(abs(log.e_per_delay_s) * sd)
+            deltas.append(sd * log.fs_hz)
+        elif checked:
             if np.isfinite(log.velocity_delay_s) and np.isfinite(log.velocity_delay_stderr_s):
                 d_c.append(log.velocity_delay_s)
                 s_c.append(max(log.velocity_delay_stderr_s, _POOL_FLOOR_SAMPLES / log.fs_hz))

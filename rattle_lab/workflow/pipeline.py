@@ -82,7 +82,8 @@ if TYPE_CHECKING:
 #: step_guard_s, velocity_delay_window_s, e_per_delay_s, e_window_change (issue 28).  7: and
 #: e_measurand_diff (format 6 was briefly on main without it).  8: and velocity_delay_method
 #: and velocity_delay_note.  9: ImpactParams (in ImpactLog.params) gained ring_fundamental.
-CACHE_FORMAT = 9
+#: 10: ImpactLog gained decoder, ImpactParams identify_decoder.
+CACHE_FORMAT = 10
 
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")

@@ -95,7 +95,7 @@ PACKAGES: dict[str, list[str]] = {
         "DetectParams", "SEGMENT_KEYS", "SOUND_KEYS", "RunResult", "analyse_run", "campaign_ringing",
         "campaign_measurand", "MEASURAND_KEYS",
         "CAUSE_QUANTITIES", "FLAG_DELAY_CONTRADICTED", "FLAG_DELAY_ESTIMATED",
-        "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
+        "FLAG_FILTER_IDENTIFIED", "FLAG_MEASURAND_INFERRED", "FLAG_MEASURAND_UNDETERMINED", "SHOCK_QUANTITIES",
         "infer_measurand", "median_and_error", "paired_plate_channels", "relative_to_striker",
         "run_chain_flags", "transient_shocks", "velocity_delay_flags",
         # the kernels compiled after installing (rattle_lab._warmup) or at a first fit
