@@ -47,6 +47,8 @@ WINDOW_AFTER_S = 3e-3
 ACCEPT_RESIDUAL = 0.05
 #: Fewest impacts for an identification.
 MIN_IMPACTS = 8
+#: Most impacts an identification uses (spread over the run).
+MAX_IMPACTS = 48
 #: The equaliser's Gaussian target: -3 dB at this share of the identified cut-off.
 TARGET_SHARE = 0.5
 #: The equaliser gains at most this much at any frequency (the noise beyond the cut-off).
@@ -58,7 +60,7 @@ MAX_ORDER = 8
 #: advance is left for where between two samples a jump is read.
 MIN_EXTRA_SAMPLES = -0.5
 #: Families refined after the coarse pass.
-REFINED = 8
+REFINED = 6
 _NT = 1024       # the step tables' length (samples), the step at _C0
 _C0 = 256
 
@@ -186,7 +188,12 @@ class _Problem:
     def __init__(self, v_hp: np.ndarray, t_idx: np.ndarray, lo: int, hi: int):
         pos, vals, seg = [], [], []
         t = np.sort(np.asarray(t_idx, dtype=float))
-        for i, ti in enumerate(t):
+        # at most MAX_IMPACTS, spread over the run (a long run's thousands of impacts add
+        # nothing a few dozen do not tell: the decoder is the same at every impact)
+        use = np.unique(np.linspace(0, t.size - 1, min(t.size, MAX_IMPACTS)).round().astype(int)) \
+            if t.size else np.zeros(0, dtype=int)
+        for i in use:
+            ti = t[i]
             n = np.arange(int(math.floor(ti)) + lo, int(math.ceil(ti)) + hi + 1)
             if n[0] < 0 or n[-1] >= v_hp.size:
                 continue
@@ -278,7 +285,7 @@ def identify_decoder(v: np.ndarray, t_idx: np.ndarray, fs_hz: float, delay_sampl
     # closest few refined in cut-off and extra delay together
     # (the measured delay is itself off by up to a few samples where the decoder rings: the
     # centroid is cut off inside the ringing)
-    starts = [math.log((f - f_lo) / (f_hi - f)) for f in np.geomspace(0.03 * fs_hz, 0.4 * fs_hz, 13)]
+    starts = [math.log((f - f_lo) / (f_hi - f)) for f in np.geomspace(0.03 * fs_hz, 0.4 * fs_hz, 11)]
     offsets = tuple(float(o) for o in range(-4, 5))
     coarse = []
     for kind in FAMILIES:
@@ -288,7 +295,7 @@ def identify_decoder(v: np.ndarray, t_idx: np.ndarray, fs_hz: float, delay_sampl
     best: tuple[float, str, int, float, float] | None = None
     for _, kind, order, s0, o0 in sorted(coarse)[:REFINED]:
         res = minimize(cost, np.array([s0, o0]), args=(kind, order), method="Nelder-Mead",
-                       options=dict(xatol=1e-3, fatol=1e-15, maxfev=120,
+                       options=dict(xatol=1e-3, fatol=1e-15, maxfev=100,
                                     initial_simplex=[[s0, o0], [s0 + 0.3, o0], [s0, o0 + 1.0]]))
         if best is None or res.fun < best[0]:
             fc, extra = unpack(res.x, kind, order)
