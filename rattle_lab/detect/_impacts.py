@@ -159,7 +159,9 @@ class ImpactParams:
         How many runs ``ring_modes`` were found from (0: given; the fit names a search
         that had one run only).
     identify_decoder : bool
-        With a velocity and a plate acceleration and no delay declared: identify the
+        With a velocity and a plate acceleration and no delay declared, where the first
+        pass shows a decoder's response in the steps (unsettled at the fits' near ends, or
+        its two delay estimators more than :data:`IDENTIFY_METHOD_ERR` apart): identify the
         vibrometer's decoder from the impacts' velocity steps (Butterworth or Bessel
         low-pass, order, cut-off, extra delay; :func:`rattle_lab.detect._decoder.identify_decoder`)
         and, where one explains them, replace it by a zero-phase, non-ringing low-pass
