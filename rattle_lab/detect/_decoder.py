@@ -164,7 +164,7 @@ def _tukey(n: int) -> np.ndarray:
 
 
 def _fir(gain: np.ndarray, n_taps: int) -> np.ndarray:
-    """A zero-phase FIR (odd length, centred) from a real gain on the rfft grid of 2 n_taps."""
+    """A centred FIR (odd length, tapered) from a response on the rfft grid of 2 n_taps."""
     h = np.fft.irfft(gain, 2 * n_taps)
     half = n_taps // 2
     taps = np.r_[h[-half:], h[:half + 1]]
@@ -342,9 +342,7 @@ def equalise(v: np.ndarray, fs_hz: float, fit: DecoderFit, shape: bool = True) -
         # a pure advance, band-limited: the decoder's output holds nothing near Nyquist
         g = np.exp(2j * np.pi * f / fs_hz * fit.delay_samples)
         g[-1] = g[-1].real
-        taps = np.fft.irfft(g, 2 * n_taps)
-        half = n_taps // 2
-        taps = np.r_[taps[-half:], taps[:half + 1]] * _tukey(2 * half + 1)
+        taps = _fir(g, n_taps)
         return _filtered(np.asarray(v, dtype=float), taps / taps.sum())
     h = response(fit.kind, fit.order, fit.cutoff_hz, fs_hz, f, fit.extra_samples)
     # a Gaussian (no overshoot) times the decoder's own zeros at Nyquist (the bilinear
@@ -355,8 +353,5 @@ def equalise(v: np.ndarray, fs_hz: float, fit: DecoderFit, shape: bool = True) -
     with np.errstate(divide="ignore", invalid="ignore"):
         scale = np.where(target > MAX_GAIN * mag, MAX_GAIN * mag / target, 1.0)
         g = np.where(mag > 0, target * scale / h, 0.0)
-    taps = np.fft.irfft(g, 2 * n_taps)
-    half = n_taps // 2
-    taps = np.r_[taps[-half:], taps[:half + 1]]
-    taps *= _tukey(taps.size)
+    taps = _fir(g, n_taps)
     return _filtered(np.asarray(v, dtype=float), taps / taps.sum())   # unit gain at DC
