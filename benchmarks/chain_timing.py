@@ -12,9 +12,11 @@ does (:func:`rattle_lab.workflow.fit_store`, default settings).
 
 Printed per campaign: the chain, e from the ratios against the truth (0.55), whether its
 95 % interval (value +- 1.96 stderr) covers the truth, the median ``|v_in|`` of the matched
-impacts against the true ones, the SPL slope (first peak against ``|v_in|``) against the same
-campaign through an ideal vibrometer (no filter, no delay, everything declared: same seed,
-the same noise), and the chain flags.  Then the coverage.
+impacts against the true ones (and the same through an ideal vibrometer: no filter, no
+delay, everything declared; same seed, the same noise), the SPL slope (first peak against
+``|v_in|``) against that ideal vibrometer's campaign, and the chain flags.  Then the
+coverage and the counts within 1 % (v_in against the truth and against the ideal
+vibrometer's, the SPL slope against the ideal vibrometer's).
 
 Usage: ``python benchmarks/chain_timing.py [--n 50] [--seed0 0] [--table] [--grid]
 [--coverage-detect]``;
@@ -265,7 +267,7 @@ def main(argv: list[str] | None = None) -> int:
         cases = [(describe(c), c, args.seed0 + i)
                  for i, c in enumerate(random_chain(rng) for _ in range(args.n))]
     hits = n = 0
-    errs = []
+    errs, v_errs, v_changes, spl_changes = [], [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         for name, chain, seed in cases:
             t0 = time.perf_counter()
@@ -284,8 +286,13 @@ def main(argv: list[str] | None = None) -> int:
                          f"{'covers' if cover else 'MISSES'}")
             n += 1
             line += f" | v_in {100 * (out['vin_ratio'] - 1):+.2f} %"
+            v_errs.append(out["vin_ratio"] - 1)
+            if ref is not None:
+                v_changes.append(out["vin_ratio"] / ref["vin_ratio"] - 1)
+                line += f" (ideal {100 * (ref['vin_ratio'] - 1):+.2f} %)"
             if ref is not None and out["spl_slope"] and ref["spl_slope"]:
-                line += f" | SPL slope {100 * (out['spl_slope'] / ref['spl_slope'] - 1):+.2f} %"
+                spl_changes.append(out["spl_slope"] / ref["spl_slope"] - 1)
+                line += f" | SPL slope {100 * spl_changes[-1]:+.2f} %"
             line += f" | {time.perf_counter() - t0:.0f} s | flags: " + "; ".join(
                 f.split(": ", 1)[-1][:60] for f in out["flags"])
             print(line, flush=True)
@@ -293,6 +300,13 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\n{n} campaigns: e given in {len(errs)}, |error| max {100 * errs_a.max(initial=0):.2f} %"
           f", within 3 %: {int((errs_a <= 0.03).sum())}; 95 % interval covers the truth in "
           f"{hits} of {n} ({100 * hits / max(n, 1):.0f} %; withheld counts as not covering)")
+    within = lambda x: int((np.abs(np.asarray(x)) <= 0.01).sum())   # noqa: E731
+    line = f"v_in against the truth within 1 %: {within(v_errs)} of {n}"
+    if v_changes:
+        line += (f"; unchanged within 1 % from the ideal vibrometer's campaign: "
+                 f"{within(v_changes)} of {len(v_changes)}; SPL slope unchanged within 1 %: "
+                 f"{within(spl_changes)} of {len(spl_changes)}")
+    print(line)
     return 0
 
 

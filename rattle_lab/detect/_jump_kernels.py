@@ -160,6 +160,42 @@ def half_region(r: np.ndarray, peak: int) -> tuple[int, int]:  # pragma: no cove
     return lo, hi
 
 
+@numba.njit(cache=True, nogil=True)
+def pulse_peak(r: np.ndarray) -> int:  # pragma: no cover - compiled
+    """The contact pulse's peak in the residual ``r`` of the acceleration from its smooth
+    fit extrapolated over the search window: the largest ``|r|`` that falls below half its
+    height on both sides inside the window, if it is at least half the largest ``|r|``.
+    An extrapolation drifting away from a steep acceleration grows towards the window's end
+    without falling again, and may outgrow a pulse that clips (seen on the independent
+    generator's start-up impacts: 1283 against a clipped pulse's 1262 m/s^2, the impact
+    timed 8.8 samples late).  Otherwise the largest ``|r|``: a bump of the noise far under
+    the drift is no pulse (the trigger had none; its time stays undecided)."""
+    m = r.size
+    top = 0.0
+    for i in range(m):
+        top = max(top, abs(r[i]))
+    best = -1
+    for i in range(m):
+        ai = abs(r[i])
+        if ai == 0.0 or (best >= 0 and ai <= abs(r[best])):
+            continue
+        half = 0.5 * ai
+        lo = i
+        while lo > 0 and abs(r[lo - 1]) > half and r[lo - 1] * r[i] > 0:
+            lo -= 1
+        hi = i
+        while hi + 1 < m and abs(r[hi + 1]) > half and r[hi + 1] * r[i] > 0:
+            hi += 1
+        if lo > 0 and hi + 1 < m and ai >= 0.5 * top:
+            best = i
+    if best < 0:
+        best = 0
+        for i in range(1, m):
+            if abs(r[i]) > abs(r[best]):
+                best = i
+    return best
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _step_centroid(v: np.ndarray, p: np.ndarray, q: np.ndarray, pre_hi: int, post_lo: int
                    ) -> float:  # pragma: no cover - compiled
@@ -199,10 +235,7 @@ def _contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, n_fit: int
         r[i] = a[lo + i] - fit_value(row, float(lo + i))
         if not math.isfinite(r[i]):
             return nan, nan, nan, 0.0, False
-    pk = 0
-    for i in range(1, m):
-        if abs(r[i]) > abs(r[pk]):
-            pk = i
+    pk = pulse_peak(r)
     sign = 1.0 if r[pk] > 0 else (-1.0 if r[pk] < 0 else 0.0)
     for i in range(m):
         r[i] *= sign
@@ -299,8 +332,11 @@ def jump_fits_batch(v: np.ndarray, a: np.ndarray, has_a: bool, spans: np.ndarray
                 t_s = ts
         scal[i, 3] = t_s
         if has_a:
+            # a centroid away from the jump's region measured nothing: the region centres
+            # the search (see _jump_fits)
+            t_c = t if abs(t - scal[i, 2]) <= j_hi - j_lo + 1 else scal[i, 2]
             t_a, a_lo, a_hi, a_sign, fine = _contact_pulse(
-                a, int(np.rint(t)), (post_lo - j_hi) + (j_hi - j_lo + 1) // 2, lo_lim, n_fit,
+                a, int(np.rint(t_c)), (post_lo - j_hi) + (j_hi - j_lo + 1) // 2, lo_lim, n_fit,
                 degree, w, periodic, work)
             if not fine:
                 scal[i, 7] = 1.0
@@ -329,18 +365,20 @@ def _refined(y: np.ndarray, k: int) -> tuple[float, float]:  # pragma: no cover 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def sound_windows(p: np.ndarray, t_imp: np.ndarray, start_time_s: float, fs_hz: float,
                   delay_s: float, n_win: int, n_base: int, w: float, periodic: bool,
-                  first_fraction: float) -> np.ndarray:  # pragma: no cover - compiled
+                  first_fraction: float, n_guard: int) -> np.ndarray:  # pragma: no cover - compiled
     """:func:`~rattle_lab.detect.sound_peaks`' loop over the impacts of finite samples ``p``:
-    ``out[i] = (t_first, t_max, p_first, p_max, rms)`` (NaN where the window is empty)."""
+    ``out[i] = (t_first, t_max, p_first, p_max, rms)`` (NaN where the window is empty).
+    Each window opens ``n_guard`` samples before the first sample at or after the arrival."""
     n = t_imp.size
     out = np.full((n, 5), np.nan)
     row = np.empty(FIT_HEAD + 3)
     prev_hi = 0
     for i in range(n):
-        lo = int(math.ceil((t_imp[i] + delay_s - start_time_s) * fs_hz - 1e-9))
-        hi = lo + n_win
+        lo = int(math.ceil((t_imp[i] + delay_s - start_time_s) * fs_hz - 1e-9)) - n_guard
+        hi = lo + n_guard + n_win
         if i + 1 < n:
-            hi = min(hi, int(math.ceil((t_imp[i + 1] + delay_s - start_time_s) * fs_hz - 1e-9)))
+            hi = min(hi, int(math.ceil((t_imp[i + 1] + delay_s - start_time_s) * fs_hz - 1e-9))
+                     - n_guard)
         lo, hi = max(lo, 0), min(hi, p.size)
         if hi - lo < 1:
             continue

@@ -102,11 +102,12 @@ def contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: i
 
     The smooth acceleration is fitted (:class:`_LocalFit`) over ``n_fit`` samples ending
     ``n_half`` samples before ``k_c`` and extrapolated; in the residual over
-    ``k_c +- n_half`` the pulse is the half-height region around the largest ``|residual|``,
-    widened by a quarter of its width on each side (a half-sine is 1.5 times as long as its
-    half-height width).  A contact pulse is short and large, so its centroid is a far less
-    noisy impact time than the velocity step (``sigma_a / peak`` against ``sigma_v / jump``);
-    point sampling a half-sine of 4 samples moves its centroid by at most 0.01 sample.
+    ``k_c +- n_half`` the pulse is the half-height region around the largest ``|residual|``
+    that falls below half its height on both sides inside that span, if it is at least half
+    the largest (:func:`~rattle_lab.detect._jump_kernels.pulse_peak`), widened by a quarter
+    of its width on each side (a half-sine is 1.5 times as long as its half-height width).
+    A contact pulse is short and large, so its centroid is a far less noisy impact time
+    than the velocity step (``sigma_a / peak`` against ``sigma_v / jump``); point sampling a half-sine of 4 samples moves its centroid by at most 0.01 sample.
     The widened region is the contact's extent (first touch to separation of a half-sine
     force).  Returns NaNs (sign 0) without room for the fit.
     """
@@ -119,7 +120,9 @@ def contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: i
     smooth = _LocalFit(np.arange(f_lo, f_hi + 1.0), a[f_lo:f_hi + 1], degree, omega_per_sample)
     k = np.arange(lo, hi + 1.0)
     r = a[lo:hi + 1] - smooth(k)
-    pk = int(np.argmax(np.abs(r)))
+    from ._jump_kernels import pulse_peak   # here: importing detect stays light (no numba)
+
+    pk = int(pulse_peak(np.ascontiguousarray(r, dtype=np.float64)))
     sign = float(np.sign(r[pk]))
     r = r * sign
     r_lo, r_hi = _half_region(r, pk)
@@ -286,8 +289,14 @@ def _jump_fits(v: np.ndarray, j_lo: int, j_hi: int, lo_lim: int, hi_lim: int, *,
     t_a, a_lo, a_hi, a_sign = nan, nan, nan, 0.0
     if accel is not None:
         n_pad = post_lo - j_hi
+        # a step's centroid further from the jump's half-height region than the region is
+        # wide (fits that read the plate's ringing, not the approach and rebound; one held
+        # at a window's edge) measured nothing, and a pulse search centred there can miss
+        # the pulse (the independent generator's light ringing: impacts timed 6.7-8.4
+        # samples early): the region centres it instead
+        t_c = t if abs(t - t_half) <= j_hi - j_lo + 1 else t_half
         t_a, a_lo, a_hi, a_sign = contact_pulse(
-            accel, int(round(t)), n_pad + (j_hi - j_lo + 1) // 2, lo_lim,
+            accel, int(round(t_c)), n_pad + (j_hi - j_lo + 1) // 2, lo_lim,
             n_fit=n_fit, degree=degree, omega_per_sample=omega_per_sample)
         if not (np.isfinite(t_a) and pre_hi <= t_a <= post_lo):
             t_a, a_lo, a_hi, a_sign = nan, nan, nan, 0.0

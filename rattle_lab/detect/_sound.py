@@ -22,6 +22,14 @@ from ._common import as_signal, n_samples_of, parabolic_peak
 from ._spl import spl_db
 
 
+#: Each window opens this many samples before the predicted arrival (impact time plus
+#: ``delay_s``), and the baseline fit ends before them.  The arrival is predicted from an
+#: impact time good to a fraction of a sample and a declared distance: a sound whose onset is
+#: sharp (one sample) and lands a sample early would otherwise be fitted into the baseline and
+#: missed by the window, and the first peak would follow the impact time's rounding.
+ARRIVAL_GUARD_SAMPLES = 2
+
+
 @dataclass(frozen=True)
 class SoundPeaks:
     """Sound peaks paired with impacts (one entry per impact; NaN when the window is empty).
@@ -54,14 +62,14 @@ class SoundPeaks:
 def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window_s: float = 5e-3,
                 first_fraction: float = 0.5, start_time_s: float = 0.0,
                 excitation_freq_hz: float | None = None, baseline_s: float = 3e-3,
-                delay_s: float = 0.0) -> SoundPeaks:
+                delay_s: float = 0.0, guard_samples: int = ARRIVAL_GUARD_SAMPLES) -> SoundPeaks:
     """First and largest pressure peaks in a bounded window after each impact.
 
     Each window opens ``delay_s`` after its impact (the declared propagation delay,
-    microphone distance over the speed of sound) and closes ``window_s`` later or when the
-    next impact's sound can arrive: each sound is paired with its own impact even when it
-    arrives after the next impact (a distant microphone).  Peak times and delays are from
-    the impact.
+    microphone distance over the speed of sound), less ``guard_samples`` samples (see
+    :data:`ARRIVAL_GUARD_SAMPLES`), and closes ``window_s`` later or when the next impact's
+    sound can arrive: each sound is paired with its own impact even when it arrives after
+    the next impact (a distant microphone).  Peak times and delays are from the impact.
 
     With ``excitation_freq_hz``, the pressure over ``baseline_s`` before each impact
     (cut at the previous impact's window) is fitted by a forced-mode sinusoid at that
@@ -95,12 +103,14 @@ def sound_peaks(pressure_pa: object, fs_hz: float, impact_t_s: object, *, window
     out = {k: np.full(t_imp.size, np.nan) for k in ("tf", "tm", "pf", "pm", "rms")}
     if not (np.isfinite(delay_s) and delay_s >= 0):
         raise ParameterError(f"`delay_s` must be >= 0, was {delay_s}")
+    if int(guard_samples) != guard_samples or guard_samples < 0:
+        raise ParameterError(f"`guard_samples` must be a whole number >= 0, was {guard_samples}")
     from ._jump_kernels import readonly, sound_windows
 
     res = sound_windows(readonly(p_signed), np.ascontiguousarray(t_imp, dtype=float), float(start_time_s),
                         float(fs_hz), float(delay_s), n_win, n_base,
                         0.0 if omega is None else float(omega), omega is not None,
-                        float(first_fraction))
+                        float(first_fraction), int(guard_samples))
     for j, key in enumerate(("tf", "tm", "pf", "pm", "rms")):
         out[key] = res[:, j]
     return SoundPeaks(out["tf"], out["tm"], out["pf"], out["pm"], out["tf"] - t_imp,

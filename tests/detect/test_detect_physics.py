@@ -81,6 +81,42 @@ def test_sound_paired_with_its_impact_through_the_propagation_delay():
     assert wrong.p_max_pa[1:] == pytest.approx(amp[:-1], rel=0.09)
 
 
+def test_a_sharp_sound_onset_reads_the_same_whatever_the_impact_times_rounding():
+    # A sound whose onset is one sample (no anti-alias filter spreading it) on top of the
+    # plate's forced sound, and impact times off by up to 0.45 sample either way, as a
+    # detector's are: each window must still hold the onset (the first peak) and the
+    # baseline fit before it must not.  With the window opened at the rounded arrival
+    # itself (guard_samples=0) an impact time a fraction of a sample late fits the onset into
+    # the baseline and misses it: the first peak then reads the next, smaller sample.
+    from rattle_lab.detect import sound_peaks
+
+    fs, f, delay = 51200.0, 99.0, 0.3 / 343.0
+    rng = np.random.default_rng(7)
+    ti = 0.02 + np.arange(30) / f + rng.uniform(0, 1e-3, 30)
+    amp = rng.uniform(0.5, 2.0, ti.size)
+    t = np.arange(int(0.35 * fs)) / fs
+    p = 3.0 * np.sin(2 * np.pi * f * t + 0.4) + 1e-3 * rng.standard_normal(t.size)
+    onset = np.empty(ti.size)
+    for j, (t_i, a_i) in enumerate(zip(ti, amp)):
+        i0 = int(np.ceil((t_i + delay) * fs))
+        u = t[i0:i0 + 1000] - t_i - delay
+        p[i0:i0 + 1000] += a_i * np.exp(-u / 1.5e-3) * np.cos(2 * np.pi * 1300 * u)
+        onset[j] = a_i * np.exp(-u[0] / 1.5e-3) * np.cos(2 * np.pi * 1300 * u[0])
+    jitter = rng.uniform(-0.45, 0.45, ti.size) / fs
+    exact = sound_peaks(p, fs, ti, delay_s=delay, excitation_freq_hz=f)
+    got = sound_peaks(p, fs, ti + jitter, delay_s=delay, excitation_freq_hz=f)
+    # the onset sample is the first peak; the baseline fitted over 3 ms before it carries
+    # the earlier sounds' tails (<= 2 Pa exp(-10 ms / 1.5 ms) = 2.5 mPa, which the sinusoid
+    # does not follow) and the noise's 1 mPa: 5 mPa
+    assert exact.p_first_pa == pytest.approx(onset, rel=0, abs=5e-3)
+    assert got.p_first_pa == pytest.approx(exact.p_first_pa, rel=1e-3)
+    bare = sound_peaks(p, fs, ti + jitter, delay_s=delay, excitation_freq_hz=f,
+                       guard_samples=0)
+    assert np.max(np.abs(bare.p_first_pa / onset - 1)) > 0.05   # what the guard is for
+    with pytest.raises(ParameterError, match="guard_samples"):
+        sound_peaks(p, fs, ti, guard_samples=-1)
+
+
 def test_crossing_level_is_half_a_period_before_the_first_impact():
     # Impacts at most once a forcing period: a ramp crossing its threshold A_c at a uniform
     # instant of a period shows its first impact at the end of that period.  The level at

@@ -159,18 +159,21 @@ def test_edges_and_no_impacts():
     assert _jump_fits_all(v, [], **kw) == []
 
 
-def reference_sound_peaks(p, fs, t_imp, n_win, n_base, omega, fraction, t0=0.0, delay=0.0):
+def reference_sound_peaks(p, fs, t_imp, n_win, n_base, omega, fraction, t0=0.0, delay=0.0,
+                          guard=2):
     """The sound-peak rule written out with numpy (module docstring of detect._sound): the
-    window after each impact cut at the next, the forcing-frequency sinusoid fitted over
+    window after each impact, opened ``guard`` samples before the first sample at or after
+    the arrival and cut at the next impact's, the forcing-frequency sinusoid fitted over
     the baseline before it (columns 1, cos, sin of omega k) and removed, the first local
     maximum reaching ``fraction`` of the largest, both refined by a parabola unless at an
     onset."""
     out = np.full((t_imp.size, 5), np.nan)
     prev_hi = 0
-    for i, t in enumerate(t_imp):
-        lo = int(np.ceil((t + delay - t0) * fs - 1e-9))
-        hi = lo + n_win if i + 1 == t_imp.size else min(
-            lo + n_win, int(np.ceil((t_imp[i + 1] + delay - t0) * fs - 1e-9)))
+    arrival = [int(np.ceil((t + delay - t0) * fs - 1e-9)) - guard for t in t_imp]
+    for i in range(t_imp.size):
+        lo = arrival[i]
+        hi = lo + guard + n_win if i + 1 == t_imp.size else min(lo + guard + n_win,
+                                                                arrival[i + 1])
         lo, hi = max(lo, 0), min(hi, p.size)
         if hi <= lo:
             continue
@@ -365,3 +368,67 @@ def test_the_coarse_lag_is_the_fft_cross_correlations():
         np.testing.assert_allclose(lag_correlation(x, y, 51), want, rtol=0,
                                    atol=1e-12 * np.sum(x * x + y * y))
     assert coarse_lag(np.zeros(50), np.zeros(50), 51, 3.0) == 0
+
+
+def test_a_clipped_contact_pulse_is_found_where_the_smooth_fit_drifts_away():
+    # A start-up impact on the independent generator: the plate's acceleration steepens
+    # (here an exponential) and the contact pulse clips at the ADC's range.
+    # The smooth fit before the search window (degree 1 here) extrapolated over it drifts
+    # by more than the clipped pulse stands out; the pulse is the largest residual that
+    # falls below half its height on both sides inside the window, the drift at the
+    # window's end does not fall again.
+    from rattle_lab.detect._jump_kernels import pulse_peak
+    from rattle_lab.detect._local_fits import contact_pulse
+
+    k = np.arange(400.0)
+    k_imp = 300
+    a = 200.0 * np.exp((k - 300.0) / 5.5)
+    a[k_imp:k_imp + 2] = -2000.0                 # the pulse, clipped: centroid 300.5
+    n_half, n_fit = 14, 60
+    lo, hi = k_imp - n_half, k_imp + n_half
+    kk = np.arange(lo - n_fit, lo)
+    line = np.polyval(np.polyfit(kk, a[lo - n_fit:lo], 1), np.arange(lo, hi + 1.0))
+    r = a[lo:hi + 1] - line
+    # the test means something: the drift at the window's end outgrows the clipped pulse
+    assert abs(r[-1]) > np.abs(r[n_half:n_half + 2]).max()
+    assert int(np.argmax(np.abs(r))) == r.size - 1
+    assert pulse_peak(np.ascontiguousarray(r)) in (n_half, n_half + 1)
+    t1, a_lo, a_hi, sign = contact_pulse(a, k_imp, n_half, 0, n_fit=n_fit, degree=1)
+    # the two clipped samples' centroid; the ramp removed after the pulse moves it a little
+    assert t1 == pytest.approx(k_imp + 0.5, abs=0.1)
+    assert sign == -1.0 and a_lo <= k_imp and a_hi >= k_imp + 1
+    # a residual that never falls again (no pulse): the largest, as before; so where the
+    # only bump that falls again is under half the drift (noise, not a pulse)
+    ramp = np.linspace(0.0, 5.0, 20)
+    assert pulse_peak(ramp) == 19
+    ramp[3] += 1.5          # 2.29, falls to half both sides, under half of 5
+    assert pulse_peak(ramp) == 19
+    ramp[3] += 1.0          # 3.29: now the pulse
+    assert pulse_peak(ramp) == 3
+    assert pulse_peak(np.zeros(5)) == 0
+
+
+def test_a_step_centroid_held_at_its_window_edge_does_not_centre_the_pulse_search():
+    # Fits that read ringing rather than the approach and rebound: here no net jump
+    # (q - p is a thousandth of the excursion), so the normalised step's centroid runs off
+    # and is held at the pre window's edge, further from the jump's region than the region
+    # is wide.  The contact pulse, at the end of the jump's region, is then searched around
+    # that region, not around the edge (which put the search window's end on the pulse:
+    # impacts of the independent generator timed 6.7-8.4 samples early).  The compiled
+    # batch and the Python rule agree.
+    from rattle_lab.detect._local_fits import _jump_fits, _jump_fits_all
+
+    n = 600
+    v = np.zeros(n)
+    j_lo, j_hi = 300, 306
+    v[j_lo:j_hi + 1] = 0.3 * np.sin(np.pi * (np.arange(7) + 1) / 8)   # an excursion
+    v[j_hi + 1:] = 1e-3
+    a = np.zeros(n)
+    a[j_hi - 1:j_hi + 1] = -500.0                  # the pulse: centroid j_hi - 0.5
+    kw = dict(n_fit=60, n_guard=4, degree=1, omega_per_sample=None, accel=a)
+    jf = _jump_fits(v, j_lo, j_hi, 0, n - 1, **kw)
+    n_pad = (j_hi - j_lo + 1) + 4
+    assert jf.t_v == j_lo - 1 - n_pad              # held at the pre window's edge
+    assert jf.t_a == pytest.approx(j_hi - 0.5, abs=1e-9)
+    batch = _jump_fits_all(v, [(j_lo, j_hi, 0, n - 1)], **kw)[0]
+    assert batch.t_v == jf.t_v and batch.t_a == pytest.approx(jf.t_a, abs=1e-9)
