@@ -107,9 +107,10 @@ def contact_pulse(a: np.ndarray, k_c: int, n_half: int, lo_lim: int, *, n_fit: i
     the largest (:func:`~rattle_lab.detect._jump_kernels.pulse_peak`), widened by a quarter
     of its width on each side (a half-sine is 1.5 times as long as its half-height width).
     A contact pulse is short and large, so its centroid is a far less noisy impact time
-    than the velocity step (``sigma_a / peak`` against ``sigma_v / jump``); point sampling a half-sine of 4 samples moves its centroid by at most 0.01 sample.
-    The widened region is the contact's extent (first touch to separation of a half-sine
-    force).  Returns NaNs (sign 0) without room for the fit.
+    than the velocity step (``sigma_a / peak`` against ``sigma_v / jump``); point sampling a
+    half-sine of 4 samples moves its centroid by at most 0.01 sample.  The widened region is
+    the contact's extent (first touch to separation of a half-sine force).  Returns NaNs
+    (sign 0) without room for the fit.
     """
     nan = float("nan")
     lo, hi = k_c - n_half, k_c + n_half
