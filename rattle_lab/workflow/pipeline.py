@@ -82,8 +82,10 @@ if TYPE_CHECKING:
 #: step_guard_s, velocity_delay_window_s, e_per_delay_s, e_window_change (issue 28).  7: and
 #: e_measurand_diff (format 6 was briefly on main without it).  8: and velocity_delay_method
 #: and velocity_delay_note.  9: ImpactParams (in ImpactLog.params) gained ring_fundamental.
-#: 10: ImpactLog gained decoder, ImpactParams identify_decoder.
-CACHE_FORMAT = 10
+#: 10: ImpactLog gained decoder, ImpactParams identify_decoder.  11: the same layout, other
+#: results (the contact pulse's rule and the sound windows' guard; a cached detection of 10
+#: would stand for what this code no longer gives).
+CACHE_FORMAT = 11
 
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")
