@@ -16,7 +16,8 @@ fractional delay in the frequency domain after an 8 kHz low-pass) or, with ``dec
 ``"butterworth"`` or ``"bessel"``, filters it with a causal digital low-pass of that family
 (``decoder_order``, -3 dB at ``decoder_cutoff_hz``; analog prototype, bilinear transform
 prewarped at the cut-off, applied through the FFT with zero padding) followed by a pure
-fractional delay of ``decoder_delay_s`` (then the extra delay of the chain), a plate accelerometer,
+fractional delay of ``decoder_delay_s`` (then the extra delay of the chain), or with
+``"none"`` passes the velocity as it is (an ideal vibrometer), a plate accelerometer,
 a base accelerometer; higher modes ringing after each impact (each excited by the impact's
 impulse: a velocity step ``r_j dv`` decaying with ``zeta_j``); DC offsets; white noise;
 mains hum; ADC quantisation; a microphone at ``mic_m`` with propagation delay and one floor
@@ -68,7 +69,7 @@ class Chain:
     declare_delay: bool = True
     declare_filter: bool = False    # the decoder's family, order, cut-off and rate (schema v2)
     declare_measurand: bool = True
-    decoder: str = "fir"            # "fir" | "butterworth" | "bessel"
+    decoder: str = "fir"            # "fir" | "butterworth" | "bessel" | "none"
     decoder_order: int = 4
     decoder_cutoff_hz: float = 10000.0
     schema_version: int = 2
@@ -77,7 +78,7 @@ class Chain:
     @property
     def velocity_delay_s(self) -> float:
         """The vibrometer's total delay at low frequency (its filter's DC group delay + the pure delay)."""
-        if self.decoder == "fir":
+        if self.decoder in ("fir", "none"):
             return self.decoder_delay_s
         return iir_dc_delay_s(self.decoder, self.decoder_order, self.decoder_cutoff_hz,
                               self.fs_hz) + self.decoder_delay_s
@@ -291,8 +292,11 @@ def measure(plant: Plant, chain: Chain, W: float, levels: np.ndarray, rng: np.ra
     vel = v + (ring_v if chain.ring_in_velocity else 0.0) + (v_b if chain.measurand == "panel_absolute" else 0.0)
     hum = chain.hum_v_m_s * np.sin(2 * math.pi * chain.hum_hz * ts + 0.3)
     vel = vel + hum + chain.offset_v_m_s + chain.noise_v_m_s * rng.standard_normal(ts.size)
-    vel = _delay(vel, fs, chain.decoder_delay_s, 8000.0) if chain.decoder == "fir" else \
-        _iir(vel, chain)
+    if chain.decoder == "none":     # the velocity as it is (a pure delay, if any)
+        vel = _delay(vel, fs, chain.decoder_delay_s, fs) if chain.decoder_delay_s else vel
+    else:
+        vel = _delay(vel, fs, chain.decoder_delay_s, 8000.0) if chain.decoder == "fir" else \
+            _iir(vel, chain)
     vel, _ = _quantise(vel, 2.0, chain.adc_bits)
     plate = acc + ring_a + a_b + chain.offset_a_ms2 + chain.noise_a_ms2 * rng.standard_normal(ts.size)
     plate, _ = _quantise(plate, 2000.0, chain.adc_bits)

@@ -84,8 +84,9 @@ if TYPE_CHECKING:
 #: and velocity_delay_note.  9: ImpactParams (in ImpactLog.params) gained ring_fundamental.
 #: 10: ImpactLog gained decoder, ImpactParams identify_decoder.  11: the same layout, other
 #: results (the contact pulse's rule and the sound windows' guard; a cached detection of 10
-#: would stand for what this code no longer gives).
-CACHE_FORMAT = 11
+#: would stand for what this code no longer gives).  12: the same layout, other results (the
+#: flight model's ringing weighted by its own velocity changes to their fixed point).
+CACHE_FORMAT = 12
 
 #: Parameters of [fit] that the per-run analysis (detect stage) uses.
 _DETECT_FIT_KEYS = ("n_confirm", "speed_of_sound_m_s")

@@ -378,8 +378,9 @@ def test_a_product_cached_by_other_code_is_a_clear_error(tmp_path: Path) -> None
     # velocity offset, ringing share and ringing ratio; 5: its ring_modes; 6, 7: the channel
     # timing and measurand fields of issue 28; 8: velocity_delay_method and _note; 9: the
     # parameters' ring_fundamental; 10: the identified decoder, identify_decoder; 11: the
-    # contact pulse's rule and the sound windows' guard, which change cached results)
-    assert pipeline_module.CACHE_FORMAT == 11
+    # contact pulse's rule and the sound windows' guard, which change cached results; 12: the
+    # flight model's ringing weights at their fixed point, likewise)
+    assert pipeline_module.CACHE_FORMAT == 12
 
 
 def _same(a: Any, b: Any) -> bool:
