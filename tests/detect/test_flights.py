@@ -774,7 +774,7 @@ def test_lightly_damped_tails_weighted_by_the_models_own_jumps_give_the_true_vel
     # by +-2 % and their median by up to 0.5 %), the delay declared (read at those
     # instants): what is left is the weighting of the tails.  Modes and fundamental given
     # as the generator's, the model is then complete; its fixed point reads v_in and v_out
-    # +0.02 % and -0.09 % (median; the 0.25 s to which the generator cuts each tail is
+    # +0.03 % and -0.08 % (median; the 0.25 s to which the generator cuts each tail is
     # worth ~0.1 %): bound 0.3 %.  With the local fits' jumps as the weights (one model,
     # ``rounds=1``) they read +4.5 % and +9.7 %.
     import math
