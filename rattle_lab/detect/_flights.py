@@ -69,6 +69,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -922,8 +923,10 @@ def flight_velocities(v: np.ndarray, fs_hz: float, f_hz: float, k_imp: np.ndarra
                      fallback.searched, **timing)
 
 
-def _weighted_by_jumps(build: Any, evaluate: Any, vin: np.ndarray, vout: np.ndarray,
-                       dv: np.ndarray) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray]:
+def _weighted_by_jumps(build: Callable[[np.ndarray], _Model],
+                       evaluate: Callable[[_Model], tuple[np.ndarray, np.ndarray]],
+                       vin: np.ndarray, vout: np.ndarray, dv: np.ndarray
+                       ) -> tuple[_Model, np.ndarray, np.ndarray, np.ndarray]:
     """The flight model whose ringing tails are weighted by its own velocity changes.
 
     Each impact's ringing is its velocity change ``v_out - v_in`` times the modes' shares,
